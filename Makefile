@@ -1,0 +1,42 @@
+# Set-up and entry points. Every target installs what is missing (Debian 12, root) and is quick when nothing is.
+SHELL := /bin/bash
+VENV := .venv
+PY := $(VENV)/bin/python
+APT_PKGS := python3-dolfinx python3-slepc4py python3-petsc4py python3-gmsh python3-mpi4py python3-scipy \
+            python3-venv python3-pip libopenblas0-pthread openmpi-bin
+STAMP := $(VENV)/.installed
+export OMPI_ALLOW_RUN_AS_ROOT := 1
+export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
+export OMPI_MCA_rmaps_base_oversubscribe := 1
+export MPLBACKEND := Agg
+export PYVISTA_OFF_SCREEN := true
+
+.PHONY: setup demo test test-fast bench clean
+
+setup: $(STAMP)
+
+/usr/lib/x86_64-linux-gnu/openblas-pthread/libblas.so.3:
+	@echo "installing Debian packages: $(APT_PKGS)"
+	apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q $(APT_PKGS)
+
+$(STAMP): pyproject.toml /usr/lib/x86_64-linux-gnu/openblas-pthread/libblas.so.3
+	@/usr/bin/python3 -c "import dolfinx, slepc4py, gmsh" 2>/dev/null || \
+	  (apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q $(APT_PKGS))
+	test -x $(PY) || /usr/bin/python3 -m venv --system-site-packages $(VENV)
+	/usr/bin/python3 -c "import numpy; print('numpy==' + numpy.__version__)" > $(VENV)/constraints.txt
+	$(PY) -m pip install -q -c $(VENV)/constraints.txt pyvista matplotlib tqdm pytest
+	$(PY) -m pip install -q -c $(VENV)/constraints.txt --no-build-isolation --no-deps -e .
+	$(PY) -c "import numpy, dolfinx; assert numpy.__version__ == '$$(/usr/bin/python3 -c 'import numpy; print(numpy.__version__)')'"
+	touch $(STAMP)
+
+demo: $(STAMP)
+	$(PY) demos/blade_modes.py
+
+test: $(STAMP)
+	$(PY) -m pytest -q -ra tests
+
+bench: $(STAMP)
+	$(PY) benchmarks/bench_full_order.py
+
+clean:
+	rm -rf $(VENV) results .pytest_cache

@@ -1,0 +1,447 @@
+"""gmsh OpenCASCADE models of the rotor 37 blade: loft, named groups, tip contact nodes and mesh presets.
+
+Only gmsh and NumPy are used. Functions build into the current gmsh model (``gmsh.model``); wrap calls in
+:func:`gmsh_session` to get an initialised, quiet gmsh that is finalised afterwards.
+
+Coordinates are SI (m): z axial (downstream), x = r cos(theta), y = r sin(theta).
+"""
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import enum
+import os
+from pathlib import Path
+from typing import Iterator, Sequence
+
+import numpy as np
+
+from .parametric import N_TABLE_SECTIONS, BladeLaw, default_blade_law
+from .tables import BladeTable
+
+__all__ = [
+    "BladeGroup",
+    "MeshPreset",
+    "MESH_PRESETS",
+    "get_mesh_preset",
+    "BladeModel",
+    "gmsh_session",
+    "add_blade_from_sections",
+    "table_sections",
+    "law_sections",
+    "create_blade_model",
+    "import_blade_model",
+    "N_TIP_NODES",
+]
+
+N_TIP_NODES = 8
+
+
+class BladeGroup(enum.IntEnum):
+    """Physical-group tags shared by every gmsh model of the project (names are the lower-case member names)."""
+
+    BLADE = 1      # the volume
+    CLAMP = 2      # root face (blade) or bore face (sector): u = 0
+    TIP = 3        # blade tip face
+    PRESSURE = 4   # pressure side (THETA2, lower theta)
+    SUCTION = 5    # suction side (THETA1, higher theta)
+    LEFT = 6       # cyclic face at lower theta (disk sector)
+    RIGHT = 7      # cyclic face at higher theta (disk sector)
+    TIP_NODES = 8  # the contact nodes on the tip, LE to TE (points)
+    LEADING_EDGE = 9   # narrow blunt-edge strips at the LE
+    TRAILING_EDGE = 10  # and at the TE
+
+
+@dataclasses.dataclass(frozen=True)
+class MeshPreset:
+    """Mesh resolution.
+
+    Attributes:
+        name: preset name.
+        size: target element size (m).
+        curvature_points: elements per 2*pi of curvature (refines the rounded LE/TE); 0 switches it off.
+        min_size: smallest element size (m).
+    """
+
+    name: str
+    size: float
+    curvature_points: int
+    min_size: float
+
+
+MESH_PRESETS = {
+    "ci": MeshPreset("ci", size=12.0e-3, curvature_points=0, min_size=2.0e-3),
+    "coarse": MeshPreset("coarse", size=6.0e-3, curvature_points=0, min_size=0.9e-3),
+    "paper": MeshPreset("paper", size=3.0e-3, curvature_points=0, min_size=0.6e-3),
+}
+
+
+def get_mesh_preset(preset: str | MeshPreset) -> MeshPreset:
+    """Return a preset by name (one of MESH_PRESETS) or validate a custom one."""
+    if isinstance(preset, MeshPreset):
+        if not (1e-5 < preset.size < 0.1) or not (0 < preset.min_size <= preset.size):
+            raise ValueError(f"mesh preset {preset.name!r}: size must be in (1e-5, 0.1) m and 0 < min_size <= size")
+        return preset
+    if preset not in MESH_PRESETS:
+        raise ValueError(f"unknown mesh preset {preset!r}; allowed: {', '.join(MESH_PRESETS)}")
+    return MESH_PRESETS[preset]
+
+
+@dataclasses.dataclass(frozen=True)
+class BladeModel:
+    """What the builder reports about the gmsh model it made (the mesh itself stays in gmsh).
+
+    Attributes:
+        source: 'parametric', 'table:<path>' or 'file:<path>'.
+        volume: blade volume (m^3) from the CAD solid.
+        tip_nodes: coordinates (n_tip, 3) of the tip contact nodes, LE first, TE last (m).
+        preset: the mesh preset used.
+        n_nodes: mesh nodes (order-1 mesh).
+    """
+
+    source: str
+    volume: float
+    tip_nodes: np.ndarray
+    preset: MeshPreset
+    n_nodes: int
+
+
+_SESSION_DEPTH = [0]
+
+
+@contextlib.contextmanager
+def gmsh_session(verbose: bool = False) -> Iterator[object]:
+    """Initialise gmsh (quiet unless verbose), yield the module, finalise at exit (also on errors); nests."""
+    import gmsh
+
+    if _SESSION_DEPTH[0] == 0:
+        gmsh.initialize([], readConfigFiles=False)
+    _SESSION_DEPTH[0] += 1
+    gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
+    gmsh.option.setNumber("General.Verbosity", 5 if verbose else 1)
+    try:
+        yield gmsh
+    finally:
+        _SESSION_DEPTH[0] -= 1
+        if _SESSION_DEPTH[0] == 0:
+            gmsh.finalize()
+
+
+def table_sections(table: BladeTable) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(suction, pressure) point arrays of Table IV sections 1-12 (the exact loft input)."""
+    return [(table.side_points(k, "suction"), table.side_points(k, "pressure")) for k in range(N_TABLE_SECTIONS)]
+
+
+def law_sections(law: BladeLaw, n_sections: int = N_TABLE_SECTIONS, n_points: int = 80,
+                 ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(suction, pressure) point arrays of the parametric blade at n_sections span fractions from root to tip."""
+    etas = np.linspace(0.0, 1.0, n_sections)
+    return [(law.side_points(eta, "suction", n_points), law.side_points(eta, "pressure", n_points)) for eta in etas]
+
+
+EDGE_TRIM = 1.0e-4  # m of arc trimmed from each side at LE and TE (blunt edges; see add_blade_from_sections)
+
+
+def _trim_side(points: np.ndarray, depth: float) -> np.ndarray:
+    """Cut ``depth`` of arc length off both ends of a polyline (linear interpolation at the new ends)."""
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+    if arc[-1] <= 4 * depth:
+        raise ValueError(f"section side of length {arc[-1]:.3g} m is too short for an edge trim of {depth:g} m")
+    keep = (arc > depth) & (arc < arc[-1] - depth)
+    ends = [np.array([np.interp(t, arc, points[:, k]) for k in range(3)]) for t in (depth, arc[-1] - depth)]
+    return np.vstack([ends[0], points[keep], ends[1]])
+
+
+def add_blade_from_sections(sections: Sequence[tuple[np.ndarray, np.ndarray]], edge_trim: float = EDGE_TRIM) -> int:
+    """Loft the blade in gmsh OCC and return the volume tag.
+
+    Each section (suction and pressure points, LE to TE, sharing the LE and TE points) becomes a closed wire: two
+    side splines trimmed by ``edge_trim`` of arc at LE and TE, closed there by two straight segments that meet at
+    the LE (TE) mid-point, a geometry vertex. The rounded noses of rotor 37 (radius ~0.1 mm) would otherwise force
+    elements of that size; the trim moves the surface by less than ``edge_trim``. The side surfaces are lofted
+    through the wires, the root and tip wires are closed by filling surfaces, and the shell is sewn into a volume
+    (a solid loft of conical sections is fragile in OCC).
+    """
+    import gmsh
+
+    occ = gmsh.model.occ
+    if len(sections) < 2:
+        raise ValueError(f"sections: need at least 2 blade sections, got {len(sections)}")
+    if not (0.0 < edge_trim < 1e-3):
+        raise ValueError(f"edge_trim must be in (0, 1e-3) m, got {edge_trim}")
+    wires, end_loops = [], []
+    for k, (suction, pressure) in enumerate(sections):
+        if suction.shape != pressure.shape or suction.shape[0] < 4:
+            raise ValueError(f"sections[{k}]: suction and pressure need the same shape with >= 4 points")
+        le_mid, te_mid = occ.addPoint(*suction[0]), occ.addPoint(*suction[-1])
+        suction, pressure = _trim_side(suction, edge_trim), _trim_side(pressure, edge_trim)
+        s_tags = [occ.addPoint(*p) for p in suction]
+        p_tags = [occ.addPoint(*p) for p in pressure[::-1]]
+        curves = [occ.addSpline(s_tags), occ.addLine(s_tags[-1], te_mid), occ.addLine(te_mid, p_tags[0]),
+                  occ.addSpline(p_tags), occ.addLine(p_tags[-1], le_mid), occ.addLine(le_mid, s_tags[0])]
+        wires.append(occ.addWire(curves))
+        if k in (0, len(sections) - 1):
+            end_loops.append(occ.addCurveLoop(curves))
+    sides = occ.addThruSections(wires, makeSolid=False, makeRuled=False)
+    caps = [occ.addSurfaceFilling(loop) for loop in end_loops]
+    originals = [tag for dim, tag in sides if dim == 2] + caps
+    shell = occ.addSurfaceLoop(originals, sewing=True)
+    volume = occ.addVolume([shell])
+    occ.synchronize()
+    # sewing builds new faces; drop the free originals and construction curves so only the volume is meshed
+    kept = {tag for dim, tag in gmsh.model.getBoundary([(3, volume)], oriented=False)}
+    occ.remove([(2, tag) for tag in originals if tag not in kept], recursive=True)
+    occ.synchronize()
+    used = {t for d, t in gmsh.model.getBoundary([(3, volume)], combined=False, oriented=False, recursive=True)}
+    occ.remove([(d, t) for d, t in gmsh.model.getEntities(1) + gmsh.model.getEntities(0) if t not in used
+                and not gmsh.model.getAdjacencies(d, t)[0].size], recursive=False)
+    occ.synchronize()
+    return volume
+
+
+def _polar_theta(points: np.ndarray) -> np.ndarray:
+    return np.arctan2(points[..., 1], points[..., 0])
+
+
+def _classify_blade_faces(volume: int) -> dict[BladeGroup, list[int]]:
+    """Find root, tip, pressure and suction faces geometrically (never by entity number)."""
+    import gmsh
+
+    faces = [tag for dim, tag in gmsh.model.getBoundary([(3, volume)], oriented=False) if dim == 2]
+    centres = np.array([gmsh.model.occ.getCenterOfMass(2, f) for f in faces])
+    radius = np.hypot(centres[:, 0], centres[:, 1])
+    root = faces[int(np.argmin(radius))]
+    tip = faces[int(np.argmax(radius))]
+    areas = np.array([gmsh.model.occ.getMass(2, f) for f in faces])
+    others = [k for k, f in enumerate(faces) if f not in (root, tip)]
+    big = max(areas[others])
+    sides = [faces[k] for k in others if areas[k] > 0.05 * big]
+    strips = [k for k in others if areas[k] <= 0.05 * big]
+    if len(sides) < 2:
+        raise ValueError("blade model has fewer than two side faces")
+    # project the centre of every side face onto all side faces; the face seen at the larger theta is suction
+    groups: dict[BladeGroup, list[int]] = {BladeGroup.CLAMP: [root], BladeGroup.TIP: [tip],
+                                           BladeGroup.PRESSURE: [], BladeGroup.SUCTION: [],
+                                           BladeGroup.LEADING_EDGE: [], BladeGroup.TRAILING_EDGE: []}
+    if strips:
+        z_mid = np.median(centres[strips, 2])
+        for k in strips:
+            groups[BladeGroup.LEADING_EDGE if centres[k, 2] < z_mid else BladeGroup.TRAILING_EDGE].append(faces[k])
+    for face, centre in zip(faces, centres):
+        if face not in sides:
+            continue
+        own = np.array(gmsh.model.getClosestPoint(2, face, centre.tolist())[0])
+        others = [np.array(gmsh.model.getClosestPoint(2, g, centre.tolist())[0]) for g in sides if g != face]
+        opposite = min(others, key=lambda p: np.linalg.norm(p - own)) if others else own
+        suction = _polar_theta(own) > _polar_theta(opposite)
+        groups[BladeGroup.SUCTION if suction else BladeGroup.PRESSURE].append(face)
+    return groups
+
+
+def _tip_camber_points(tip_face: int, le: np.ndarray, te: np.ndarray, sections, n_nodes: int) -> np.ndarray:
+    """n_nodes points on the tip face along the tip camber line, evenly spaced in arc length, LE and TE included."""
+    import gmsh
+
+    suction, pressure = sections[-1]
+    # camber line of the tip section: mid-points between the two sides at matching chordwise stations
+    mid = 0.5 * (suction + pressure)
+    mid[0], mid[-1] = le, te
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(mid, axis=0), axis=1))])
+    targets = np.linspace(0.0, arc[-1], n_nodes)
+    points = np.column_stack([np.interp(targets, arc, mid[:, k]) for k in range(3)])
+    projected = np.array(gmsh.model.getClosestPoint(2, tip_face, points[1:-1].ravel().tolist())[0]).reshape(-1, 3)
+    return np.vstack([le, projected, te])
+
+
+def _apply_mesh_preset(preset: MeshPreset, edge_curves: Sequence[int] = ()) -> None:
+    """Global size options; with edge_curves (the thin LE/TE), a distance field grades the size from min_size there
+    to size at a distance of 4*size, so that the two sides of a thin edge never see overlapping triangles."""
+    import gmsh
+
+    if edge_curves:
+        field = gmsh.model.mesh.field
+        dist = field.add("Distance")
+        field.setNumbers(dist, "CurvesList",
+                         list(edge_curves))
+        field.setNumber(dist, "NumPointsPerCurve", 200)
+        ramp = field.add("Threshold")
+        field.setNumber(ramp, "InField", dist)
+        field.setNumber(ramp, "SizeMin", preset.min_size)
+        field.setNumber(ramp, "SizeMax", preset.size)
+        field.setNumber(ramp, "DistMin", 0.0)
+        field.setNumber(ramp, "DistMax", 4.0 * preset.size)
+        field.setAsBackgroundMesh(ramp)
+        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+
+    gmsh.option.setNumber("Mesh.MeshSizeMax", preset.size)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", preset.min_size)
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", preset.curvature_points)
+    gmsh.option.setNumber("Mesh.Algorithm", 6)
+    gmsh.option.setNumber("Mesh.Algorithm3D", 1)
+    gmsh.option.setNumber("Mesh.Optimize", 1)
+    gmsh.option.setNumber("Mesh.ElementOrder", 1)
+
+
+def _edge_curves(groups: dict[BladeGroup, list[int]]) -> list[int]:
+    """Spanwise curves of the blunt LE and TE strips."""
+    import gmsh
+
+    faces = groups.get(BladeGroup.LEADING_EDGE, []) + groups.get(BladeGroup.TRAILING_EDGE, [])
+    return sorted({t for f in faces for d, t in gmsh.model.getBoundary([(2, f)], oriented=False) if d == 1})
+
+
+def _tag_and_mesh(volume: int, groups: dict[BladeGroup, list[int]], tip_points: np.ndarray | None,
+                  tip_face: int | None, preset: MeshPreset) -> np.ndarray:
+    """Add physical groups, embed the tip nodes, mesh; returns the mesh coordinates of the tip nodes."""
+    import gmsh
+
+    gmsh.model.addPhysicalGroup(3, [volume], BladeGroup.BLADE)
+    gmsh.model.setPhysicalName(3, BladeGroup.BLADE, BladeGroup.BLADE.name.lower())
+    for group, faces in groups.items():
+        if faces:
+            gmsh.model.addPhysicalGroup(2, faces, group)
+            gmsh.model.setPhysicalName(2, group, group.name.lower())
+    point_tags = []
+    if tip_points is not None:
+        # LE and TE are already geometry vertices; the inner points are embedded in the tip face
+        vertices = [tag for dim, tag in gmsh.model.getBoundary([(2, tip_face)], recursive=True) if dim == 0]
+        vcoords = np.array([gmsh.model.getValue(0, v, []) for v in vertices])
+        for k, p in enumerate(tip_points):
+            dist = np.linalg.norm(vcoords - p, axis=1)
+            if k in (0, len(tip_points) - 1) and dist.min() < 1e-9:
+                point_tags.append(vertices[int(np.argmin(dist))])
+            else:
+                point_tags.append(gmsh.model.occ.addPoint(*p))
+        gmsh.model.occ.synchronize()
+        inner = [t for t in point_tags if t not in vertices]
+        gmsh.model.mesh.embed(0, inner, 2, tip_face)
+        gmsh.model.addPhysicalGroup(0, point_tags, BladeGroup.TIP_NODES)
+        gmsh.model.setPhysicalName(0, BladeGroup.TIP_NODES, BladeGroup.TIP_NODES.name.lower())
+    _apply_mesh_preset(preset, _edge_curves(groups))
+    gmsh.model.mesh.generate(3)
+    if tip_points is None:
+        return np.zeros((0, 3))
+    return np.array([gmsh.model.mesh.getNodes(0, t)[1] for t in point_tags]).reshape(-1, 3)
+
+
+def create_blade_model(table: BladeTable | None = None, preset: str | MeshPreset = "coarse",
+                       law: BladeLaw | None = None, n_tip_nodes: int = N_TIP_NODES,
+                       shorten: float = 0.0) -> BladeModel:
+    """Build and mesh the rotor 37 blade in the current gmsh model.
+
+    Args:
+        table: NASA Table IV; if given, the exact loft of sections 1-12 is used, else the parametric blade.
+        preset: mesh preset name ('ci', 'coarse', 'paper') or a MeshPreset.
+        law: parametric law (default: the built-in one); ignored when a table is given.
+        n_tip_nodes: contact nodes on the tip camber line, LE to TE inclusive (2..40).
+        shorten: radial length (m) removed at the tip, 0 <= shorten < 20 mm (the paper shortens the disk's
+            blades by 4 mm); the tip section then sits at span fraction 1 - shorten/span.
+    """
+    import gmsh
+
+    preset = get_mesh_preset(preset)
+    if not (2 <= int(n_tip_nodes) <= 40):
+        raise ValueError(f"n_tip_nodes must be in [2, 40], got {n_tip_nodes}")
+    if not (0.0 <= shorten < 0.02):
+        raise ValueError(f"shorten must be in [0, 0.02) m, got {shorten}")
+    if table is not None:
+        if table.n_sections < N_TABLE_SECTIONS:
+            raise ValueError(f"blade table {table.source} has {table.n_sections} sections, needs >= {N_TABLE_SECTIONS}")
+        if shorten:
+            raise ValueError("shorten is only available for the parametric blade (table=None)")
+        sections, source = table_sections(table), f"table:{table.source}"
+    else:
+        law = law or default_blade_law()
+        span_le = float(np.diff(law.evaluate(0.0, np.array([0.0, 1.0]))[1])[0])
+        eta_tip = 1.0 - shorten / span_le
+        etas = np.linspace(0.0, eta_tip, N_TABLE_SECTIONS)
+        sections = [(law.side_points(e, "suction"), law.side_points(e, "pressure")) for e in etas]
+        source = "parametric" if not shorten else f"parametric(shorten={shorten:g})"
+    gmsh.model.add("blade")
+    volume = add_blade_from_sections(sections)
+    groups = _classify_blade_faces(volume)
+    tip_face = groups[BladeGroup.TIP][0]
+    le, te = sections[-1][0][0], sections[-1][0][-1]
+    tip_points = _tip_camber_points(tip_face, le, te, sections, int(n_tip_nodes))
+    tip_mesh = _tag_and_mesh(volume, groups, tip_points, tip_face, preset)
+    return BladeModel(source=source, volume=gmsh.model.occ.getMass(3, volume), tip_nodes=tip_mesh,
+                      preset=preset, n_nodes=len(gmsh.model.mesh.getNodes()[0]))
+
+
+def _faces_in_box(box: Sequence[float], what: str, path: Path) -> list[int]:
+    import gmsh
+
+    if len(box) != 6:
+        raise ValueError(f"{what} box must be (xmin, ymin, zmin, xmax, ymax, zmax), got {box!r}")
+    faces = [t for d, t in gmsh.model.getEntitiesInBoundingBox(*box, dim=2)]
+    if not faces:
+        raise ValueError(f"{what}: no surface of {path} lies inside the box {tuple(box)}")
+    return faces
+
+
+def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], tip: str | Sequence[float] | None = None,
+                       preset: str | MeshPreset = "coarse", scale: float = 1.0) -> BladeModel:
+    """Load a user's blade: a CAD file (STEP, BREP: meshed with the preset) or a gmsh mesh file (.msh: used as is).
+
+    Args:
+        path: the file.
+        clamp: for .msh, the name of a surface physical group; for CAD, a box (xmin, ymin, zmin, xmax, ymax, zmax)
+            in metres (after scaling) enclosing the clamped faces.
+        tip: the tip faces, given the same way (optional; the tip contact nodes are then the tip face's vertices).
+        preset: mesh preset for CAD files.
+        scale: factor from file units to metres (e.g. 1e-3 for mm).
+    """
+    import gmsh
+
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"blade file {path} does not exist")
+    suffix = path.suffix.lower()
+    if suffix not in (".step", ".stp", ".brep", ".msh"):
+        raise ValueError(f"blade file {path}: unsupported type {suffix!r}; allowed: .step, .stp, .brep, .msh")
+    if not scale > 0:
+        raise ValueError(f"scale must be > 0, got {scale}")
+    preset = get_mesh_preset(preset)
+    gmsh.model.add("user_blade")
+    if suffix == ".msh":
+        try:
+            gmsh.merge(str(path))
+        except Exception as exc:  # gmsh raises a bare Exception with its log line
+            raise ValueError(f"blade file {path} could not be read by gmsh ({str(exc).splitlines()[0]})") from None
+        names = {gmsh.model.getPhysicalName(d, t): (d, t) for d, t in gmsh.model.getPhysicalGroups()}
+        for what, name in (("clamp", clamp), ("tip", tip)):
+            if name is not None and (not isinstance(name, str) or name not in names or names[name][0] != 2):
+                raise ValueError(f"{what}: mesh file {path} has no surface physical group named {name!r}; "
+                                 f"it has {sorted(n for n in names if n)}")
+        vols = gmsh.model.getEntities(3)
+        volume = sum(gmsh.model.occ.getMass(3, t) for _, t in vols) if gmsh.model.occ.getEntities(3) else float("nan")
+        tip_nodes = np.zeros((0, 3))
+        if tip is not None:
+            tip_nodes = gmsh.model.mesh.getNodesForPhysicalGroup(2, names[tip][1])[1].reshape(-1, 3)
+        return BladeModel(source=f"file:{path}", volume=volume, tip_nodes=tip_nodes, preset=preset,
+                          n_nodes=len(gmsh.model.mesh.getNodes()[0]))
+    try:
+        entities = gmsh.model.occ.importShapes(str(path))
+    except Exception as exc:
+        raise ValueError(f"blade file {path} could not be read by gmsh ({str(exc).splitlines()[0]})") from None
+    if scale != 1.0:
+        gmsh.model.occ.dilate(entities, 0, 0, 0, scale, scale, scale)
+    gmsh.model.occ.synchronize()
+    volumes = [t for d, t in gmsh.model.getEntities(3)]
+    if not volumes:
+        raise ValueError(f"blade file {path} holds no solid")
+    groups = {BladeGroup.CLAMP: _faces_in_box(clamp, "clamp", path)}
+    if tip is not None:
+        groups[BladeGroup.TIP] = _faces_in_box(tip, "tip", path)
+    gmsh.model.addPhysicalGroup(3, volumes, BladeGroup.BLADE)
+    gmsh.model.setPhysicalName(3, BladeGroup.BLADE, "blade")
+    for group, faces in groups.items():
+        gmsh.model.addPhysicalGroup(2, faces, group)
+        gmsh.model.setPhysicalName(2, group, group.name.lower())
+    _apply_mesh_preset(preset)
+    gmsh.model.mesh.generate(3)
+    tip_nodes = np.zeros((0, 3))
+    if tip is not None:
+        tip_nodes = gmsh.model.mesh.getNodesForPhysicalGroup(2, BladeGroup.TIP)[1].reshape(-1, 3)
+    return BladeModel(source=f"file:{path}", volume=sum(gmsh.model.occ.getMass(3, v) for v in volumes),
+                      tip_nodes=tip_nodes, preset=preset, n_nodes=len(gmsh.model.mesh.getNodes()[0]))

@@ -1,0 +1,619 @@
+"""The dolfinx/PETSc/SLEPc adapter: the only module of rotor37_rom that touches them.
+
+It turns a gmsh model into a :class:`Sector` (mesh, tags by name, function space, named DOF sets, communicator),
+assembles K and M with the clamp applied, solves the clamped eigenproblem with SLEPc shift-invert, and provides the
+full-order nonlinear static (Newton, exact tangent, load stepping) and implicit transient (Newmark) solvers that later
+reduced models are checked against. Everything runs under MPI; the communicator always comes from the mesh.
+
+Clamped DOFs are kept in the matrices as decoupled rows: K gets 1 on their diagonal and M gets 1e-14, so their
+spurious eigenvalues sit at 1e14 (rad/s)^2, far above any physical mode, and M stays positive definite.
+"""
+from __future__ import annotations
+
+import dataclasses
+import logging
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx.io import gmshio
+from dolfinx.fem import petsc as fem_petsc
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from rotor37_rom import forms
+from rotor37_rom.forms import Material
+from rotor37_rom.geometry import blade as blade_geometry
+from rotor37_rom.geometry.tables import read_blade_table
+
+__all__ = [
+    "Sector",
+    "SvkOperators",
+    "ModalResult",
+    "StaticResult",
+    "TransientResult",
+    "create_blade_sector",
+    "create_sector_from_file",
+    "create_sector_from_gmsh",
+    "create_svk_operators",
+    "assemble_stiffness",
+    "assemble_mass",
+    "solve_eigenproblem",
+    "compute_clamped_modes",
+    "solve_static",
+    "solve_newmark",
+    "vector_to_array",
+    "gather_dof_values",
+]
+
+LOG = logging.getLogger(__name__)
+MASS_DIAGONAL = 1.0e-14
+JIT_PARAMS = {"cffi_extra_compile_args": ["-O2", "-march=native"], "cffi_libraries": ["m"]}
+
+
+@dataclasses.dataclass(frozen=True)
+class Sector:
+    """A meshed structure with named groups and DOF sets (a blade now; a disk sector with cyclic faces later).
+
+    Attributes:
+        mesh: dolfinx mesh (distributed over ``mesh.comm``).
+        cell_tags, facet_tags: gmsh physical groups as dolfinx MeshTags.
+        groups: group name -> tag (BladeGroup names, lower case).
+        V: vector P``degree`` function space.
+        material: the material.
+        clamp_bc: homogeneous Dirichlet condition on the clamp facets.
+        tip_nodes: (n_tip, 3) coordinates of the contact nodes, LE first (m), identical on all ranks.
+        tip_dofs: (n_tip, 3) local (unblocked) DOF indices of the tip nodes on this rank, -1 where not owned here.
+        cyclic_dofs: {'left': ..., 'right': ...} local DOF indices of cyclic faces (empty for a single blade).
+        volume: CAD volume (m^3).
+        source: where the geometry came from; preset: mesh preset name.
+    """
+
+    mesh: object
+    cell_tags: object
+    facet_tags: object
+    groups: dict
+    V: object
+    material: Material
+    clamp_bc: object
+    tip_nodes: np.ndarray
+    tip_dofs: np.ndarray
+    cyclic_dofs: dict
+    volume: float
+    source: str
+    preset: str
+
+    @property
+    def comm(self) -> MPI.Comm:
+        return self.mesh.comm
+
+    @property
+    def n_dofs(self) -> int:
+        """Global number of DOFs (clamped ones included)."""
+        im = self.V.dofmap.index_map
+        return im.size_global * self.V.dofmap.index_map_bs
+
+    def facets(self, name: str) -> np.ndarray:
+        """Local facet indices of a named group."""
+        if name not in self.groups:
+            raise ValueError(f"group {name!r} not in this sector; it has {sorted(self.groups)}")
+        return self.facet_tags.find(self.groups[name])
+
+    def total_mass(self) -> float:
+        form = fem.form(self.material.rho * ufl.dx(domain=self.mesh))
+        return self.comm.allreduce(fem.assemble_scalar(form), op=MPI.SUM)
+
+
+def _locate_point_dofs(V, points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    """(n, 3) owned local DOF indices of the vertices at ``points`` (-1 where not owned by this rank)."""
+    bs = V.dofmap.index_map_bs
+    n_owned = V.dofmap.index_map.size_local
+    out = -np.ones((len(points), bs), dtype=np.int64)
+    for k, p in enumerate(points):  # loop over a handful of contact nodes, not over DOFs
+        blocks = fem.locate_dofs_geometrical(V, lambda x, p=p: np.linalg.norm(x.T - p, axis=1) < tol)
+        blocks = blocks[blocks < n_owned]
+        if blocks.size:
+            out[k] = blocks[0] * bs + np.arange(bs)
+    found = V.mesh.comm.allreduce((out[:, 0] >= 0).astype(int), op=MPI.SUM)
+    if np.any(found != 1):
+        missing = np.flatnonzero(found != 1)
+        raise ValueError(f"tip nodes {missing.tolist()} are not vertices of the mesh (boundary nodes not on the mesh)")
+    return out
+
+
+def create_sector_from_gmsh(comm: MPI.Comm, model_info, material: Material, degree: int = 2,
+                            preset: str = "") -> Sector:
+    """Build a :class:`Sector` from the current gmsh model (alive on rank 0 only) and its builder report."""
+    import gmsh
+
+    if not (1 <= degree <= 3):
+        raise ValueError(f"degree must be 1, 2 or 3, got {degree}")
+    names = {}
+    if comm.rank == 0:
+        names = {gmsh.model.getPhysicalName(d, t): t for d, t in gmsh.model.getPhysicalGroups()}
+    names = comm.bcast(names, root=0)
+    model_info = comm.bcast(model_info, root=0)
+    mesh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model if comm.rank == 0 else None, comm, 0, gdim=3)
+    V = fem.VectorFunctionSpace(mesh, ("Lagrange", degree))
+    if "clamp" not in names:
+        raise ValueError(f"the model of {model_info.source} has no 'clamp' group; it has {sorted(names)}")
+    clamp_facets = facet_tags.find(names["clamp"])
+    if comm.allreduce(clamp_facets.size, op=MPI.SUM) == 0:
+        raise ValueError(f"the clamp group of {model_info.source} holds no facets")
+    mesh.topology.create_connectivity(2, 3)
+    clamp_dofs = fem.locate_dofs_topological(V, 2, clamp_facets)
+    zero = np.zeros(3, dtype=PETSc.ScalarType)
+    clamp_bc = fem.dirichletbc(zero, clamp_dofs, V)
+    tip_nodes = np.asarray(model_info.tip_nodes, dtype=float).reshape(-1, 3)
+    tip_dofs = _locate_point_dofs(V, tip_nodes) if len(tip_nodes) else np.zeros((0, 3), dtype=np.int64)
+    return Sector(mesh=mesh, cell_tags=cell_tags, facet_tags=facet_tags, groups=names, V=V, material=material,
+                  clamp_bc=clamp_bc, tip_nodes=tip_nodes, tip_dofs=tip_dofs, cyclic_dofs={},
+                  volume=float(model_info.volume), source=model_info.source, preset=preset)
+
+
+def create_blade_sector(comm: MPI.Comm = MPI.COMM_WORLD, table: str | Path | None = None, preset="coarse",
+                        material: Material | None = None, degree: int = 2,
+                        n_tip_nodes: int = blade_geometry.N_TIP_NODES, shorten: float = 0.0) -> Sector:
+    """Mesh the rotor 37 blade with gmsh (rank 0) and distribute it.
+
+    Args:
+        comm: communicator.
+        table: path of NASA Table IV for the exact loft; None for the built-in parametric blade.
+        preset: mesh preset name ('ci', 'coarse', 'paper') or a geometry.blade.MeshPreset.
+        material: defaults to the paper's maraging steel.
+        degree: Lagrange degree of the displacement (2 = the paper's quadratic elements).
+        n_tip_nodes: contact nodes along the tip camber line, LE and TE included.
+        shorten: radial length removed at the tip (m), parametric blade only.
+    """
+    material = material or Material()
+    preset_obj = blade_geometry.get_mesh_preset(preset)
+    table_obj = read_blade_table(table) if table is not None else None
+    info, error = None, None
+    if comm.rank == 0:
+        with blade_geometry.gmsh_session():
+            try:
+                info = blade_geometry.create_blade_model(table_obj, preset_obj, n_tip_nodes=n_tip_nodes,
+                                                         shorten=shorten)
+            except ValueError as exc:
+                error = str(exc)
+            except Exception as exc:  # gmsh's own failures: one line, naming the step
+                error = f"gmsh failed to mesh the blade ({str(exc).splitlines()[0]})"
+            error = comm.bcast(error, root=0)
+            if error is None:
+                return create_sector_from_gmsh(comm, info, material, degree, preset_obj.name)
+    else:
+        error = comm.bcast(None, root=0)
+        if error is None:
+            return create_sector_from_gmsh(comm, None, material, degree, preset_obj.name)
+    raise ValueError(error)
+
+
+def create_sector_from_file(path: str | Path, clamp, tip=None, comm: MPI.Comm = MPI.COMM_WORLD,
+                            preset="coarse", material: Material | None = None, degree: int = 2,
+                            scale: float = 1.0) -> Sector:
+    """A user's blade from a STEP/BREP/MSH file (see geometry.blade.import_blade_model for clamp/tip)."""
+    material = material or Material()
+    error = None
+    if comm.rank == 0:
+        with blade_geometry.gmsh_session():
+            try:
+                info = blade_geometry.import_blade_model(path, clamp, tip, preset, scale)
+            except ValueError as exc:
+                error = str(exc)
+            except Exception as exc:
+                error = f"gmsh failed on {path} ({str(exc).splitlines()[0]})"
+            error = comm.bcast(error, root=0)
+            if error is None:
+                return create_sector_from_gmsh(comm, info, material, degree, str(preset))
+    else:
+        error = comm.bcast(None, root=0)
+        if error is None:
+            return create_sector_from_gmsh(comm, None, material, degree, str(preset))
+    raise ValueError(error)
+
+
+@dataclasses.dataclass(frozen=True)
+class SvkOperators:
+    """Compiled SVK forms of a sector, evaluated at the state ``u`` (set ``u.x.array`` before assembling).
+
+    Attributes:
+        u: state Function; w1, w2, w3: direction Functions for the higher derivatives.
+        f_int, g_nl: internal and nonlinear force 1-forms at u.
+        tangent: exact tangent K_T(u) 2-form; stiffness: K; mass: M.
+        d2: D^2 f_int(u)[w1, w2] 1-form; d3: D^3 f_int[w1, w2, w3] 1-form.
+    """
+
+    u: object
+    w1: object
+    w2: object
+    w3: object
+    f_int: object
+    g_nl: object
+    tangent: object
+    stiffness: object
+    mass: object
+    d2: object
+    d3: object
+    constants: dict
+
+
+def create_svk_operators(sector: Sector, quadrature_degree: int | None = None) -> SvkOperators:
+    """Compile the forms of :mod:`forms.svk` for ``sector`` with material constants as fem.Constant."""
+    V, mesh = sector.V, sector.mesh
+    lmbda_value, mu_value = sector.material.lame
+    lmbda = fem.Constant(mesh, PETSc.ScalarType(lmbda_value))
+    mu = fem.Constant(mesh, PETSc.ScalarType(mu_value))
+    rho = fem.Constant(mesh, PETSc.ScalarType(sector.material.rho))
+    u, w1, w2, w3 = (fem.Function(V, name=n) for n in ("u", "w1", "w2", "w3"))
+    v, du = ufl.TestFunction(V), ufl.TrialFunction(V)
+    metadata = {} if quadrature_degree is None else {"quadrature_degree": quadrature_degree}
+    dx = ufl.dx(domain=mesh, metadata=metadata)
+
+    def compile_(form):
+        return fem.form(form, jit_params=JIT_PARAMS)
+
+    return SvkOperators(
+        u=u, w1=w1, w2=w2, w3=w3,
+        f_int=compile_(forms.internal_force(u, v, lmbda, mu, dx)),
+        g_nl=compile_(forms.nonlinear_force(u, v, lmbda, mu, dx)),
+        tangent=compile_(forms.tangent_stiffness(u, v, du, lmbda, mu, dx)),
+        stiffness=compile_(forms.linear_stiffness(v, du, lmbda, mu, dx)),
+        mass=compile_(forms.mass(v, du, rho, dx)),
+        d2=compile_(forms.second_derivative(u, v, w1, w2, lmbda, mu, dx)),
+        d3=compile_(forms.third_derivative(u, v, w1, w2, w3, lmbda, mu, dx)),
+        constants={"lambda": lmbda, "mu": mu, "rho": rho},
+    )
+
+
+def _assemble_matrix(form, bcs, diagonal: float) -> PETSc.Mat:
+    A = fem_petsc.assemble_matrix(form, bcs=bcs, diagonal=diagonal)
+    A.assemble()
+    return A
+
+
+def assemble_stiffness(sector: Sector, ops: SvkOperators | None = None, clamped: bool = True) -> PETSc.Mat:
+    """Linear stiffness K (N/m) with the clamp: clamped rows/columns zero, 1 on the diagonal."""
+    ops = ops or create_svk_operators(sector)
+    return _assemble_matrix(ops.stiffness, [sector.clamp_bc] if clamped else [], 1.0)
+
+
+def assemble_mass(sector: Sector, ops: SvkOperators | None = None, clamped: bool = True) -> PETSc.Mat:
+    """Consistent mass M (kg) with the clamp: clamped rows/columns zero, MASS_DIAGONAL on the diagonal."""
+    ops = ops or create_svk_operators(sector)
+    return _assemble_matrix(ops.mass, [sector.clamp_bc] if clamped else [], MASS_DIAGONAL)
+
+
+def assemble_vector(form) -> PETSc.Vec:
+    """Assemble a 1-form into a ghost-updated PETSc vector."""
+    b = fem_petsc.assemble_vector(form)
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    return b
+
+
+def vector_to_array(sector: Sector, vec: PETSc.Vec) -> np.ndarray:
+    """Owned entries of a PETSc vector as a NumPy copy."""
+    return vec.getArray(readonly=True).copy()
+
+
+def gather_dof_values(sector: Sector, values: np.ndarray, dofs: np.ndarray) -> np.ndarray:
+    """Values at per-rank local DOF indices (-1 = not here), summed over ranks: identical on every rank."""
+    dofs = np.asarray(dofs)
+    out = np.zeros(dofs.shape + values.shape[1:], dtype=float)
+    mask = dofs >= 0
+    out[mask] = values[dofs[mask]]
+    return sector.comm.allreduce(out, op=MPI.SUM)
+
+
+def _lu_solver(comm, A: PETSc.Mat, prefix: str) -> PETSc.KSP:
+    ksp = PETSc.KSP().create(comm)
+    ksp.setOptionsPrefix(prefix)
+    ksp.setOperators(A)
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType("mumps")
+    ksp.setFromOptions()
+    return ksp
+
+
+@dataclasses.dataclass(frozen=True)
+class ModalResult:
+    """Clamped modes: omega (rad/s), mass-normalised mode Functions, tip displacements (n_modes, n_tip, 3)."""
+
+    omega: np.ndarray
+    modes: list
+    tip_displacements: np.ndarray
+
+
+def solve_eigenproblem(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float = 0.0, tol: float = 1e-12,
+                       prefix: str = "modes_") -> tuple[np.ndarray, list]:
+    """Lowest ``n_modes`` eigenpairs of K x = lambda M x by SLEPc Krylov-Schur with shift-invert (MUMPS LU).
+
+    Returns:
+        (omega, vectors): omega = sqrt(lambda) in rad/s ascending, vectors M-normalised (x^T M x = 1).
+    """
+    from slepc4py import SLEPc
+
+    n_global = K.getSize()[0]
+    if not (1 <= n_modes < n_global):
+        raise ValueError(f"n_modes must be in [1, {n_global - 1}], got {n_modes}")
+    eps = SLEPc.EPS().create(K.getComm())
+    eps.setOptionsPrefix(prefix)
+    eps.setOperators(K, M)
+    eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
+    eps.setType(SLEPc.EPS.Type.KRYLOVSCHUR)
+    eps.setDimensions(n_modes, max(2 * n_modes, n_modes + 15))
+    eps.setTolerances(tol, 500)
+    eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
+    eps.setTarget(sigma)
+    st = eps.getST()
+    st.setType(SLEPc.ST.Type.SINVERT)
+    st.setShift(sigma)
+    ksp = st.getKSP()
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType("mumps")
+    eps.setFromOptions()
+    eps.solve()
+    n_conv = eps.getConverged()
+    if n_conv < n_modes:
+        raise RuntimeError(f"SLEPc converged {n_conv} of {n_modes} eigenpairs")
+    lams, vecs = [], []
+    for i in range(n_conv):
+        x = K.createVecRight()
+        lam = eps.getEigenpair(i, x).real
+        lams.append(lam)
+        vecs.append(x)
+    order = np.argsort(lams)[:n_modes]
+    lam = np.array(lams)[order]
+    if np.any(lam <= 0):
+        raise ValueError("K is not positive definite on the free DOFs (non-positive eigenvalue): check the clamp")
+    vecs = [vecs[i] for i in order]
+    for x in vecs:  # M-normalise (SLEPc already does for GHEP; make it explicit)
+        Mx = M.createVecLeft()
+        M.mult(x, Mx)
+        x.scale(1.0 / np.sqrt(x.dot(Mx)))
+    eps.destroy()
+    return np.sqrt(lam), vecs
+
+
+def compute_clamped_modes(sector: Sector, n_modes: int = 6, ops: SvkOperators | None = None) -> ModalResult:
+    """First ``n_modes`` clamped modes with tip-node displacements gathered on every rank."""
+    ops = ops or create_svk_operators(sector)
+    K, M = assemble_stiffness(sector, ops), assemble_mass(sector, ops)
+    omega, vecs = solve_eigenproblem(K, M, n_modes)
+    modes, tips = [], []
+    for i, x in enumerate(vecs):
+        f = fem.Function(sector.V, name=f"mode_{i + 1}")
+        f.vector.array[:] = x.array
+        f.x.scatter_forward()
+        modes.append(f)
+        tips.append(gather_dof_values(sector, f.x.array, sector.tip_dofs))
+    K.destroy()
+    M.destroy()
+    return ModalResult(omega=omega, modes=modes, tip_displacements=np.array(tips))
+
+
+@dataclasses.dataclass(frozen=True)
+class StaticResult:
+    """Load factors, tip displacements (n_steps, n_tip, 3) and Newton iterations per step; u: final Function."""
+
+    load_factors: np.ndarray
+    tip_displacements: np.ndarray
+    iterations: np.ndarray
+    u: object
+
+
+def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec | None = None,
+                 prescribed: Sequence[tuple[np.ndarray, np.ndarray]] = (), n_steps: int = 10,
+                 rtol: float = 1e-10, max_iterations: int = 25, ops: SvkOperators | None = None,
+                 linear: bool = False) -> StaticResult:
+    """Nonlinear static equilibrium f_int(u) = lambda f_ext by Newton with the exact tangent and load stepping.
+
+    Args:
+        sector: the structure (clamp applied).
+        force: external load for lambda = 1: a PETSc vector (N) or a function v -> UFL 1-form (e.g. a traction).
+        prescribed: displacement control: (local DOF indices, values at lambda = 1) pairs, imposed as lambda*values.
+        n_steps: equal load increments (1..10000).
+        rtol: Newton stops when ||r|| <= rtol * max(||lambda f_ext||, ||reaction||) (relative residual).
+        linear: solve K u = lambda f (one factorisation) instead.
+    """
+    if not (1 <= n_steps <= 10000):
+        raise ValueError(f"n_steps must be in [1, 10000], got {n_steps}")
+    ops = ops or create_svk_operators(sector)
+    V = sector.V
+    u = ops.u
+    u.x.array[:] = 0.0
+    f_ext = None
+    if isinstance(force, PETSc.Vec):
+        f_ext = force
+    elif force is not None:
+        f_ext = assemble_vector(fem.form(force(ufl.TestFunction(V)), jit_params=JIT_PARAMS))
+    dofs = np.concatenate([np.asarray(d, dtype=np.int32) for d, _ in prescribed]) if prescribed else \
+        np.zeros(0, np.int32)
+    values = np.concatenate([np.asarray(v, float) for _, v in prescribed]) if prescribed else np.zeros(0)
+    target = fem.Function(V)
+    bcs = [sector.clamp_bc]
+    if dofs.size:
+        bcs.append(fem.dirichletbc(target, dofs))
+    lambdas = np.linspace(0.0, 1.0, n_steps + 1)[1:]
+    tips, its = [], []
+    du = u.vector.duplicate()
+    K_lin = assemble_stiffness(sector, ops) if linear else None
+    for lam in lambdas:
+        target.x.array[dofs] = lam * values
+        target.x.scatter_forward()
+        if linear:  # K u = lam f with lifting of the prescribed values
+            b = K_lin.createVecLeft()
+            b.set(0.0)
+            if f_ext is not None:
+                b.axpy(lam, f_ext)
+            fem_petsc.apply_lifting(b, [ops.stiffness], [bcs])
+            b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            fem_petsc.set_bc(b, bcs)
+            ksp = _lu_solver(sector.comm, K_lin, "static_")
+            ksp.solve(b, u.vector)
+            u.x.scatter_forward()
+            ksp.destroy()
+            tips.append(gather_dof_values(sector, u.x.array, sector.tip_dofs))
+            its.append(1)
+            continue
+        fem_petsc.set_bc(u.vector, bcs)  # impose the prescribed values on u; Newton increments keep them
+        u.x.scatter_forward()
+        for it in range(max_iterations + 1):
+            r = assemble_vector(ops.f_int)
+            reaction = r.norm()
+            load_norm = 0.0
+            if f_ext is not None:
+                r.axpy(-lam, f_ext)
+                load_norm = abs(lam) * f_ext.norm()
+            fem_petsc.set_bc(r, bcs, scale=0.0)
+            res, ref = r.norm(), max(load_norm, reaction, 1e-300)
+            LOG.debug("lambda=%.4f it=%d |r|=%.3e ref=%.3e", lam, it, res, ref)
+            if res <= rtol * ref:
+                break
+            if it == max_iterations:
+                raise RuntimeError(f"Newton did not converge at load factor {lam:.4g} "
+                                   f"(|r|/ref = {res / ref:.2e} after {it} iterations); use more n_steps")
+            A = fem_petsc.assemble_matrix(ops.tangent, bcs=bcs, diagonal=1.0)
+            A.assemble()
+            ksp = _lu_solver(sector.comm, A, "newton_")
+            r.scale(-1.0)
+            ksp.solve(r, du)
+            u.vector.axpy(1.0, du)
+            u.x.scatter_forward()
+            A.destroy()
+            ksp.destroy()
+        tips.append(gather_dof_values(sector, u.x.array, sector.tip_dofs))
+        its.append(it)
+    out = fem.Function(V, name="u")
+    out.x.array[:] = u.x.array
+    return StaticResult(load_factors=lambdas, tip_displacements=np.array(tips), iterations=np.array(its), u=out)
+
+
+@dataclasses.dataclass(frozen=True)
+class TransientResult:
+    """Times (n+1,), monitored DOF values (n+1, n_monitor) and final displacement/velocity Functions."""
+
+    t: np.ndarray
+    monitored: np.ndarray
+    u: object
+    v: object
+    energy: np.ndarray
+
+
+def solve_newmark(sector: Sector, force_shape: PETSc.Vec, load: Callable[[float], float], dt: float,
+                  n_steps: int, monitor_dofs: np.ndarray, nonlinear: bool = True, rayleigh=(0.0, 0.0),
+                  beta: float = 0.25, gamma: float = 0.5, rtol: float = 1e-9, max_iterations: int = 20,
+                  ops: SvkOperators | None = None) -> TransientResult:
+    """Implicit Newmark integration of M a + C v + f_int(u) = load(t) f from rest (full-order reference).
+
+    Args:
+        force_shape: spatial load vector f (N).
+        load: time law load(t) (dimensionless).
+        dt: time step (s), > 0; n_steps: number of steps.
+        monitor_dofs: per-rank local DOF indices (-1 = not here) recorded each step, e.g. ``sector.tip_dofs``.
+        nonlinear: SVK internal force with Newton on the exact tangent; False: linear K u (one factorisation).
+        rayleigh: (alpha, beta_K): C = alpha M + beta_K K.
+        beta, gamma: Newmark parameters (default: average acceleration, unconditionally stable, no dissipation).
+    Returns:
+        TransientResult with energy (n+1,): kinetic + strain energy (linear: u^T K u / 2), for checks.
+    """
+    if not dt > 0:
+        raise ValueError(f"dt must be > 0 s, got {dt}")
+    if not (1 <= n_steps <= 10_000_000):
+        raise ValueError(f"n_steps must be in [1, 1e7], got {n_steps}")
+    if not (0.0 < beta <= 0.5 and 0.5 <= gamma <= 1.0):
+        raise ValueError(f"Newmark needs 0 < beta <= 0.5 and 0.5 <= gamma <= 1, got beta={beta}, gamma={gamma}")
+    ops = ops or create_svk_operators(sector)
+    comm, bcs = sector.comm, [sector.clamp_bc]
+    K, M = assemble_stiffness(sector, ops), assemble_mass(sector, ops)
+    C = M.copy()
+    C.scale(rayleigh[0])
+    C.axpy(rayleigh[1], K)
+    c_mass, c_damp = 1.0 / (beta * dt**2), gamma / (beta * dt)
+    u = ops.u
+    u.x.array[:] = 0.0
+    un, vn, an = u.vector.copy(), u.vector.duplicate(), u.vector.duplicate()
+    for w in (vn, an):
+        w.set(0.0)
+    # initial acceleration from rest: M a0 = f(0)
+    rhs = force_shape.copy()
+    rhs.scale(load(0.0))
+    fem_petsc.set_bc(rhs, bcs, scale=0.0)
+    ksp_m = _lu_solver(comm, M, "newmark_mass_")
+    ksp_m.solve(rhs, an)
+    ksp_m.destroy()
+    A_lin = None
+    if not nonlinear:
+        A_lin = K.copy()
+        A_lin.axpy(c_mass, M)
+        A_lin.axpy(c_damp, C)
+        ksp_lin = _lu_solver(comm, A_lin, "newmark_")
+    t = np.arange(n_steps + 1) * dt
+    monitored = [gather_dof_values(sector, u.x.array, monitor_dofs)]
+    energies = [0.0]
+    pred_a, pred_v, tmp, r, du = (u.vector.duplicate() for _ in range(5))
+    for n in range(1, n_steps + 1):
+        # predictors: a_{n+1} = c_mass (u - un) - pred_a, v_{n+1} = pred_v + gamma dt a_{n+1}
+        pred_a.set(0.0)
+        pred_a.axpy(c_mass * dt, vn)
+        pred_a.axpy(1.0 / (2.0 * beta) - 1.0, an)
+        pred_v.set(0.0)
+        pred_v.axpy(1.0, vn)
+        pred_v.axpy((1.0 - gamma) * dt, an)
+        f_n = force_shape.copy()
+        f_n.scale(load(t[n]))
+        for it in range(max_iterations + 1):
+            # a = c_mass (u - un) - pred_a ; v = pred_v + gamma dt a
+            a_vec = u.vector.copy()
+            a_vec.axpy(-1.0, un)
+            a_vec.scale(c_mass)
+            a_vec.axpy(-1.0, pred_a)
+            v_vec = pred_v.copy()
+            v_vec.axpy(gamma * dt, a_vec)
+            if nonlinear:
+                r = assemble_vector(ops.f_int)
+            else:
+                K.mult(u.vector, r)
+            M.multAdd(a_vec, r, r)
+            C.multAdd(v_vec, r, r)
+            r.axpy(-1.0, f_n)
+            fem_petsc.set_bc(r, bcs, scale=0.0)
+            res = r.norm()
+            ref = max(f_n.norm(), 1e-30)
+            if not nonlinear and it == 1:
+                break
+            if nonlinear and (res <= rtol * ref or (it > 0 and res < 1e-14)):
+                break
+            if it == max_iterations:
+                raise RuntimeError(f"Newmark-Newton did not converge at step {n} (|r|/|f| = {res / ref:.2e})")
+            if nonlinear:
+                A = fem_petsc.assemble_matrix(ops.tangent, bcs=bcs, diagonal=1.0)
+                A.assemble()
+                A.axpy(c_mass, M)
+                A.axpy(c_damp, C)
+                ksp = _lu_solver(comm, A, "newmark_")
+            else:
+                ksp = ksp_lin
+            r.scale(-1.0)
+            ksp.solve(r, du)
+            u.vector.axpy(1.0, du)
+            u.x.scatter_forward()
+            if nonlinear:
+                ksp.destroy()
+                A.destroy()
+        un.array[:] = u.vector.array
+        vn.array[:] = v_vec.array
+        an.array[:] = a_vec.array
+        monitored.append(gather_dof_values(sector, u.x.array, monitor_dofs))
+        M.mult(vn, tmp)
+        kinetic = 0.5 * vn.dot(tmp)
+        K.mult(un, tmp)
+        energies.append(kinetic + 0.5 * un.dot(tmp))
+    v_out = fem.Function(sector.V, name="velocity")
+    v_out.vector.array[:] = vn.array
+    u_out = fem.Function(sector.V, name="u")
+    u_out.x.array[:] = u.x.array
+    return TransientResult(t=t, monitored=np.array(monitored), u=u_out, v=v_out, energy=np.array(energies))
