@@ -37,6 +37,7 @@ __all__ = [
     "create_blade_sector",
     "create_sector_from_file",
     "create_sector_from_gmsh",
+    "create_sector_from_mesh",
     "create_svk_operators",
     "assemble_stiffness",
     "assemble_mass",
@@ -45,6 +46,8 @@ __all__ = [
     "solve_static",
     "solve_newmark",
     "vector_to_array",
+    "assemble_scalar",
+    "assemble_vector",
     "gather_dof_values",
 ]
 
@@ -102,8 +105,7 @@ class Sector:
         return self.facet_tags.find(self.groups[name])
 
     def total_mass(self) -> float:
-        form = fem.form(self.material.rho * ufl.dx(domain=self.mesh))
-        return self.comm.allreduce(fem.assemble_scalar(form), op=MPI.SUM)
+        return assemble_scalar(self.material.rho * ufl.dx(domain=self.mesh), self.comm)
 
 
 def _locate_point_dofs(V, points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
@@ -128,29 +130,38 @@ def create_sector_from_gmsh(comm: MPI.Comm, model_info, material: Material, degr
     """Build a :class:`Sector` from the current gmsh model (alive on rank 0 only) and its builder report."""
     import gmsh
 
-    if not (1 <= degree <= 3):
-        raise ValueError(f"degree must be 1, 2 or 3, got {degree}")
     names = {}
     if comm.rank == 0:
         names = {gmsh.model.getPhysicalName(d, t): t for d, t in gmsh.model.getPhysicalGroups()}
     names = comm.bcast(names, root=0)
     model_info = comm.bcast(model_info, root=0)
     mesh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model if comm.rank == 0 else None, comm, 0, gdim=3)
+    return create_sector_from_mesh(mesh, cell_tags, facet_tags, names, material, degree,
+                                   np.asarray(model_info.tip_nodes, dtype=float).reshape(-1, 3),
+                                   float(model_info.volume), model_info.source, preset)
+
+
+def create_sector_from_mesh(mesh, cell_tags, facet_tags, groups: dict, material: Material, degree: int = 2,
+                            tip_nodes: np.ndarray | None = None, volume: float = float("nan"), source: str = "mesh",
+                            preset: str = "") -> Sector:
+    """A :class:`Sector` from a distributed dolfinx mesh whose facet tags hold a group named 'clamp'."""
+    if not (1 <= degree <= 3):
+        raise ValueError(f"degree must be 1, 2 or 3, got {degree}")
+    comm = mesh.comm
     V = fem.VectorFunctionSpace(mesh, ("Lagrange", degree))
-    if "clamp" not in names:
-        raise ValueError(f"the model of {model_info.source} has no 'clamp' group; it has {sorted(names)}")
-    clamp_facets = facet_tags.find(names["clamp"])
+    if "clamp" not in groups:
+        raise ValueError(f"the model of {source} has no 'clamp' group; it has {sorted(groups)}")
+    clamp_facets = facet_tags.find(groups["clamp"])
     if comm.allreduce(clamp_facets.size, op=MPI.SUM) == 0:
-        raise ValueError(f"the clamp group of {model_info.source} holds no facets")
-    mesh.topology.create_connectivity(2, 3)
-    clamp_dofs = fem.locate_dofs_topological(V, 2, clamp_facets)
-    zero = np.zeros(3, dtype=PETSc.ScalarType)
-    clamp_bc = fem.dirichletbc(zero, clamp_dofs, V)
-    tip_nodes = np.asarray(model_info.tip_nodes, dtype=float).reshape(-1, 3)
+        raise ValueError(f"the clamp group of {source} holds no facets")
+    mesh.topology.create_connectivity(mesh.topology.dim - 1, mesh.topology.dim)
+    clamp_dofs = fem.locate_dofs_topological(V, mesh.topology.dim - 1, clamp_facets)
+    clamp_bc = fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), clamp_dofs, V)
+    tip_nodes = np.zeros((0, 3)) if tip_nodes is None else np.asarray(tip_nodes, float).reshape(-1, 3)
     tip_dofs = _locate_point_dofs(V, tip_nodes) if len(tip_nodes) else np.zeros((0, 3), dtype=np.int64)
-    return Sector(mesh=mesh, cell_tags=cell_tags, facet_tags=facet_tags, groups=names, V=V, material=material,
-                  clamp_bc=clamp_bc, tip_nodes=tip_nodes, tip_dofs=tip_dofs, cyclic_dofs={},
-                  volume=float(model_info.volume), source=model_info.source, preset=preset)
+    return Sector(mesh=mesh, cell_tags=cell_tags, facet_tags=facet_tags, groups=dict(groups), V=V,
+                  material=material, clamp_bc=clamp_bc, tip_nodes=tip_nodes, tip_dofs=tip_dofs, cyclic_dofs={},
+                  volume=volume, source=source, preset=preset)
 
 
 def create_blade_sector(comm: MPI.Comm = MPI.COMM_WORLD, table: str | Path | None = None, preset="coarse",
@@ -290,6 +301,13 @@ def assemble_vector(form) -> PETSc.Vec:
     b = fem_petsc.assemble_vector(form)
     b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     return b
+
+
+def assemble_scalar(form, comm: MPI.Comm | None = None) -> float:
+    """Assemble a UFL 0-form and sum over ranks."""
+    compiled = fem.form(form, jit_params=JIT_PARAMS)
+    comm = comm or compiled.mesh.comm
+    return comm.allreduce(fem.assemble_scalar(compiled), op=MPI.SUM)
 
 
 def vector_to_array(sector: Sector, vec: PETSc.Vec) -> np.ndarray:
