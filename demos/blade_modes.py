@@ -78,7 +78,10 @@ def main(argv=None) -> int:
     parser.add_argument("--out", default="results/blade_modes", help="output folder")
     parser.add_argument("--no-pictures", action="store_true", help="skip the pyvista PNGs")
     args = parser.parse_args(argv)
-    logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    # the FFCx JIT (through setuptools' distutils log) resets the root logger to INFO while compiling: filter at
+    # the handler so compiler chatter stays out of the output
+    logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s", force=True)
+    logging.getLogger().handlers[0].setLevel(logging.WARNING)
     if not 1 <= args.modes <= 50:
         raise ValueError(f"--modes must be in [1, 50], got {args.modes}")
     tables = [None]

@@ -448,61 +448,71 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
         f_ext = force
     elif force is not None:
         f_ext = assemble_vector(fem.form(force(ufl.TestFunction(V)), jit_params=JIT_PARAMS))
-    dofs = np.concatenate([np.asarray(d, dtype=np.int32) for d, _ in prescribed]) if prescribed else \
-        np.zeros(0, np.int32)
-    values = np.concatenate([np.asarray(v, float) for _, v in prescribed]) if prescribed else np.zeros(0)
-    target = fem.Function(V)
+    dofs = np.concatenate([np.asarray(d, dtype=np.int64).ravel() for d, _ in prescribed]) if prescribed else \
+        np.zeros(0, np.int64)
+    values = np.concatenate([np.asarray(v, float).ravel() for _, v in prescribed]) if prescribed else np.zeros(0)
+    if dofs.shape != values.shape:
+        raise ValueError(f"prescribed: {dofs.size} DOFs but {values.size} values")
+    owned = dofs >= 0  # per-rank local indices, -1 where the DOF lives on another rank
+    dofs, values = dofs[owned], values[owned]
+    bs = V.dofmap.index_map_bs
+    n_owned = V.dofmap.index_map.size_local * bs
+    if np.any(dofs >= n_owned):
+        raise ValueError("prescribed: DOF indices must be owned local (unblocked) indices, as in Sector.tip_dofs")
+    global_rows = (V.dofmap.index_map.local_range[0] * bs + dofs).astype(PETSc.IntType)
     bcs = [sector.clamp_bc]
-    if dofs.size:
-        bcs.append(fem.dirichletbc(target, dofs))
     lambdas = np.linspace(0.0, 1.0, n_steps + 1)[1:]
     tips, its = [], []
     du = u.vector.duplicate()
-    K_lin = assemble_stiffness(sector, ops) if linear else None
+    K_full = assemble_stiffness(sector, ops) if linear else None
+    if linear:  # one factorisation of K with the prescribed rows and columns eliminated
+        K_lin = K_full.copy()
+        K_lin.zeroRowsColumns(global_rows, diag=1.0)
+        ksp = _lu_solver(sector.comm, K_lin, "static_")
+    lift, rhs, r = u.vector.duplicate(), u.vector.duplicate(), u.vector.duplicate()
     for lam in lambdas:
-        target.x.array[dofs] = lam * values
-        target.x.scatter_forward()
-        if linear:  # K u = lam f with lifting of the prescribed values
-            b = K_lin.createVecLeft()
-            b.set(0.0)
-            if f_ext is not None:
-                b.axpy(lam, f_ext)
-            fem_petsc.apply_lifting(b, [ops.stiffness], [bcs])
-            b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            fem_petsc.set_bc(b, bcs)
-            ksp = _lu_solver(sector.comm, K_lin, "static_")
-            ksp.solve(b, u.vector)
-            u.x.scatter_forward()
-            ksp.destroy()
-            tips.append(gather_dof_values(sector, u.x.array, sector.tip_dofs))
-            its.append(1)
-            continue
-        fem_petsc.set_bc(u.vector, bcs)  # impose the prescribed values on u; Newton increments keep them
-        u.x.scatter_forward()
         for it in range(max_iterations + 1):
-            r = assemble_vector(ops.f_int)
+            # the prescribed increment still to apply (only non-zero on the first iteration of a step)
+            lift.set(0.0)
+            with u.vector.localForm() as local:
+                lift.array[dofs] = lam * values - local.array[dofs]
+            if linear:
+                K_full.mult(u.vector, r)
+            else:
+                r = assemble_vector(ops.f_int)
             reaction = r.norm()
             load_norm = 0.0
             if f_ext is not None:
                 r.axpy(-lam, f_ext)
                 load_norm = abs(lam) * f_ext.norm()
             fem_petsc.set_bc(r, bcs, scale=0.0)
+            r.array[dofs] = 0.0
             res, ref = r.norm(), max(load_norm, reaction, 1e-300)
             LOG.debug("lambda=%.4f it=%d |r|=%.3e ref=%.3e", lam, it, res, ref)
-            if res <= rtol * ref:
+            if (res <= rtol * ref or (linear and it == 1)) and lift.norm() == 0.0:
                 break
             if it == max_iterations:
                 raise RuntimeError(f"Newton did not converge at load factor {lam:.4g} "
                                    f"(|r|/ref = {res / ref:.2e} after {it} iterations); use more n_steps")
-            A = fem_petsc.assemble_matrix(ops.tangent, bcs=bcs, diagonal=1.0)
-            A.assemble()
-            ksp = _lu_solver(sector.comm, A, "newton_")
-            r.scale(-1.0)
-            ksp.solve(r, du)
+            A = K_full
+            if not linear:
+                A = fem_petsc.assemble_matrix(ops.tangent, bcs=bcs, diagonal=1.0)
+                A.assemble()
+            # rhs = -r - A lift on the free rows, = lift on the prescribed rows (a lifted predictor: no spike)
+            A.mult(lift, rhs)
+            rhs.axpy(1.0, r)
+            rhs.scale(-1.0)
+            fem_petsc.set_bc(rhs, bcs, scale=0.0)
+            rhs.array[dofs] = lift.array[dofs]
+            if not linear:
+                A.zeroRowsColumns(global_rows, diag=1.0)
+                ksp = _lu_solver(sector.comm, A, "newton_")
+            ksp.solve(rhs, du)
             u.vector.axpy(1.0, du)
             u.x.scatter_forward()
-            A.destroy()
-            ksp.destroy()
+            if not linear:
+                A.destroy()
+                ksp.destroy()
         tips.append(gather_dof_values(sector, u.x.array, sector.tip_dofs))
         its.append(it)
     out = fem.Function(V, name="u")
@@ -595,12 +605,14 @@ def solve_newmark(sector: Sector, force_shape: PETSc.Vec, load: Callable[[float]
                 r = assemble_vector(ops.f_int)
             else:
                 K.mult(u.vector, r)
-            M.multAdd(a_vec, r, r)
+            M.mult(a_vec, tmp)
+            # residual scale: the largest of the force terms, so round-off in any of them cannot stall Newton
+            ref = max(f_n.norm(), r.norm(), tmp.norm(), 1e-30)
+            r.axpy(1.0, tmp)
             C.multAdd(v_vec, r, r)
             r.axpy(-1.0, f_n)
             fem_petsc.set_bc(r, bcs, scale=0.0)
             res = r.norm()
-            ref = max(f_n.norm(), 1e-30)
             if not nonlinear and it == 1:
                 break
             if nonlinear and (res <= rtol * ref or (it > 0 and res < 1e-14)):
