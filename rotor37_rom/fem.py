@@ -647,3 +647,180 @@ def solve_newmark(sector: Sector, force_shape: PETSc.Vec, load: Callable[[float]
     u_out = fem.Function(sector.V, name="u")
     u_out.x.array[:] = u.x.array
     return TransientResult(t=t, monitored=np.array(monitored), u=u_out, v=v_out, energy=np.array(energies))
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Reduction support: free-DOF operators, constraint and fixed-interface modes, exact modal-derivative right-hand
+# sides, nonlinear forces of given fields and displacement gradients at quadrature points (all serial NumPy out).
+# ---------------------------------------------------------------------------------------------------------------
+
+def _require_serial(sector: Sector, what: str) -> None:
+    if sector.comm.size > 1:
+        raise ValueError(f"{what} works on one process (the reduced model is built serially); got "
+                         f"{sector.comm.size} ranks")
+
+
+def free_dofs(sector: Sector) -> np.ndarray:
+    """Sorted local (unblocked) indices of the DOFs not on the clamp (serial)."""
+    _require_serial(sector, "free_dofs")
+    bs = sector.V.dofmap.index_map_bs
+    n = sector.V.dofmap.index_map.size_local * bs
+    clamped = np.zeros(n, dtype=bool)
+    clamped[sector.clamp_bc.dof_indices()[0]] = True
+    return np.flatnonzero(~clamped)
+
+
+def petsc_to_scipy(A: PETSc.Mat):
+    """A serial PETSc AIJ matrix as scipy CSR (copy)."""
+    import scipy.sparse as sp
+
+    indptr, indices, data = A.getValuesCSR()
+    return sp.csr_matrix((data.copy(), indices.copy(), indptr.copy()), shape=A.getSize())
+
+
+def assemble_free_operators(sector: Sector, ops: SvkOperators | None = None):
+    """(K, M, free): linear stiffness and mass restricted to the free DOFs (scipy CSR, serial) and their indices."""
+    ops = ops or create_svk_operators(sector)
+    free = free_dofs(sector)
+    K = petsc_to_scipy(assemble_stiffness(sector, ops, clamped=False))[free][:, free]
+    M = petsc_to_scipy(assemble_mass(sector, ops, clamped=False))[free][:, free]
+    return K.tocsr(), M.tocsr(), free
+
+
+def evaluate_forces(sector: Sector, ops: SvkOperators, fields: np.ndarray, which: str = "g_nl") -> np.ndarray:
+    """Internal ('f_int') or nonlinear ('g_nl') force vectors of full displacement fields (n_fields, n_dofs)."""
+    _require_serial(sector, "evaluate_forces")
+    form = {"g_nl": ops.g_nl, "f_int": ops.f_int}[which]
+    fields = np.atleast_2d(fields)
+    out = np.empty_like(fields)
+    for k, u in enumerate(fields):  # one FE assembly per field (loop over fields, not DOFs)
+        ops.u.x.array[:] = u
+        out[k] = assemble_vector(form).getArray(readonly=True)
+    ops.u.x.array[:] = 0.0
+    return out
+
+
+def evaluate_second_derivative(sector: Sector, ops: SvkOperators, w1: np.ndarray, w2: np.ndarray,
+                               u: np.ndarray | None = None) -> np.ndarray:
+    """D^2 f_int(u)[w1, w2] (full vector); at u = 0 the exact modal-derivative right-hand side of eq. (17)."""
+    _require_serial(sector, "evaluate_second_derivative")
+    ops.u.x.array[:] = 0.0 if u is None else u
+    ops.w1.x.array[:] = w1
+    ops.w2.x.array[:] = w2
+    out = assemble_vector(ops.d2).getArray(readonly=True).copy()
+    ops.u.x.array[:] = 0.0
+    return out
+
+
+def assemble_tangent_scipy(sector: Sector, ops: SvkOperators, u: np.ndarray):
+    """Exact tangent K_T(u) on all DOFs (scipy CSR, no clamp) for the finite-difference MD variant (eq. 19)."""
+    ops.u.x.array[:] = u
+    A = fem_petsc.assemble_matrix(ops.tangent)
+    A.assemble()
+    ops.u.x.array[:] = 0.0
+    return petsc_to_scipy(A)
+
+
+def quadrature_gradients(sector: Sector, fields: np.ndarray, degree: int = 4):
+    """Displacement gradients of fields at the quadrature points of every cell.
+
+    Args:
+        fields: (r, n_dofs) displacement fields (e.g. the reduction basis, transposed).
+        degree: quadrature degree (4 integrates every SVK force term exactly for P2 on affine tetrahedra,
+            and is what UFL estimates for the forms of create_svk_operators).
+    Returns:
+        (H, w, cells): H (n_points, r, 3, 3) with H[p, i] = grad(phi_i) at point p, w (n_points,) the physical
+        quadrature weights (m^3), cells (n_points,) the cell of each point (points are grouped by cell).
+    """
+    import basix
+
+    _require_serial(sector, "quadrature_gradients")
+    mesh = sector.mesh
+    points, ref_weights = basix.make_quadrature(basix.CellType.tetrahedron, degree)
+    n_cells = mesh.topology.index_map(3).size_local
+    cells = np.arange(n_cells, dtype=np.int32)
+    u = fem.Function(sector.V)
+    grad_expr = fem.Expression(ufl.grad(u), points, jit_params=JIT_PARAMS)
+    det_expr = fem.Expression(abs(ufl.JacobianDeterminant(mesh)), points, jit_params=JIT_PARAMS)
+    fields = np.atleast_2d(fields)
+    n_pts = n_cells * len(ref_weights)
+    H = np.empty((n_pts, len(fields), 3, 3))
+    for i, field in enumerate(fields):  # one compiled evaluation per basis vector
+        u.x.array[:] = field
+        H[:, i] = grad_expr.eval(cells).reshape(n_pts, 3, 3)
+    w = (det_expr.eval(cells).reshape(n_cells, -1) * ref_weights).ravel()
+    return H, w, np.repeat(cells, len(ref_weights))
+
+
+def solve_constraint_and_interface_modes(sector: Sector, boundary_dofs: np.ndarray, n_interface: int,
+                                         ops: SvkOperators | None = None):
+    """Craig-Bampton ingredients on the full DOF vector (eqs. 8-11), serial NumPy output.
+
+    Constraint modes Psi: K u = 0 on the interior with u = e_j on boundary DOF j (one MUMPS factorisation of K_ii,
+    reused for all boundary DOFs). Fixed-interface modes Theta: the r_c lowest modes of (K_ii, M_ii) from SLEPc
+    shift-invert, M-normalised, zero on the boundary.
+
+    Returns:
+        (Psi, Theta, omega_c): (n_dofs, n_b), (n_dofs, r_c), (r_c,) rad/s; clamped DOFs are zero.
+    """
+    _require_serial(sector, "solve_constraint_and_interface_modes")
+    ops = ops or create_svk_operators(sector)
+    boundary_dofs = np.asarray(boundary_dofs, dtype=np.int64).ravel()
+    n = sector.V.dofmap.index_map.size_local * sector.V.dofmap.index_map_bs
+    clamped = sector.clamp_bc.dof_indices()[0]
+    if boundary_dofs.size == 0 or boundary_dofs.min() < 0 or boundary_dofs.max() >= n:
+        raise ValueError(f"boundary DOFs must be indices in [0, {n}) of DOFs on the mesh")
+    if np.intersect1d(boundary_dofs, clamped).size:
+        raise ValueError("boundary DOFs must not be clamped")
+    if len(np.unique(boundary_dofs)) != boundary_dofs.size:
+        raise ValueError("boundary DOFs contain duplicates")
+    rows = boundary_dofs.astype(PETSc.IntType)
+    K = assemble_stiffness(sector, ops)
+    M = assemble_mass(sector, ops)
+    K_fixed = K.copy()
+    K_fixed.zeroRowsColumns(rows, diag=1.0)
+    M_fixed = M.copy()
+    M_fixed.zeroRowsColumns(rows, diag=MASS_DIAGONAL)
+    n_free_interior = n - clamped.size - boundary_dofs.size
+    if not (1 <= n_interface < n_free_interior):
+        raise ValueError(f"r_c (fixed-interface modes) must be in [1, {n_free_interior - 1}], got {n_interface}")
+    ksp = _lu_solver(sector.comm, K_fixed, "constraint_")
+    Psi = np.zeros((n, boundary_dofs.size))
+    e, rhs, x = K.createVecRight(), K.createVecLeft(), K.createVecRight()
+    for j, dof in enumerate(boundary_dofs):  # a handful of right-hand sides, one factorisation
+        e.set(0.0)
+        e.array[dof] = 1.0
+        K.mult(e, rhs)
+        rhs.scale(-1.0)
+        rhs.array[boundary_dofs] = 0.0
+        rhs.array[dof] = 1.0
+        rhs.array[clamped] = 0.0
+        ksp.solve(rhs, x)
+        Psi[:, j] = x.array
+    ksp.destroy()
+    omega, vecs = solve_eigenproblem(K_fixed, M_fixed, n_interface, prefix="interface_")
+    Theta = np.column_stack([v.array for v in vecs])
+    Theta[boundary_dofs] = 0.0
+    for A in (K, M, K_fixed, M_fixed):
+        A.destroy()
+    return Psi, Theta, omega
+
+
+def solve_clamped_static(sector: Sector, rhs: np.ndarray, ops: SvkOperators | None = None) -> np.ndarray:
+    """Solve K x = b for many right-hand sides b (n_rhs, n_dofs) with the clamp (one MUMPS factorisation)."""
+    _require_serial(sector, "solve_clamped_static")
+    ops = ops or create_svk_operators(sector)
+    K = assemble_stiffness(sector, ops)
+    ksp = _lu_solver(sector.comm, K, "md_")
+    clamped = sector.clamp_bc.dof_indices()[0]
+    b, x = K.createVecLeft(), K.createVecRight()
+    rhs = np.atleast_2d(rhs)
+    out = np.empty_like(rhs)
+    for k, r in enumerate(rhs):
+        b.array[:] = r
+        b.array[clamped] = 0.0
+        ksp.solve(b, x)
+        out[k] = x.array
+    ksp.destroy()
+    K.destroy()
+    return out

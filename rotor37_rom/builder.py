@@ -1,0 +1,230 @@
+"""Build a reduced model of a Sector: Craig-Bampton modes, selected modal derivatives, reduced cubic forces.
+
+The FE work goes through rotor37_rom.fem (the adapter); the algebra is in reduction, nonlinear_forces, step and
+ecsw. Offline products are cached under a key (parameters + mesh signature + version) when a cache folder is given.
+"""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import logging
+import time
+from pathlib import Path
+
+import numpy as np
+
+from rotor37_rom import __version__, fem
+from rotor37_rom.ecsw import train_ecsw
+from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces
+from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, ReducedModel, fixed_interface_correction, lift_states,
+                                   load_reduced_model, modal_damping, reduced_model_key, save_reduced_model,
+                                   select_pairs, selection_weights, simulate_linear_newmark)
+from rotor37_rom.step import identify_step
+
+__all__ = ["ReductionConfig", "build_reduced_model", "mesh_signature", "compute_modal_derivatives",
+           "training_states"]
+
+LOG = logging.getLogger(__name__)
+FORCE_METHODS = ("intrusive", "quadrature", "step", "ecsw", "none")
+
+
+@dataclasses.dataclass(frozen=True)
+class ReductionConfig:
+    """Reduction parameters (SI units).
+
+    Attributes:
+        r_c: fixed-interface modes (>= 1).
+        r_md: modal derivatives kept (0 .. (r_b + r_c)(r_b + r_c + 1)/2).
+        criterion: MD selection: 'MMI', 'MI2a', 'MI2b', 'SMVW', 'random'.
+        md_method: 'exact' (UFL second derivative, eq. 17) or 'fd' (finite-difference tangent, eq. 19).
+        fd_step: displacement amplitude (m) of the finite-difference step (largest nodal displacement of eps phi_k).
+        forces: 'intrusive' (exact tensors), 'quadrature' (exact, tensor-free), 'step', 'ecsw', 'none'.
+        step_amplitude: largest displacement (m) of each enforced STEP displacement.
+        ecsw_tol: relative training tolerance of ECSW; ecsw_states: number of training states.
+        training_force: amplitude (N) of the harmonic training force at node LE along e_z (§3.3.1: 400 N).
+        training_omega: its pulsation (rad/s) (§3.3.1: 4000); one period, 400 Newmark steps.
+        keep_basis: store Phi in the model (to rebuild fields).
+    """
+
+    r_c: int = 15
+    r_md: int = 30
+    criterion: str = "MI2b"
+    md_method: str = "exact"
+    fd_step: float = 1e-6
+    forces: str = "intrusive"
+    step_amplitude: float = 1e-3
+    ecsw_tol: float = 1e-3
+    ecsw_states: int = 80
+    training_force: float = 400.0
+    training_omega: float = 4000.0
+    keep_basis: bool = True
+
+    def __post_init__(self):
+        if self.r_c < 1:
+            raise ValueError(f"r_c must be >= 1, got {self.r_c}")
+        if self.r_md < 0:
+            raise ValueError(f"r_md must be >= 0, got {self.r_md}")
+        if self.criterion not in CRITERIA:
+            raise ValueError(f"criterion must be one of {CRITERIA}, got {self.criterion!r}")
+        if self.md_method not in ("exact", "fd"):
+            raise ValueError(f"md_method must be 'exact' or 'fd', got {self.md_method!r}")
+        if self.forces not in FORCE_METHODS:
+            raise ValueError(f"forces must be one of {FORCE_METHODS}, got {self.forces!r}")
+        if not (0 < self.fd_step < 1e-2) or not (0 < self.step_amplitude < 1e-1):
+            raise ValueError("fd_step must be in (0, 1e-2) m and step_amplitude in (0, 0.1) m")
+
+
+def mesh_signature(sector: fem.Sector) -> str:
+    """sha256 of the DOF coordinates, the cell DOF map and the material: identifies the discrete problem."""
+    h = hashlib.sha256()
+    h.update(np.ascontiguousarray(sector.V.tabulate_dof_coordinates().round(12)).tobytes())
+    h.update(np.ascontiguousarray(sector.V.dofmap.list.array).tobytes())
+    h.update(repr(sector.material).encode())
+    return h.hexdigest()[:24]
+
+
+def _check_operators(K: np.ndarray, M: np.ndarray) -> None:
+    for name, A in (("stiffness", K), ("mass", M)):
+        asym = np.abs(A - A.T).max() / np.abs(A).max()
+        if asym > 1e-8:
+            raise ValueError(f"reduced {name} is not symmetric (relative asymmetry {asym:.1e})")
+        try:
+            np.linalg.cholesky(0.5 * (A + A.T))
+        except np.linalg.LinAlgError:
+            raise ValueError(f"reduced {name} is not positive definite: the basis is rank-deficient or the "
+                             f"operator indefinite; reduce r_md or check the clamp") from None
+
+
+def compute_modal_derivatives(sector, ops, basis: CraigBamptonBasis, pairs: np.ndarray, method: str = "exact",
+                              fd_step: float = 1e-6) -> np.ndarray:
+    """Fixed-interface modal derivatives zeta_jk (eqs. 17, 19, 20) for the given (j, k) pairs, M-normalised later.
+
+    exact: K xi = -D^2 f_int(0)[phi_j, phi_k] from the UFL second derivative (no step).
+    fd:    K xi = -(K_T(eps phi_k) - K) phi_j / eps, eps = fd_step / max|phi_k| (eq. 19).
+    """
+    lin = basis.linear
+    if len(pairs) == 0:
+        return np.zeros((lin.shape[0], 0))
+    rhs = np.empty((len(pairs), lin.shape[0]))
+    if method == "exact":
+        for n, (j, k) in enumerate(pairs):
+            rhs[n] = -fem.evaluate_second_derivative(sector, ops, lin[:, j], lin[:, k])
+    else:
+        K0 = fem.assemble_tangent_scipy(sector, ops, np.zeros(lin.shape[0]))
+        for k in np.unique(pairs[:, 1]):
+            eps = fd_step / np.abs(lin[:, k]).max()
+            dK = (fem.assemble_tangent_scipy(sector, ops, eps * lin[:, k]) - K0) / eps
+            for n in np.flatnonzero(pairs[:, 1] == k):
+                rhs[n] = -(dK @ lin[:, pairs[n, 0]])
+    xi = fem.solve_clamped_static(sector, rhs, ops).T
+    return fixed_interface_correction(xi, basis.Psi, basis.boundary_dofs)
+
+
+def _m_normalise(Z: np.ndarray, M) -> tuple[np.ndarray, np.ndarray]:
+    norms = np.sqrt(np.einsum("ij,ij->j", Z, M @ Z))
+    return Z / norms, norms
+
+
+def training_states(K_lin: np.ndarray, M_lin: np.ndarray, pairs: np.ndarray, md_scale: np.ndarray, r_b: int,
+                    n_states: int, amplitudes=(1e-3, 3e-3), n_modes: int = 12, seed: int = 7) -> np.ndarray:
+    """Smooth reduced states for training and checking hyper-reduction: the first n_modes eigenvectors of the linear
+    Craig-Bampton model and random combinations of them (seeded), each scaled so that its largest boundary
+    displacement is one of ``amplitudes`` (m), lifted with the modal derivatives (reduction.lift_states).
+    A different seed gives held-out states."""
+    import scipy.linalg
+
+    _, V = scipy.linalg.eigh(K_lin, M_lin)
+    V = V[:, :n_modes]
+    rng = np.random.default_rng(seed)
+    n_random = max(0, n_states // len(amplitudes) - n_modes)
+    base = np.hstack([V, V @ rng.standard_normal((n_modes, n_random))]) if seed == 7 else \
+        V @ rng.standard_normal((n_modes, max(1, n_states // len(amplitudes))))
+    base = base / np.abs(base[:r_b]).max(axis=0)
+    return np.hstack([lift_states(a * base, pairs, md_scale) for a in amplitudes])
+
+
+def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), boundary_dofs: np.ndarray | None = None,
+                        ops=None, cache_dir: str | Path | None = None) -> tuple[ReducedModel, dict]:
+    """Craig-Bampton + modal derivatives + reduced forces. Returns (model, report with timings and weights)."""
+    ops = ops or fem.create_svk_operators(sector)
+    boundary_dofs = sector.tip_dofs.ravel() if boundary_dofs is None else np.asarray(boundary_dofs).ravel()
+    metadata = {"config": dataclasses.asdict(config), "boundary_dofs": boundary_dofs.tolist(),
+                "mesh": mesh_signature(sector), "source": sector.source, "version": __version__}
+    key = reduced_model_key(metadata)
+    cache = Path(cache_dir) / f"rom_{key}.npz" if cache_dir else None
+    if cache is not None and cache.is_file():
+        LOG.info("loading cached reduced model %s", cache)
+        return load_reduced_model(cache, expected_key=key), {"cached": True}
+    report: dict = {"cached": False, "timings": {}}
+    clock = time.perf_counter()
+
+    def lap(name):
+        nonlocal clock
+        now = time.perf_counter()
+        report["timings"][name] = now - clock
+        clock = now
+
+    Kfull = fem.petsc_to_scipy(fem.assemble_stiffness(sector, ops, clamped=False))
+    Mfull = fem.petsc_to_scipy(fem.assemble_mass(sector, ops, clamped=False))
+    Psi, Theta, omega_c = fem.solve_constraint_and_interface_modes(sector, boundary_dofs, config.r_c, ops)
+    basis = CraigBamptonBasis(Psi=Psi, Theta=Theta, omega_c=omega_c, boundary_dofs=boundary_dofs)
+    lin = basis.linear
+    n_lin = lin.shape[1]
+    max_md = n_lin * (n_lin + 1) // 2
+    if config.r_md > max_md:
+        raise ValueError(f"r_md must be in [0, {max_md}] for r_b + r_c = {n_lin}, got {config.r_md}")
+    lap("craig_bampton")
+    # linear training response in the Craig-Bampton space (harmonic force at node LE along e_z, one period)
+    K_lin, M_lin = lin.T @ (Kfull @ lin), lin.T @ (Mfull @ lin)
+    C_lin, _ = modal_damping(K_lin, M_lin)
+    le_z = sector.tip_dofs[0, 2]
+    f_shape = config.training_force * lin[le_z]
+    period = 2 * np.pi / config.training_omega
+    t, q_train = simulate_linear_newmark(M_lin, C_lin, K_lin,
+                                         lambda tt: f_shape * np.sin(config.training_omega * tt), period / 400, 400)
+    lin_forces = None
+    if config.criterion == "SMVW":
+        H, w, _ = fem.quadrature_gradients(sector, lin.T)
+        lin_forces = QuadratureForces(H, w, *sector.material.lame)
+    W = selection_weights(config.criterion, q_train, t, lin, lin_forces)
+    pairs = select_pairs(W, config.r_md)
+    report["weights"], report["pairs"] = W, pairs
+    lap("selection")
+    Z = compute_modal_derivatives(sector, ops, basis, pairs, config.md_method, config.fd_step)
+    Z, md_scale = _m_normalise(Z, Mfull) if Z.shape[1] else (Z, np.zeros(0))
+    basis = dataclasses.replace(basis, Z=Z, md_pairs=pairs)
+    lap("modal_derivatives")
+    Phi = basis.Phi
+    K, M = Phi.T @ (Kfull @ Phi), Phi.T @ (Mfull @ Phi)
+    K, M = 0.5 * (K + K.T), 0.5 * (M + M.T)
+    _check_operators(K, M)
+    C, omega = modal_damping(K, M)
+    report["omega"] = omega
+    report["q_train"], report["md_scale"], report["linear_operators"] = q_train, md_scale, (K_lin, M_lin)
+    lap("projection")
+    forces = None
+    lmbda, mu = sector.material.lame
+    if config.forces != "none":
+        H, w, cells = fem.quadrature_gradients(sector, Phi.T)
+        exact = QuadratureForces(H, w, lmbda, mu)
+        lap("quadrature_data")
+        if config.forces == "intrusive":
+            forces = compute_polynomial_forces(exact)
+        elif config.forces == "quadrature":
+            forces = exact
+        elif config.forces == "step":
+            scales = config.step_amplitude / np.abs(Phi).max(axis=0)
+            forces = identify_step(lambda Q: Phi.T @ fem.evaluate_forces(sector, ops, (Phi @ Q).T).T, scales)
+        elif config.forces == "ecsw":
+            Q_train = training_states(K_lin, M_lin, pairs, md_scale, len(boundary_dofs), config.ecsw_states)
+            result = train_ecsw(exact, cells, Q_train, tol=config.ecsw_tol)
+            report["ecsw_exact"] = exact
+            forces = result.forces
+            report["ecsw_cells"], report["ecsw_training_error"] = result.cells.size, result.training_error
+        lap("forces")
+    model = ReducedModel(M=M, C=C, K=K, forces=forces, boundary_dofs=boundary_dofs,
+                         boundary_nodes=sector.tip_nodes, sizes=basis.sizes, md_pairs=pairs,
+                         Phi=Phi if config.keep_basis else None, metadata=metadata)
+    if cache is not None:
+        save_reduced_model(model, cache)
+    return model, report

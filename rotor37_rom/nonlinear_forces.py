@@ -1,0 +1,250 @@
+"""Reduced St. Venant-Kirchhoff forces (pure NumPy): exact quadrature-level evaluation, exact cubic tensors over
+unique monomials (eqs. 23-24), and their batched evaluation (eqs. 34-36).
+
+With H_p,i the displacement gradient of basis vector i at quadrature point p (weight w_p), eps_i = sym(H_i) and
+P_ij = sym(H_i^T H_j), the reduced internal force of u = Phi q is exactly (C the isotropic elasticity tensor)
+
+    f^m(q) = sum_i q_i <C eps_i, eps_m>                                  (K~ q)
+           + sum_ij q_i q_j [<C eps_i, P_jm> + 1/2 <C P_ij, eps_m>]       (A~(q, q))
+           + 1/2 sum_ijk q_i q_j q_k <C P_ij, P_km>                       (B~(q, q, q))
+
+with <X, Y> = sum_p w_p X_p : Y_p. The quadratic and cubic parts are stored over unique monomials q_a q_b (a <= b,
+r(r+1)/2 of them) and q_a q_b q_c (a <= b <= c, r(r+1)(r+2)/6), in lexicographic order.
+"""
+from __future__ import annotations
+
+import dataclasses
+import itertools
+
+import numpy as np
+
+__all__ = [
+    "quadratic_monomial_indices",
+    "cubic_monomial_indices",
+    "QuadratureForces",
+    "PolynomialForces",
+    "compute_polynomial_forces",
+]
+
+_VOIGT_I = np.array([0, 1, 2, 1, 0, 0])
+_VOIGT_J = np.array([0, 1, 2, 2, 2, 1])
+_VOIGT_SCALE = np.sqrt(np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0]))  # so that dot products are X : Y
+
+
+def quadratic_monomial_indices(r: int) -> tuple[np.ndarray, np.ndarray]:
+    """(a, b) with a <= b, lexicographic: r(r+1)/2 pairs."""
+    a, b = np.triu_indices(r)
+    return a, b
+
+
+def cubic_monomial_indices(r: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(a, b, c) with a <= b <= c, lexicographic: r(r+1)(r+2)/6 triples."""
+    triples = np.array(list(itertools.combinations_with_replacement(range(r), 3)), dtype=np.int64).reshape(-1, 3)
+    return triples[:, 0], triples[:, 1], triples[:, 2]
+
+
+def _pair_index(r: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Position of the sorted pair (min, max) in the lexicographic list of quadratic monomials."""
+    a, b = np.minimum(i, j), np.maximum(i, j)
+    return a * r - a * (a - 1) // 2 + (b - a)
+
+
+def _sym_voigt(X: np.ndarray) -> np.ndarray:
+    """Symmetric part of (..., 3, 3) as (..., 6) scaled Voigt vectors (dot product = double contraction)."""
+    S = 0.5 * (X + np.swapaxes(X, -1, -2))
+    return S[..., _VOIGT_I, _VOIGT_J] * _VOIGT_SCALE
+
+
+def _apply_C(V: np.ndarray, lmbda: float, mu: float) -> np.ndarray:
+    """C : X in scaled Voigt form: lambda tr(X) I + 2 mu X."""
+    out = 2.0 * mu * V
+    out[..., :3] += lmbda * V[..., :3].sum(axis=-1, keepdims=True)
+    return out
+
+
+@dataclasses.dataclass(frozen=True)
+class QuadratureForces:
+    """Tensor-free exact SVK forces on a set of quadrature points (all points: exact; a weighted subset: ECSW).
+
+    Attributes:
+        H: (n_points, r, 3, 3) basis gradients; w: (n_points,) weights (m^3, or ECSW-modified); lmbda, mu (Pa).
+    """
+
+    H: np.ndarray
+    w: np.ndarray
+    lmbda: float
+    mu: float
+
+    @property
+    def r(self) -> int:
+        return self.H.shape[1]
+
+    def _gradients(self, Q: np.ndarray) -> np.ndarray:
+        n = self.H.shape[0]
+        Ht = np.moveaxis(self.H, 1, -1).reshape(n * 9, self.r)
+        return (Ht @ Q).reshape(n, 3, 3, -1)
+
+    def _project(self, P1: np.ndarray) -> np.ndarray:
+        """sum_p w_p P1_p : H_p,m for a batch P1 (n, 3, 3, P) -> (r, P)."""
+        n = self.H.shape[0]
+        Hw = (np.moveaxis(self.H, 1, -1) * self.w[:, None, None, None]).reshape(n * 9, self.r)
+        return Hw.T @ P1.reshape(n * 9, -1)
+
+    def evaluate(self, Q: np.ndarray, linear: bool = False) -> np.ndarray:
+        """Nonlinear reduced force g~(q) (eq. 23) for a batch Q (r, P) -> (r, P); with linear=True, K~ q instead."""
+        Q = np.asarray(Q, float).reshape(self.r, -1)
+        G = self._gradients(Q)                       # (n, 3, 3, P)
+        Gt = np.swapaxes(G, 1, 2)
+        eps = 0.5 * (G + Gt)
+        if linear:
+            return self._project(self._stress(eps))
+        E = eps + 0.5 * np.einsum("nkiP,nkjP->nijP", G, G)
+        S = self._stress(E)
+        first_pk = S + np.einsum("nikP,nkjP->nijP", G, S)  # F S with F = I + G
+        return self._project(first_pk - self._stress(eps))
+
+    def _stress(self, E: np.ndarray) -> np.ndarray:
+        tr = E[:, 0, 0] + E[:, 1, 1] + E[:, 2, 2]
+        S = 2.0 * self.mu * E
+        for k in range(3):
+            S[:, k, k] += self.lmbda * tr
+        return S
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        """d g~ / d q at one state q (r,) -> (r, r), exact (tangent of F S minus the linear part)."""
+        q = np.asarray(q, float).reshape(self.r, 1)
+        G = self._gradients(q)[..., 0]                                  # (n, 3, 3)
+        F = G + np.eye(3)
+        E = 0.5 * (np.einsum("nki,nkj->nij", F, F) - np.eye(3))
+        S = self._stress(E[..., None])[..., 0]
+        H = self.H                                                      # (n, r, 3, 3)
+        dE = 0.5 * (np.einsum("nki,nlkj->nlij", F, H) + np.einsum("nlki,nkj->nlij", H, F))
+        tr = dE[..., 0, 0] + dE[..., 1, 1] + dE[..., 2, 2]
+        dS = 2.0 * self.mu * dE
+        for k in range(3):
+            dS[..., k, k] += self.lmbda * tr
+        dP = np.einsum("nlik,nkj->nlij", H, S) + np.einsum("nik,nlkj->nlij", F, dS)
+        J = np.einsum("n,nlij,nmij->ml", self.w, dP, H)
+        return J - self.stiffness()
+
+    def stiffness(self) -> np.ndarray:
+        """K~ = <C eps_i, eps_m> (r, r)."""
+        eps = _sym_voigt(self.H)                       # (n, r, 6)
+        Ceps = _apply_C(eps, self.lmbda, self.mu) * self.w[:, None, None]
+        return np.einsum("nia,nja->ij", Ceps, eps)
+
+
+@dataclasses.dataclass(frozen=True)
+class PolynomialForces:
+    """g~(q) = A~ m2(q) + B~ m3(q) over unique monomials (eq. 24).
+
+    Attributes:
+        A: (r, r(r+1)/2) quadratic coefficients; B: (r, r(r+1)(r+2)/6) cubic coefficients.
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+
+    @property
+    def r(self) -> int:
+        return self.A.shape[0]
+
+    def __post_init__(self):
+        r = self.A.shape[0]
+        if self.A.shape != (r, r * (r + 1) // 2) or self.B.shape != (r, r * (r + 1) * (r + 2) // 6):
+            raise ValueError(f"PolynomialForces: A {self.A.shape} and B {self.B.shape} do not match r = {r}")
+
+    def evaluate(self, Q: np.ndarray) -> np.ndarray:
+        """g~ for a batch Q (r, P) -> (r, P) as GEMMs over monomials; the cubic one without forming m3: for each
+        j, Q_j * (B[:, triples starting at j] @ m2[pairs starting at >= j])."""
+        Q = np.asarray(Q, float).reshape(self.r, -1)
+        r = self.r
+        a, b = quadratic_monomial_indices(r)
+        m2 = Q[a] * Q[b]
+        out = self.A @ m2
+        start = 0
+        pair_start = 0
+        for j in range(r):
+            n_tail = (r - j) * (r - j + 1) // 2            # pairs (b, c) with j <= b <= c
+            out += Q[j] * (self.B[:, start:start + n_tail] @ m2[pair_start:])
+            start += n_tail
+            pair_start += r - j
+        return out
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        """d g~ / d q at one state q (r,) -> (r, r), exact."""
+        q = np.asarray(q, float).ravel()
+        r = self.r
+        J = np.zeros((r, r))
+        a, b = quadratic_monomial_indices(r)
+        np.add.at(J.T, a, (self.A * q[b]).T)
+        np.add.at(J.T, b, (self.A * q[a]).T)
+        ca, cb, cc = cubic_monomial_indices(r)
+        np.add.at(J.T, ca, (self.B * (q[cb] * q[cc])).T)
+        np.add.at(J.T, cb, (self.B * (q[ca] * q[cc])).T)
+        np.add.at(J.T, cc, (self.B * (q[ca] * q[cb])).T)
+        return J
+
+
+def _unique_pair_strains(H: np.ndarray, pa: np.ndarray, pb: np.ndarray) -> np.ndarray:
+    """P_ab = sym(H_a^T H_b) for the unique pairs (a <= b) as scaled Voigt vectors (n, n_pairs, 6)."""
+    Ht = np.ascontiguousarray(H.transpose(2, 3, 0, 1))     # (k, l, n, r): contiguous planes per component
+    Ha, Hb = Ht[..., pa], Ht[..., pb]                     # one gather each: (3, 3, n, n_pairs)
+    out = np.empty((H.shape[0], pa.size, 6))
+    for v, (l, m) in enumerate(zip(_VOIGT_I, _VOIGT_J)):
+        acc = Ha[0, l] * Hb[0, m]
+        for k in range(3):
+            if k:
+                acc += Ha[k, l] * Hb[k, m]
+            if l != m:
+                acc += Ha[k, m] * Hb[k, l]
+        out[:, :, v] = acc * (_VOIGT_SCALE[v] * (0.5 if l != m else 1.0))
+    return out
+
+
+def compute_polynomial_forces(forces: QuadratureForces, chunk_points: int = 512) -> PolynomialForces:
+    """Exact intrusive A~ and B~ from the quadrature data (chunked GEMMs over points).
+
+    Cost ~ 2 r^3 * 3 n_points (quadratic) + (r^2/2)^2 * 12 n_points (cubic Gram matrix) flops; memory
+    ~ (r^2/2)^2 doubles for the Gram matrix.
+    """
+    H, w, lmbda, mu = forces.H, forces.w, forces.lmbda, forces.mu
+    r = forces.r
+    pa, pb = quadratic_monomial_indices(r)
+    n_pairs = pa.size
+    from scipy.linalg.blas import dsyrk
+
+    T = np.zeros((r, n_pairs))        # T[i, (jm)] = <eps_i, C P_jm>
+    G = np.zeros((n_pairs, n_pairs), order="F")  # G[(ij), (km)] = <P_ij, C P_km>, upper triangle accumulated
+    # C is symmetric positive definite in scaled Voigt form: G = Y^T Y with Y = C^(1/2) P sqrt(w) (a SYRK)
+    C6 = _apply_C(np.eye(6), lmbda, mu)
+    lam6, vec6 = np.linalg.eigh(C6)
+    if lam6.min() <= 0:
+        raise ValueError("elasticity tensor is not positive definite (check E and nu)")
+    C_half = vec6 @ np.diag(np.sqrt(lam6)) @ vec6.T
+    for start in range(0, H.shape[0], chunk_points):
+        Hc, wc = H[start:start + chunk_points], w[start:start + chunk_points]
+        n = Hc.shape[0]
+        eps = _sym_voigt(Hc)                                          # (n, r, 6)
+        Pu = _unique_pair_strains(Hc, pa, pb)                         # (n, n_pairs, 6)
+        CPu = _apply_C(Pu, lmbda, mu)
+        eps_w = (eps * wc[:, None, None]).transpose(1, 0, 2).reshape(r, n * 6)
+        CP_flat = CPu.transpose(0, 2, 1).reshape(n * 6, n_pairs)
+        T += eps_w @ CP_flat
+        Y = ((Pu @ C_half) * np.sqrt(wc)[:, None, None]).transpose(0, 2, 1).reshape(n * 6, n_pairs)
+        G = dsyrk(1.0, Y, beta=1.0, c=G, trans=1, lower=0, overwrite_c=1)
+    G = np.triu(G) + np.triu(G, 1).T
+    # quadratic: a^m_ij = T[i, (jm)] + 1/2 T[m, (ij)]; unique monomials a <= b
+    idx = np.arange(r)
+    T_full = T[:, _pair_index(r, idx[:, None], idx[None, :])]         # (i, j, m)
+    a_full = np.einsum("ijm->mij", T_full) + 0.5 * T_full             # (m, i, j)
+    A = a_full[:, pa, pb] + np.where(pa != pb, a_full[:, pb, pa], 0.0)
+    # cubic: b^m_ijk = 1/2 G[(ij), (km)]; coefficient of q_a q_b q_c = sum over its distinct orderings
+    ca, cb, cc = cubic_monomial_indices(r)
+    stab = np.where((ca == cb) & (cb == cc), 6.0, np.where((ca == cb) | (cb == cc), 2.0, 1.0))
+    B = np.zeros((r, ca.size))
+    for i, j, k in itertools.permutations((ca, cb, cc)):
+        rows = _pair_index(r, i, j)
+        B += 0.5 * G[rows[None, :], _pair_index(r, k[None, :], idx[:, None])]
+    B /= stab
+    return PolynomialForces(A=A, B=B)

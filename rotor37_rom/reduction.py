@@ -1,0 +1,296 @@
+"""Craig-Bampton bases with modal derivatives and the ReducedModel (pure NumPy/SciPy; FE work is passed in).
+
+References: Craig & Bampton, AIAA J. 6 (1968) 1313 (eqs. 6-11 of the paper); Idelsohn & Cardona (1985) and
+Wu & Tiso (2016) for static modal derivatives (eqs. 16-21); selection criteria of §3.1.2 (eqs. 54-58).
+"""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+import scipy.integrate
+import scipy.linalg
+
+from rotor37_rom import __version__
+from rotor37_rom.nonlinear_forces import PolynomialForces, QuadratureForces
+
+__all__ = [
+    "CraigBamptonBasis",
+    "modal_derivative_pairs",
+    "fixed_interface_correction",
+    "selection_weights",
+    "select_pairs",
+    "lift_states",
+    "modal_damping",
+    "simulate_linear_newmark",
+    "ReducedModel",
+    "save_reduced_model",
+    "load_reduced_model",
+    "solve_reduced_static",
+    "CRITERIA",
+]
+
+CRITERIA = ("MMI", "MI2a", "MI2b", "SMVW", "random")
+
+
+@dataclasses.dataclass(frozen=True)
+class CraigBamptonBasis:
+    """Phi = [Psi Theta Z] on the full DOF vector (eq. 22).
+
+    Attributes:
+        Psi: (n, r_b) constraint modes (identity on the boundary DOFs, eq. 8).
+        Theta: (n, r_c) fixed-interface modes, M-normalised, zero on the boundary (eq. 10).
+        omega_c: (r_c,) their frequencies (rad/s).
+        boundary_dofs: (r_b,) full-vector indices of the boundary DOFs.
+        Z: (n, r_MD) fixed-interface modal derivatives (eq. 20), M-normalised; md_pairs: (r_MD, 2) their (j, k).
+    """
+
+    Psi: np.ndarray
+    Theta: np.ndarray
+    omega_c: np.ndarray
+    boundary_dofs: np.ndarray
+    Z: np.ndarray | None = None
+    md_pairs: np.ndarray | None = None
+
+    @property
+    def linear(self) -> np.ndarray:
+        """The linear Craig-Bampton modes [Psi Theta] (n, r_b + r_c)."""
+        return np.hstack([self.Psi, self.Theta])
+
+    @property
+    def Phi(self) -> np.ndarray:
+        return self.linear if self.Z is None else np.hstack([self.Psi, self.Theta, self.Z])
+
+    @property
+    def sizes(self) -> dict:
+        return {"r_b": self.Psi.shape[1], "r_c": self.Theta.shape[1],
+                "r_md": 0 if self.Z is None else self.Z.shape[1]}
+
+
+def modal_derivative_pairs(n_linear: int) -> np.ndarray:
+    """All (j, k) with j <= k among the linear modes: n(n+1)/2 pairs (zeta_jk = zeta_kj, eq. 21)."""
+    j, k = np.triu_indices(n_linear)
+    return np.column_stack([j, k])
+
+
+def fixed_interface_correction(xi: np.ndarray, Psi: np.ndarray, boundary_dofs: np.ndarray) -> np.ndarray:
+    """Eq. (20): zeta = xi - Psi xi_b, which vanishes on the boundary. xi: (n, m) -> (n, m)."""
+    zeta = xi - Psi @ xi[boundary_dofs]
+    zeta[boundary_dofs] = 0.0
+    return zeta
+
+
+def selection_weights(criterion: str, q: np.ndarray, t: np.ndarray, Phi_lin: np.ndarray | None = None,
+                      forces: QuadratureForces | None = None, seed: int = 0) -> np.ndarray:
+    """Weights W_jk (n_lin, n_lin, symmetric) of the modal derivatives from a linear training response.
+
+    Args:
+        criterion: 'MMI' (eq. 54), 'MI2a' (55), 'MI2b' (56), 'SMVW' (57-58) or 'random'.
+        q: (n_lin, n_t) linear Craig-Bampton coordinates of the training response; t: (n_t,) times (s).
+        Phi_lin: (n, n_lin) the linear modes (MMI and MI2b use their norms and inner products).
+        forces: exact quadrature forces of the linear modes (SMVW's virtual works).
+    """
+    if criterion not in CRITERIA:
+        raise ValueError(f"criterion must be one of {CRITERIA}, got {criterion!r}")
+    n = q.shape[0]
+    if criterion == "random":
+        W = np.random.default_rng(seed).random((n, n))
+        return 0.5 * (W + W.T)
+    if criterion == "MMI":
+        a = np.linalg.norm(Phi_lin, axis=0) * np.abs(q).max(axis=1)
+        return np.outer(a, a)
+    if criterion in ("MI2a", "MI2b"):
+        absq = np.abs(q)
+        W = scipy.integrate.trapezoid(absq[:, None, :] * absq[None, :, :], t, axis=-1)
+        if criterion == "MI2b":
+            W *= np.abs(Phi_lin.T @ Phi_lin)
+        return W
+    # SMVW: t_jk = argmax (q_j q_k)^2; W = sqrt((phi_k^T g(phi_j q_j(t)))^2 + (phi_j^T g(phi_k q_k(t)))^2)
+    prod = (q[:, None, :] * q[None, :, :]) ** 2
+    t_max = prod.argmax(axis=-1)
+    W = np.zeros((n, n))
+    eye = np.eye(n)
+    for j in range(n):  # n_lin single-mode force evaluations per distinct amplitude, batched over k
+        amps = q[j, t_max[j]]                          # q_j at t_jk for every k
+        g = forces.evaluate(eye[:, [j]] * amps[None, :])  # (n, n_lin): column k = g~(e_j q_j(t_jk))
+        W[j] = np.diag(g)  # entry k: phi_k^T g(phi_j q_j(t_jk))
+    return np.sqrt(W**2 + W.T**2)
+
+
+def lift_states(q_lin: np.ndarray, pairs: np.ndarray, md_scale: np.ndarray) -> np.ndarray:
+    """Full reduced states from linear Craig-Bampton coordinates q_lin (n_lin, n): the modal-derivative
+    coordinates follow the second-order term of eq. (14), u ~ Phi q + 1/2 sum_jk xi_jk q_j q_k, i.e.
+    eta_jk = c_jk q_j q_k md_scale_jk with c = 1/2 on the diagonal, 1 off it (each pair stored once).
+
+    md_scale: (r_md,) norm of each modal derivative before normalisation (Z = zeta / md_scale)."""
+    j, k = pairs[:, 0], pairs[:, 1]
+    c = np.where(j == k, 0.5, 1.0)
+    return np.vstack([q_lin, (c * md_scale)[:, None] * q_lin[j] * q_lin[k]])
+
+
+def select_pairs(W: np.ndarray, r_md: int) -> np.ndarray:
+    """The r_md pairs (j <= k) with the largest weights, best first."""
+    pairs = modal_derivative_pairs(W.shape[0])
+    if not (0 <= r_md <= len(pairs)):
+        raise ValueError(f"r_md must be in [0, {len(pairs)}], got {r_md}")
+    order = np.argsort(-W[pairs[:, 0], pairs[:, 1]], kind="stable")
+    return pairs[order[:r_md]]
+
+
+def modal_damping(K: np.ndarray, M: np.ndarray, ratios: Callable[[np.ndarray], np.ndarray] | None = None):
+    """C~ = M~ V diag(2 xi_k omega_k) V^T M~ on the modes of the reduced model (V^T M~ V = I).
+
+    Default ratios: xi = 5e-4 for the first three modes, 5e-3 above (paper §2.2.1).
+    Returns (C, omega): damping matrix and the reduced model's eigenfrequencies (rad/s).
+    """
+    lam, V = scipy.linalg.eigh(K, M)
+    if lam.min() <= 0:
+        raise ValueError("reduced stiffness is not positive definite on the reduced space")
+    omega = np.sqrt(lam)
+    xi = ratios(omega) if ratios else np.where(np.arange(len(omega)) < 3, 5e-4, 5e-3)
+    MV = M @ V
+    return MV @ np.diag(2.0 * xi * omega) @ MV.T, omega
+
+
+def simulate_linear_newmark(M: np.ndarray, C: np.ndarray, K: np.ndarray, f: Callable[[float], np.ndarray],
+                            dt: float, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
+    """Average-acceleration Newmark for a small dense linear system from rest. Returns (t, q) with q (r, n+1)."""
+    r = K.shape[0]
+    A = K + 4.0 / dt**2 * M + 2.0 / dt * C
+    lu = scipy.linalg.lu_factor(A)
+    q, v = np.zeros(r), np.zeros(r)
+    a = np.linalg.solve(M, f(0.0))
+    out = [q.copy()]
+    for n in range(1, n_steps + 1):
+        rhs = f(n * dt) + M @ (4.0 / dt**2 * q + 4.0 / dt * v + a) + C @ (2.0 / dt * q + v)
+        q_new = scipy.linalg.lu_solve(lu, rhs)
+        a_new = 4.0 / dt**2 * (q_new - q) - 4.0 / dt * v - a
+        v = v + 0.5 * dt * (a + a_new)
+        q, a = q_new, a_new
+        out.append(q.copy())
+    return np.arange(n_steps + 1) * dt, np.array(out).T
+
+
+@dataclasses.dataclass(frozen=True)
+class ReducedModel:
+    """A reduced model M~ q'' + C~ q' + K~ q + g~(q) = f~ (eq. 3) with q = [u_b; eta_c; eta_MD] (eq. 22).
+
+    Attributes:
+        M, C, K: (r, r) reduced matrices.
+        forces: PolynomialForces (exact tensors) or QuadratureForces (exact or ECSW), or None (linear).
+        boundary_dofs: (r_b,) full-DOF indices kept in q (q[:r_b] are their physical displacements, m).
+        boundary_nodes: (r_b // 3, 3) coordinates of the boundary nodes (m).
+        sizes: {'r_b', 'r_c', 'r_md'}; md_pairs: (r_md, 2).
+        Phi: (n, r) basis to rebuild fields (optional).
+        metadata: parameters, mesh signature, version; ``key`` hashes them.
+    """
+
+    M: np.ndarray
+    C: np.ndarray
+    K: np.ndarray
+    forces: object
+    boundary_dofs: np.ndarray
+    boundary_nodes: np.ndarray
+    sizes: dict
+    md_pairs: np.ndarray
+    Phi: np.ndarray | None
+    metadata: dict
+
+    @property
+    def r(self) -> int:
+        return self.K.shape[0]
+
+    @property
+    def key(self) -> str:
+        return reduced_model_key(self.metadata)
+
+    def nonlinear_force(self, Q: np.ndarray) -> np.ndarray:
+        if self.forces is None:
+            return np.zeros_like(np.asarray(Q, float).reshape(self.r, -1))
+        return self.forces.evaluate(Q)
+
+
+def reduced_model_key(metadata: dict) -> str:
+    """sha256 of the metadata (parameters, mesh signature, version) as canonical JSON."""
+    return hashlib.sha256(json.dumps(metadata, sort_keys=True, default=str).encode()).hexdigest()[:24]
+
+
+def save_reduced_model(model: ReducedModel, path: str | Path) -> Path:
+    """Write an .npz atomically (temporary file, then rename)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    arrays = {"M": model.M, "C": model.C, "K": model.K, "boundary_dofs": model.boundary_dofs,
+              "boundary_nodes": model.boundary_nodes, "md_pairs": model.md_pairs,
+              "meta": np.array(json.dumps({"metadata": model.metadata, "sizes": model.sizes, "key": model.key},
+                                          sort_keys=True, default=str))}
+    if model.Phi is not None:
+        arrays["Phi"] = model.Phi
+    if isinstance(model.forces, PolynomialForces):
+        arrays.update(forces="polynomial", A=model.forces.A, B=model.forces.B)
+    elif isinstance(model.forces, QuadratureForces):
+        arrays.update(forces="quadrature", H=model.forces.H, w=model.forces.w,
+                      lame=np.array([model.forces.lmbda, model.forces.mu]))
+    else:
+        arrays["forces"] = "none"
+    tmp = path.with_name(path.name + ".tmp.npz")
+    np.savez(tmp, **arrays)
+    tmp.replace(path)
+    return path
+
+
+def load_reduced_model(path: str | Path, expected_key: str | None = None) -> ReducedModel:
+    """Read a reduced model; refuse a corrupted file or one whose key differs from ``expected_key``."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"reduced model file {path} does not exist")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {k: data[k] for k in data.files}
+        info = json.loads(str(arrays["meta"]))
+    except Exception as exc:
+        raise ValueError(f"reduced model file {path} is corrupted or not a reduced model ({exc.__class__.__name__})"
+                         ) from None
+    key = reduced_model_key(info["metadata"])
+    if key != info["key"]:
+        raise ValueError(f"reduced model file {path}: stored key does not match its metadata (corrupted)")
+    if expected_key is not None and key != expected_key:
+        raise ValueError(f"reduced model file {path} was built for other parameters or another mesh "
+                         f"(key {key}, expected {expected_key}); it is stale: rebuild it")
+    kind = str(arrays["forces"])
+    forces = None
+    if kind == "polynomial":
+        forces = PolynomialForces(arrays["A"], arrays["B"])
+    elif kind == "quadrature":
+        forces = QuadratureForces(arrays["H"], arrays["w"], *arrays["lame"])
+    return ReducedModel(M=arrays["M"], C=arrays["C"], K=arrays["K"], forces=forces,
+                        boundary_dofs=arrays["boundary_dofs"], boundary_nodes=arrays["boundary_nodes"],
+                        sizes=info["sizes"], md_pairs=arrays["md_pairs"], Phi=arrays.get("Phi"),
+                        metadata=info["metadata"])
+
+
+def solve_reduced_static(model: ReducedModel, f: np.ndarray, load_factors: Sequence[float],
+                         nonlinear: bool = True, rtol: float = 1e-10, max_iterations: int = 30) -> np.ndarray:
+    """K~ q + g~(q) = lambda f for each lambda in order (continuation), Newton with the exact reduced Jacobian.
+
+    Returns q (len(load_factors), r).
+    """
+    q = np.zeros(model.r)
+    out = []
+    for lam in load_factors:
+        target = lam * np.asarray(f, float)
+        for it in range(max_iterations + 1):
+            res = model.K @ q - target
+            if nonlinear and model.forces is not None:
+                res += model.forces.evaluate(q)[:, 0]
+            if np.linalg.norm(res) <= rtol * max(np.linalg.norm(target), np.linalg.norm(model.K @ q), 1e-300):
+                break
+            if it == max_iterations:
+                raise RuntimeError(f"reduced Newton did not converge at load factor {lam:.4g}")
+            J = model.K + (model.forces.jacobian(q) if nonlinear and model.forces is not None else 0.0)
+            q = q - np.linalg.solve(J, res)
+        out.append(q.copy())
+    return np.array(out)
