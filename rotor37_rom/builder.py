@@ -22,7 +22,7 @@ from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, ReducedModel, fi
 from rotor37_rom.step import identify_step
 
 __all__ = ["ReductionConfig", "build_reduced_model", "mesh_signature", "compute_modal_derivatives",
-           "training_states"]
+           "training_states", "clearance_consumption_study"]
 
 LOG = logging.getLogger(__name__)
 FORCE_METHODS = ("intrusive", "quadrature", "step", "ecsw", "none")
@@ -228,3 +228,65 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
     if cache is not None:
         save_reduced_model(model, cache)
     return model, report
+
+
+def clearance_consumption_study(sector, mode: str = "1B", zeta: float = 1e-3, n_levels: int = 10,
+                                roms: dict | None = None, ops=None, direction: str = "x"):
+    """Full-order linear/nonlinear and reduced clearance consumption at node LE along a clamped mode (§2.3.2).
+
+    Args:
+        mode: '1B' or '1T' (identified from the tip motion); zeta: LE displacement of the scaled mode (m) along
+            ``direction``: 'x' (e_x, the paper's "radial" direction for this blade, §2.3) or 'radial' (true radial;
+            1B and 1T move the tip LE mostly tangentially, so this gives much larger amplitudes).
+        n_levels: load levels on each side of 0 (delta = +-k/n_levels).
+        roms: {name: ReducedModel} to compare (their first boundary DOFs are node LE's).
+    Returns:
+        ClearanceCurves with 'FOM linear', 'FOM nonlinear' and one curve per ROM (nonlinear), and their costs.
+    """
+    import time
+
+    from rotor37_rom.clearance import ClearanceCurves, clearance_change
+    from rotor37_rom.modes import classify_blade_modes
+    from rotor37_rom.reduction import solve_reduced_static
+
+    if mode not in ("1B", "1T"):
+        raise ValueError(f"mode must be '1B' or '1T', got {mode!r}")
+    if not (0 < zeta < 0.02):
+        raise ValueError(f"zeta must be in (0, 0.02) m, got {zeta}")
+    ops = ops or fem.create_svk_operators(sector)
+    modal = fem.compute_clamped_modes(sector, 6, ops)
+    labels = classify_blade_modes(modal.tip_displacements, sector.tip_nodes)
+    phi = modal.modes[labels.index(mode)].x.array.copy()
+    le = sector.tip_nodes[0]
+    if direction not in ("x", "radial"):
+        raise ValueError(f"direction must be 'x' or 'radial', got {direction!r}")
+    e_n = np.array([1.0, 0.0, 0.0]) if direction == "x" else np.array([le[0], le[1], 0.0]) / np.hypot(*le[:2])
+    phi *= zeta / (phi[sector.tip_dofs[0]] @ e_n)
+    K = fem.assemble_stiffness(sector, ops)
+    x, f = K.createVecs()
+    x.array[:] = phi
+    K.mult(x, f)
+    slope = (np.hypot(*sector.tip_nodes[-1, :2]) - np.hypot(*le[:2])) / (sector.tip_nodes[-1, 2] - le[2])
+    deltas = np.concatenate([-np.arange(n_levels, 0, -1), [0], np.arange(1, n_levels + 1)]) / n_levels
+    curves, costs = {}, {}
+    curves["FOM linear"] = clearance_change(le, deltas[:, None] * phi[sector.tip_dofs[0]][None, :], slope)
+    t0 = time.perf_counter()
+    tips = {}
+    for sign in (1.0, -1.0):
+        f_signed = f.copy()
+        f_signed.scale(sign)
+        res = fem.solve_static(sector, force=f_signed, n_steps=n_levels, ops=ops)
+        tips[sign] = res.tip_displacements[:, 0, :]
+    u_le = np.vstack([tips[-1.0][::-1], np.zeros((1, 3)), tips[1.0]])
+    curves["FOM nonlinear"] = clearance_change(le, u_le, slope)
+    costs["FOM nonlinear"] = time.perf_counter() - t0
+    f_full = f.array.copy()
+    for name, model in (roms or {}).items():
+        t0 = time.perf_counter()
+        f_red = model.Phi.T @ f_full
+        q_pos = solve_reduced_static(model, f_red, deltas[deltas > 0])
+        q_neg = solve_reduced_static(model, f_red, -deltas[deltas > 0])
+        q = np.vstack([q_neg[::-1], np.zeros((1, model.r)), q_pos])
+        curves[name] = clearance_change(le, q[:, :3], slope)
+        costs[name] = time.perf_counter() - t0
+    return ClearanceCurves(mode=mode, zeta=zeta, deltas=deltas, curves=curves, costs=costs)

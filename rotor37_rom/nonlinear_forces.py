@@ -14,6 +14,7 @@ r(r+1)/2 of them) and q_a q_b q_c (a <= b <= c, r(r+1)(r+2)/6), in lexicographic
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 
 import numpy as np
@@ -60,6 +61,13 @@ def _apply_C(V: np.ndarray, lmbda: float, mu: float) -> np.ndarray:
     out = 2.0 * mu * V
     out[..., :3] += lmbda * V[..., :3].sum(axis=-1, keepdims=True)
     return out
+
+
+def _batched_product(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
+    """X @ Y over the last two axes (3 x 3), broadcasting the leading ones, as three multiply-adds (numpy's
+    matmul loops over tiny matrices one by one)."""
+    return X[..., :, 0, None] * Y[..., 0, None, :] + X[..., :, 1, None] * Y[..., 1, None, :] \
+        + X[..., :, 2, None] * Y[..., 2, None, :]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -110,22 +118,33 @@ class QuadratureForces:
             S[:, k, k] += self.lmbda * tr
         return S
 
-    def jacobian(self, q: np.ndarray) -> np.ndarray:
-        """d g~ / d q at one state q (r,) -> (r, r), exact (tangent of F S minus the linear part)."""
+    def jacobian(self, q: np.ndarray, chunk_points: int = 4096) -> np.ndarray:
+        """d g~ / d q at one state q (r,) -> (r, r), exact, as two GEMMs per chunk of points:
+
+        J_f[m, l] = sum_p w [ (H_l S) : H_m + sym(F^T H_l) : C : sym(F^T H_m) ],  J = J_f - K~.
+        """
         q = np.asarray(q, float).reshape(self.r, 1)
-        G = self._gradients(q)[..., 0]                                  # (n, 3, 3)
-        F = G + np.eye(3)
-        E = 0.5 * (np.einsum("nki,nkj->nij", F, F) - np.eye(3))
-        S = self._stress(E[..., None])[..., 0]
-        H = self.H                                                      # (n, r, 3, 3)
-        dE = 0.5 * (np.einsum("nki,nlkj->nlij", F, H) + np.einsum("nlki,nkj->nlij", H, F))
-        tr = dE[..., 0, 0] + dE[..., 1, 1] + dE[..., 2, 2]
-        dS = 2.0 * self.mu * dE
-        for k in range(3):
-            dS[..., k, k] += self.lmbda * tr
-        dP = np.einsum("nlik,nkj->nlij", H, S) + np.einsum("nik,nlkj->nlij", F, dS)
-        J = np.einsum("n,nlij,nmij->ml", self.w, dP, H)
-        return J - self.stiffness()
+        r = self.r
+        J = np.zeros((r, r))
+        for start in range(0, self.H.shape[0], chunk_points):
+            H = self.H[start:start + chunk_points]
+            w = self.w[start:start + chunk_points]
+            n = H.shape[0]
+            G = np.einsum("nlij,l->nij", H, q[:, 0])
+            F = G + np.eye(3)
+            E = 0.5 * (_batched_product(np.swapaxes(F, 1, 2), F) - np.eye(3))
+            S = self._stress(E[..., None])[..., 0]
+            HS = _batched_product(H, S[:, None])                              # (n, r, 3, 3)
+            J += (H * w[:, None, None, None]).transpose(1, 0, 2, 3).reshape(r, n * 9) @ \
+                HS.transpose(1, 0, 2, 3).reshape(r, n * 9).T
+            e = _sym_voigt(_batched_product(np.swapaxes(F, 1, 2)[:, None], H))  # (n, r, 6)
+            Ce = _apply_C(e, self.lmbda, self.mu) * w[:, None, None]
+            J += e.transpose(1, 0, 2).reshape(r, n * 6) @ Ce.transpose(1, 0, 2).reshape(r, n * 6).T
+        return J - self._stiffness
+
+    @functools.cached_property
+    def _stiffness(self) -> np.ndarray:
+        return self.stiffness()
 
     def stiffness(self) -> np.ndarray:
         """K~ = <C eps_i, eps_m> (r, r)."""
@@ -172,18 +191,21 @@ class PolynomialForces:
         return out
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
-        """d g~ / d q at one state q (r,) -> (r, r), exact."""
+        """d g~ / d q at one state q (r,) -> (r, r), exact: A~ D2 + B~ D3 with D2, D3 the sparse derivatives of
+        the monomials (2 and 3 entries a row)."""
+        import scipy.sparse as sp
+
         q = np.asarray(q, float).ravel()
         r = self.r
-        J = np.zeros((r, r))
         a, b = quadratic_monomial_indices(r)
-        np.add.at(J.T, a, (self.A * q[b]).T)
-        np.add.at(J.T, b, (self.A * q[a]).T)
+        rows2 = np.arange(a.size)
+        D2 = sp.csr_matrix((np.concatenate([q[b], q[a]]), (np.concatenate([rows2, rows2]), np.concatenate([a, b]))),
+                           shape=(a.size, r))
         ca, cb, cc = cubic_monomial_indices(r)
-        np.add.at(J.T, ca, (self.B * (q[cb] * q[cc])).T)
-        np.add.at(J.T, cb, (self.B * (q[ca] * q[cc])).T)
-        np.add.at(J.T, cc, (self.B * (q[ca] * q[cb])).T)
-        return J
+        rows3 = np.arange(ca.size)
+        D3 = sp.csr_matrix((np.concatenate([q[cb] * q[cc], q[ca] * q[cc], q[ca] * q[cb]]),
+                            (np.tile(rows3, 3), np.concatenate([ca, cb, cc]))), shape=(ca.size, r))
+        return np.asarray((D2.T @ self.A.T).T + (D3.T @ self.B.T).T)
 
 
 def _unique_pair_strains(H: np.ndarray, pa: np.ndarray, pb: np.ndarray) -> np.ndarray:
