@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
 import resource
 import subprocess
 import sys
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import write_results  # noqa: E402
 
 CHILD = r"""
 import json, resource, sys, time
@@ -66,9 +67,7 @@ def main() -> None:
             row["total_s"] = time.perf_counter() - t0
             rows.append(row)
             print(f"{row['source']:>10} {preset:>6}: {row['dofs']} DOF, {row['total_s']:.1f} s", file=sys.stderr)
-    machine = f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
-    Path("results").mkdir(exist_ok=True)
-    Path("results/bench_full_order.json").write_text(json.dumps({"machine": machine, "rows": rows}, indent=1))
+    machine = write_results("bench_full_order", rows)
     print(f"Machine: {machine}\n")
     print("| blade | preset | DOF | mesh (s) | assembly K,M (s) | 10 modes (s) | total incl. start-up (s) | peak RSS (MB) |")
     print("|---|---|---|---|---|---|---|---|")

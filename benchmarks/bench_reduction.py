@@ -11,12 +11,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
 import subprocess
 import sys
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import write_results  # noqa: E402
 
 CHILD = r"""
 import json, resource, sys, time
@@ -90,9 +91,7 @@ def main() -> None:
         rows.append({"preset": args.preset, "r": r, "r_md": r_md, "forces": "step",
                      "total_s": step_evaluations(r) * assembly_s, "peak_rss_mb": None,
                      "how": f"model ({step_evaluations(r):,} assemblies x {assembly_s * 1e3:.1f} ms)"})
-    machine = f"{platform.machine()}, {os.cpu_count()} cores, OpenBLAS, Python {platform.python_version()}"
-    Path("results").mkdir(exist_ok=True)
-    Path("results/bench_reduction.json").write_text(json.dumps({"machine": machine, "rows": rows}, indent=1))
+    machine = write_results("bench_reduction", rows)
     print(f"Machine: {machine}; preset {args.preset}\n")
     print("| forces | r_MD | r | offline time (s) | peak RSS (MB) | ECSW cells | how |")
     print("|---|---|---|---|---|---|---|")

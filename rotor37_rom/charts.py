@@ -24,13 +24,15 @@ def plot_clearance_consumption(curves, path: str | Path, reference: str = "FOM n
     plt = _pyplot()
     fig, (ax, ax_err) = plt.subplots(1, 2, figsize=(11, 4.2))
     ref = curves.curves[reference]
-    for name, values in curves.curves.items():
+    for k, (name, values) in enumerate(curves.curves.items()):
+        color = f"C{k}"
         style = "-" if name == reference else ("--" if "linear" in name else "-.")
         cost = curves.costs.get(name)
         label = name + (f" ({cost:.1f} s)" if cost is not None else "")
-        ax.plot(curves.deltas, values * 1e3, style, marker="o", ms=3, label=label)
+        ax.plot(curves.deltas, values * 1e3, style, color=color, marker="o", ms=3, label=label)
         if name != reference:
-            ax_err.semilogy(curves.deltas, relative_error(values, ref), style, marker="o", ms=3, label=name)
+            ax_err.semilogy(curves.deltas, relative_error(values, ref), style, color=color, marker="o", ms=3,
+                            label=name)
     ax.set_xlabel("deformation level δ")
     ax.set_ylabel("clearance consumption Δ at node LE (mm)")
     ax.set_title(f"{curves.mode}, ζ = {curves.zeta * 1e3:g} mm")
@@ -40,6 +42,12 @@ def plot_clearance_consumption(curves, path: str | Path, reference: str = "FOM n
     ax_err.set_xlabel("deformation level δ")
     ax_err.set_ylabel(f"relative error vs {reference}")
     ax_err.grid(alpha=0.3, which="both")
+    return _save(fig, path)
+
+
+def _save(fig, path: str | Path) -> Path:
+    import matplotlib.pyplot as plt
+
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -62,9 +70,4 @@ def plot_md_weights(W: np.ndarray, pairs: np.ndarray, r_b: int, path: str | Path
     ax.set_title(title or "modal-derivative weights")
     fig.colorbar(im, ax=ax, label="log10 W_jk / max W")
     ax.legend(loc="lower left", fontsize=8)
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, path)

@@ -273,24 +273,50 @@ def load_reduced_model(path: str | Path, expected_key: str | None = None) -> Red
 
 
 def solve_reduced_static(model: ReducedModel, f: np.ndarray, load_factors: Sequence[float],
-                         nonlinear: bool = True, rtol: float = 1e-10, max_iterations: int = 30) -> np.ndarray:
-    """K~ q + g~(q) = lambda f for each lambda in order (continuation), Newton with the exact reduced Jacobian.
+                         nonlinear: bool = True, rtol: float = 1e-10, max_iterations: int = 30,
+                         max_bisections: int = 8) -> np.ndarray:
+    """K~ q + g~(q) = lambda f for each lambda in order (continuation from q = 0).
 
+    Newton with the exact reduced Jacobian, refreshed only when the residual stops dropping fast (ratio > 0.3);
+    a load increment that does not converge is bisected (up to ``max_bisections`` times).
     Returns q (len(load_factors), r).
     """
-    q = np.zeros(model.r)
-    out = []
-    for lam in load_factors:
-        target = lam * np.asarray(f, float)
-        for it in range(max_iterations + 1):
-            res = model.K @ q - target
-            if nonlinear and model.forces is not None:
-                res += model.forces.evaluate(q)[:, 0]
-            if np.linalg.norm(res) <= rtol * max(np.linalg.norm(target), np.linalg.norm(model.K @ q), 1e-300):
-                break
-            if it == max_iterations:
-                raise RuntimeError(f"reduced Newton did not converge at load factor {lam:.4g}")
-            J = model.K + (model.forces.jacobian(q) if nonlinear and model.forces is not None else 0.0)
+    f = np.asarray(f, float)
+    use_nl = nonlinear and model.forces is not None
+
+    def residual(q, lam):
+        res = model.K @ q - lam * f
+        if use_nl:
+            res += model.forces.evaluate(q)[:, 0]
+        return res
+
+    def newton(q, lam):
+        scale = max(np.linalg.norm(lam * f), 1e-300)
+        J, previous = None, np.inf
+        for _ in range(max_iterations):
+            res = residual(q, lam)
+            norm = np.linalg.norm(res)
+            if norm <= rtol * max(scale, np.linalg.norm(model.K @ q)):
+                return q
+            if J is None or norm > 0.3 * previous:
+                J = model.K + (model.forces.jacobian(q) if use_nl else 0.0)
+            previous = norm
             q = q - np.linalg.solve(J, res)
+        return None
+
+    q, lam_done, out = np.zeros(model.r), 0.0, []
+    for target in load_factors:
+        step, bisections = target - lam_done, 0
+        while lam_done != target:
+            lam = target if abs(target - lam_done) <= abs(step) else lam_done + step
+            q_new = newton(q.copy(), lam)
+            if q_new is None:
+                bisections += 1
+                if bisections > max_bisections:
+                    raise RuntimeError(f"reduced Newton did not converge at load factor {lam:.4g} after "
+                                       f"{max_bisections} bisections of the increment")
+                step *= 0.5
+                continue
+            q, lam_done = q_new, lam
         out.append(q.copy())
     return np.array(out)

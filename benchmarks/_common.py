@@ -1,0 +1,23 @@
+"""Shared helpers of the benchmark scripts: machine description and result files."""
+from __future__ import annotations
+
+import json
+import os
+import platform
+from pathlib import Path
+
+
+def machine_description() -> str:
+    """CPU, core count, BLAS and Python version, for the tables."""
+    blas = Path("/etc/alternatives/libblas.so.3-x86_64-linux-gnu")
+    name = "OpenBLAS" if blas.exists() and "openblas" in str(blas.resolve()) else "reference BLAS"
+    return f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, {name}, " \
+           f"Python {platform.python_version()}"
+
+
+def write_results(name: str, rows: list, **extra) -> str:
+    """results/<name>.json with the machine and rows; returns the machine description."""
+    machine = machine_description()
+    Path("results").mkdir(exist_ok=True)
+    Path(f"results/{name}.json").write_text(json.dumps({"machine": machine, "rows": rows, **extra}, indent=1))
+    return machine
