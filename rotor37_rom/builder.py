@@ -44,6 +44,9 @@ class ReductionConfig:
         training_force: amplitude (N) of the harmonic training force at node LE along e_z (§3.3.1: 400 N).
         training_omega: its pulsation (rad/s) (§3.3.1: 4000); one period, 400 Newmark steps.
         keep_basis: store Phi in the model (to rebuild fields).
+        global_md_modes: n > 0 adds the modal derivatives of all pairs of the first n clamped normal modes (1B, 1T,
+            2B, ...), fixed-interface corrected: n(n+1)/2 vectors that carry the global quadratic kinematics
+            (foreshortening) which otherwise needs hundreds of constraint-mode pairs. 0 = the paper's basis.
     """
 
     r_c: int = 15
@@ -58,12 +61,15 @@ class ReductionConfig:
     training_force: float = 400.0
     training_omega: float = 4000.0
     keep_basis: bool = True
+    global_md_modes: int = 0
 
     def __post_init__(self):
         if self.r_c < 1:
             raise ValueError(f"r_c must be >= 1, got {self.r_c}")
         if self.r_md < 0:
             raise ValueError(f"r_md must be >= 0, got {self.r_md}")
+        if not (0 <= self.global_md_modes <= 10):
+            raise ValueError(f"global_md_modes must be in [0, 10], got {self.global_md_modes}")
         if self.criterion not in CRITERIA:
             raise ValueError(f"criterion must be one of {CRITERIA}, got {self.criterion!r}")
         if self.md_method not in ("exact", "fd"):
@@ -191,6 +197,16 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
     report["weights"], report["pairs"] = W, pairs
     lap("selection")
     Z = compute_modal_derivatives(sector, ops, basis, pairs, config.md_method, config.fd_step)
+    if config.global_md_modes:
+        n_g = config.global_md_modes
+        normal = np.column_stack([m.x.array for m in fem.compute_clamped_modes(sector, n_g, ops).modes])
+        gpairs = np.column_stack(np.triu_indices(n_g))
+        global_basis = dataclasses.replace(basis, Psi=np.zeros((normal.shape[0], 0)), Theta=normal,
+                                           boundary_dofs=np.zeros(0, dtype=np.int64))
+        xi = compute_modal_derivatives(sector, ops, global_basis, gpairs, config.md_method, config.fd_step)
+        # the derivatives are of the free blade; remove their boundary part with the constraint modes (eq. 20)
+        Z = np.hstack([Z, fixed_interface_correction(xi, basis.Psi, boundary_dofs)])
+        pairs = np.vstack([pairs, -1 - gpairs])  # negative: pairs of clamped normal modes
     Z, md_scale = _m_normalise(Z, Mfull) if Z.shape[1] else (Z, np.zeros(0))
     basis = dataclasses.replace(basis, Z=Z, md_pairs=pairs)
     lap("modal_derivatives")

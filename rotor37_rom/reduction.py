@@ -128,8 +128,8 @@ def lift_states(q_lin: np.ndarray, pairs: np.ndarray, md_scale: np.ndarray) -> n
 
     md_scale: (r_md,) norm of each modal derivative before normalisation (Z = zeta / md_scale)."""
     j, k = pairs[:, 0], pairs[:, 1]
-    c = np.where(j == k, 0.5, 1.0)
-    return np.vstack([q_lin, (c * md_scale)[:, None] * q_lin[j] * q_lin[k]])
+    c = np.where(j == k, 0.5, 1.0) * (j >= 0)  # pairs of clamped normal modes (negative) are not lifted
+    return np.vstack([q_lin, (c * md_scale)[:, None] * q_lin[np.maximum(j, 0)] * q_lin[np.maximum(k, 0)]])
 
 
 def select_pairs(W: np.ndarray, r_md: int) -> np.ndarray:
