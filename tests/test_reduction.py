@@ -157,6 +157,8 @@ def test_save_load_and_refusals(rom, tmp_path):
 
 
 def test_bad_reduction_input(ci_blade, ci_ops):
+    with pytest.raises(ValueError, match="not vertices of the mesh"):
+        fem._locate_point_dofs(ci_blade.V, np.array([[0.0, 0.0, 0.0]]))
     n = ci_blade.V.dofmap.index_map.size_local * 3
     with pytest.raises(ValueError, match="boundary DOFs"):
         fem.solve_constraint_and_interface_modes(ci_blade, np.array([n + 5]), 3, ci_ops)
