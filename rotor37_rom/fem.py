@@ -45,7 +45,6 @@ __all__ = [
     "compute_clamped_modes",
     "solve_static",
     "solve_newmark",
-    "vector_to_array",
     "assemble_scalar",
     "assemble_vector",
     "gather_dof_values",
@@ -310,11 +309,6 @@ def assemble_scalar(form, comm: MPI.Comm | None = None) -> float:
     return comm.allreduce(fem.assemble_scalar(compiled), op=MPI.SUM)
 
 
-def vector_to_array(sector: Sector, vec: PETSc.Vec) -> np.ndarray:
-    """Owned entries of a PETSc vector as a NumPy copy."""
-    return vec.getArray(readonly=True).copy()
-
-
 def gather_dof_values(sector: Sector, values: np.ndarray, dofs: np.ndarray) -> np.ndarray:
     """Values at per-rank local DOF indices (-1 = not here), summed over ranks: identical on every rank."""
     dofs = np.asarray(dofs)
@@ -573,7 +567,6 @@ def solve_newmark(sector: Sector, force_shape: PETSc.Vec, load: Callable[[float]
     ksp_m = _lu_solver(comm, M, "newmark_mass_")
     ksp_m.solve(rhs, an)
     ksp_m.destroy()
-    A_lin = None
     if not nonlinear:
         A_lin = K.copy()
         A_lin.axpy(c_mass, M)
