@@ -32,16 +32,31 @@ _VOIGT_J = np.array([0, 1, 2, 2, 2, 1])
 _VOIGT_SCALE = np.sqrt(np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0]))  # so that dot products are X : Y
 
 
+@functools.lru_cache(maxsize=16)
 def quadratic_monomial_indices(r: int) -> tuple[np.ndarray, np.ndarray]:
-    """(a, b) with a <= b, lexicographic: r(r+1)/2 pairs."""
+    """(a, b) with a <= b, lexicographic: r(r+1)/2 pairs (cached, read-only)."""
     a, b = np.triu_indices(r)
+    a.flags.writeable = b.flags.writeable = False
     return a, b
 
 
+@functools.lru_cache(maxsize=16)
 def cubic_monomial_indices(r: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(a, b, c) with a <= b <= c, lexicographic: r(r+1)(r+2)/6 triples."""
+    """(a, b, c) with a <= b <= c, lexicographic: r(r+1)(r+2)/6 triples (cached, read-only)."""
     triples = np.array(list(itertools.combinations_with_replacement(range(r), 3)), dtype=np.int64).reshape(-1, 3)
-    return triples[:, 0], triples[:, 1], triples[:, 2]
+    out = tuple(np.ascontiguousarray(triples[:, i]) for i in range(3))
+    for x in out:
+        x.flags.writeable = False
+    return out
+
+
+@functools.lru_cache(maxsize=16)
+def _cubic_from_pairs(r: int) -> tuple[np.ndarray, np.ndarray]:
+    """For each cubic monomial (a, b, c): the index of pair (a, b) and c, so m3 = m2[first] * q[c]."""
+    ca, cb, cc = cubic_monomial_indices(r)
+    first = _pair_index(r, ca, cb)
+    first.flags.writeable = False
+    return first, cc
 
 
 def _pair_index(r: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
@@ -181,6 +196,9 @@ class PolynomialForces:
         a, b = quadratic_monomial_indices(r)
         m2 = Q[a] * Q[b]
         out = self.A @ m2
+        if Q.shape[1] <= 2:                                # one or two states: a single GEMV over m3 is faster
+            first, cc = _cubic_from_pairs(r)
+            return out + self.B @ (m2[first] * Q[cc])
         start = 0
         pair_start = 0
         for j in range(r):

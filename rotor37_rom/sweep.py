@@ -1,0 +1,258 @@
+"""Speed sweeps of the reduced contact model: interaction maps, NFRC, sequential continuation (§2.3.1, §2.3.3).
+
+Pure NumPy (mpi4py optional, only to split a sweep over ranks). Each speed's result is written atomically as soon as
+it finishes (``<out>/<key>/omega_<speed>.npz``); a batch in flight also checkpoints its whole loop state, so a killed
+sweep resumes where it stopped and nothing already computed is recomputed. The key hashes the model, the scheme and
+the scenario: files of another set-up are never mixed in.
+"""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import logging
+import os
+import time
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from rotor37_rom.casing import Casing
+from rotor37_rom.integrator import CentralDifference, simulate
+
+__all__ = ["SweepSpec", "run_sweep", "load_sweep", "interaction_map", "InteractionMap", "last_revolution_max",
+           "continuation", "ContinuationPoint", "is_steady"]
+
+LOG = logging.getLogger(__name__)
+LE = 0          # contact-node rows: node LE first, TE last (boundary nodes ordered LE -> TE)
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepSpec:
+    """A contact scenario at several speeds. revolutions: per speed (paper 200); record_dt: sampling (s)."""
+
+    revolutions: float = 200.0
+    casing: Casing = Casing()
+    record_dt: float = 1e-5
+    batch_size: int = 16
+
+    def __post_init__(self):
+        if not self.revolutions > 0:
+            raise ValueError(f"revolutions must be > 0, got {self.revolutions}")
+        if not self.record_dt > 0:
+            raise ValueError(f"record_dt must be > 0 s, got {self.record_dt}")
+        if self.batch_size < 1:
+            raise ValueError(f"batch_size must be >= 1, got {self.batch_size}")
+
+
+def _key(scheme: CentralDifference, spec: SweepSpec) -> str:
+    info = {"model": scheme.model.key, "h": scheme.h, "nonlinear": scheme.nonlinear, "massless": scheme.massless,
+            "spec": dataclasses.asdict(spec) | {"batch_size": None}}
+    return hashlib.sha256(json.dumps(info, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def _speed_file(folder: Path, omega: float) -> Path:
+    return folder / f"omega_{omega:012.4f}.npz"
+
+
+def _atomic_savez(path: Path, **arrays) -> None:
+    tmp = path.with_name(path.name + f".tmp{os.getpid()}.npz")
+    np.savez(tmp, **arrays)
+    tmp.replace(path)
+
+
+def _load_result(path: Path) -> dict | None:
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return {k: data[k] for k in data.files}
+    except Exception:                                     # truncated or corrupted: recompute that speed
+        LOG.warning("ignoring unreadable result %s", path)
+        return None
+
+
+def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpec, out: str | Path,
+              comm=None, progress: bool = True, checkpoint_seconds: float = 60.0) -> Path:
+    """Simulate every speed from rest (paper §2.3.1) in batches; return the folder of per-speed results.
+
+    With ``comm`` (an mpi4py communicator) the speeds still to do are dealt round-robin to the ranks; every rank
+    writes its own files, and all ranks return once the folder is complete."""
+    speeds = np.unique(np.asarray(speeds, float))
+    if speeds.size == 0 or speeds.min() <= 0:
+        raise ValueError("speeds: give at least one angular speed Omega > 0 rad/s")
+    rank, size = (comm.rank, comm.size) if comm is not None else (0, 1)
+    folder = Path(out) / _key(scheme, spec)
+    if rank == 0:
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "spec.json").write_text(json.dumps({"h": scheme.h, "nonlinear": scheme.nonlinear,
+                                                      "model": scheme.model.key, "r": scheme.r,
+                                                      "spec": dataclasses.asdict(spec)}, default=str, indent=1))
+    if comm is not None:
+        comm.Barrier()
+    todo = [w for w in speeds if not _speed_file(folder, w).exists() or _load_result(_speed_file(folder, w)) is None]
+    mine = todo[rank::size]
+    record_every = max(1, int(round(spec.record_dt / scheme.h)))
+    bar = None
+    if progress and rank == 0 and mine:
+        try:
+            from tqdm import tqdm
+            total = int(sum(np.ceil(spec.revolutions * 2 * np.pi / w / scheme.h) for w in mine))
+            bar = tqdm(total=total * size, unit="step", unit_scale=True, desc=f"sweep ({len(todo)} speeds)")
+        except ImportError:
+            bar = None
+    for start in range(0, len(mine), spec.batch_size):
+        batch = np.array(mine[start:start + spec.batch_size])
+        ckpt = folder / f"batch_{rank}_{batch[0]:.4f}_{batch.size}.ckpt.npz"
+
+        def on_finish(p, rec, batch=batch):
+            _atomic_savez(_speed_file(folder, batch[p]), omega=batch[p], h=scheme.h, t=rec["t"], u_r=rec["u_r"],
+                          lam=rec["lam"], q_final=rec["q_final"], q_prev=rec["q_prev"],
+                          max_penetration=rec["max_penetration"], min_multiplier=rec["min_multiplier"],
+                          friction_power=rec["friction_power"], diverged_step=rec["diverged_step"],
+                          revolutions=spec.revolutions)
+
+        state = _load_state(ckpt, batch.size)
+
+        def save_state(st, ckpt=ckpt):
+            _save_state(ckpt, st)
+
+        simulate(scheme, batch, spec.casing, revolutions=spec.revolutions, record_every=record_every,
+                 on_blowup="flag", on_finish=on_finish, state=state, checkpoint=save_state,
+                 checkpoint_seconds=checkpoint_seconds, progress=(bar.update if bar is not None else None))
+        ckpt.unlink(missing_ok=True)
+    if bar is not None:
+        bar.close()
+    if comm is not None:
+        comm.Barrier()
+    return folder
+
+
+def _save_state(path: Path, st: dict) -> None:
+    arrays = {"n": st["n"], "Q": st["Q"], "Qp": st["Qp"], "done": st["done"], "max_pen": st["max_pen"],
+              "min_lam": st["min_lam"], "fric_pow": st["fric_pow"], "contact_steps": st["contact_steps"],
+              "diverged": st["diverged"]}
+    for p in range(len(st["u_r"])):
+        arrays[f"u_r{p}"] = st["u_r"][p]
+        arrays[f"lam{p}"] = st["lam"][p]
+    _atomic_savez(path, **arrays)
+
+
+def _load_state(path: Path, P: int) -> dict | None:
+    data = _load_result(path) if path.exists() else None
+    if data is None:
+        return None
+    st = {k: data[k] for k in ("Q", "Qp", "done", "max_pen", "min_lam", "fric_pow", "contact_steps", "diverged")}
+    st["n"] = int(data["n"])
+    st["u_r"] = [data[f"u_r{p}"] for p in range(P)]
+    st["lam"] = [data[f"lam{p}"] for p in range(P)]
+    st["energy"] = st["q_rec"] = None
+    LOG.info("resuming batch from %s at step %d", path, st["n"])
+    return st
+
+
+def load_sweep(folder: str | Path) -> list[dict]:
+    """All per-speed results of a sweep folder, sorted by speed."""
+    files = sorted(Path(folder).glob("omega_*.npz"))
+    out = [r for r in (_load_result(f) for f in files) if r is not None]
+    return sorted(out, key=lambda r: float(r["omega"]))
+
+
+def last_revolution_max(t: np.ndarray, u: np.ndarray, omega: float, revolutions: int = 1) -> float:
+    """max |u| over the last ``revolutions`` revolutions (NFRC, Fig. 7)."""
+    T = 2 * np.pi / omega
+    sel = t >= t[-1] - revolutions * T + 1e-15
+    return float(np.nanmax(np.abs(u[sel])))
+
+
+@dataclasses.dataclass
+class InteractionMap:
+    """speeds (n,), frequencies (m,) rad/s, amplitude (n, m) of the LE normal displacement spectrum (m),
+    nfrc (n,) max over the last revolution (m), diverged (n,) bool."""
+
+    speeds: np.ndarray
+    frequencies: np.ndarray
+    amplitude: np.ndarray
+    nfrc: np.ndarray
+    diverged: np.ndarray
+
+
+def interaction_map(results: Sequence[dict], node: int = LE, f_max: float = 30000.0, n_freq: int = 600
+                    ) -> InteractionMap:
+    """Spectrum of the second half of node ``node``'s normal displacement at each speed (paper §2.3.1)."""
+    freqs = np.linspace(0.0, f_max, n_freq)
+    speeds, amp, nfrc, div = [], [], [], []
+    for res in results:
+        t, u = res["t"], res["u_r"][node]
+        om = float(res["omega"])
+        speeds.append(om)
+        diverged = int(res["diverged_step"]) >= 0 or not np.all(np.isfinite(u))
+        div.append(diverged)
+        if diverged:
+            amp.append(np.full(n_freq, np.nan))
+            nfrc.append(np.nan)
+            continue
+        half = u[len(u) // 2:]
+        dt = t[1] - t[0]
+        spec = np.abs(np.fft.rfft(half - half.mean())) * 2.0 / len(half)
+        w = 2 * np.pi * np.fft.rfftfreq(len(half), dt)
+        amp.append(np.interp(freqs, w, spec))
+        nfrc.append(last_revolution_max(t, u, om))
+    return InteractionMap(np.array(speeds), freqs, np.array(amp), np.array(nfrc), np.array(div))
+
+
+def is_steady(t: np.ndarray, u: np.ndarray, omega: float, tol: float = 0.02) -> bool:
+    """Steady when the max |u| of the last revolution and of the one before differ by less than ``tol``."""
+    T = 2 * np.pi / omega
+    last = np.abs(u[t >= t[-1] - T])
+    before = np.abs(u[(t >= t[-1] - 2 * T) & (t < t[-1] - T)])
+    if last.size == 0 or before.size == 0:
+        return False
+    a, b = last.max(), before.max()
+    return bool(abs(a - b) <= tol * max(a, b, 1e-12))
+
+
+@dataclasses.dataclass
+class ContinuationPoint:
+    omega: float
+    amplitude: float
+    steady: bool
+    halvings: int
+
+
+def continuation(scheme: CentralDifference, start: float, stop: float, step: float, casing: Casing = Casing(),
+                 first_revolutions: float = 200.0, revolutions: float = 30.0, max_halvings: int = 3,
+                 record_dt: float = 1e-5, tol: float = 0.02, progress: bool = False) -> list[ContinuationPoint]:
+    """Sequential continuation (§2.3.3): each speed starts from the final state of the previous one; the first
+    runs ``first_revolutions``, the next ``revolutions``; when a run is not steady the speed step is halved (at
+    most ``max_halvings`` times) and the run redone from the last accepted state. Sweeps up if stop > start.
+
+    The casing is fully ovalized from the start of every continued run (the ramp only applies to the first)."""
+    if step <= 0:
+        raise ValueError(f"continuation step must be > 0 rad/s, got {step}")
+    sign = 1.0 if stop >= start else -1.0
+    record_every = max(1, int(round(record_dt / scheme.h)))
+    res = simulate(scheme, start, casing, revolutions=first_revolutions, record_every=record_every, on_blowup="flag")
+    points = [ContinuationPoint(start, last_revolution_max(res.t[0], res.u_r[0][LE], start),
+                                is_steady(res.t[0], res.u_r[0][LE], start, tol), 0)]
+    state = (res.q_final[:, 0], res.q_prev[:, 0])
+    omega = start
+    while sign * (stop - omega) > 1e-9:
+        halvings, accepted = 0, None
+        while True:
+            target = omega + sign * min(step / 2 ** halvings, abs(stop - omega))
+            r = simulate(scheme, target, casing, revolutions=revolutions, record_every=record_every,
+                         initial=state, on_blowup="flag", duration=1e-12)
+            steady = bool(r.diverged_step[0] < 0) and is_steady(r.t[0], r.u_r[0][LE], target, tol)
+            if steady or halvings >= max_halvings:
+                accepted = (target, r, steady)
+                break
+            halvings += 1
+        target, r, steady = accepted
+        amp = last_revolution_max(r.t[0], r.u_r[0][LE], target) if r.diverged_step[0] < 0 else np.nan
+        points.append(ContinuationPoint(target, amp, steady, halvings))
+        if progress:
+            LOG.warning("continuation %.1f rad/s: %.4g mm (%s, %d halvings)", target, amp * 1e3,
+                        "steady" if steady else "not steady", halvings)
+        state = (r.q_final[:, 0], r.q_prev[:, 0])
+        omega = target
+    return points

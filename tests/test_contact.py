@@ -1,0 +1,226 @@
+"""Reduced contact integrator (§2.1.3, §2.2.2): constraints, discrete energy, stability limit, batches, full-order
+agreement, bad input. Model: the ci blade, r = 45 (24 tip DOFs + 15 fixed-interface modes + 6 global MDs)."""
+import numpy as np
+import pytest
+import scipy.linalg
+
+from rotor37_rom.casing import Casing, casing_profile, contact_frames, ramp_rate
+from rotor37_rom.integrator import CentralDifference, SimulationDiverged, simulate, tangent_highest_frequency
+
+
+def test_casing_profile_and_ramp():
+    c0, p0 = 0.5e-3, 0.125e-3
+    theta = np.array([np.pi / 2, 3 * np.pi / 2, 0.0, np.pi / 2 + 0.15])
+    f = casing_profile(theta, c0, p0)
+    np.testing.assert_allclose(f[:2], c0 + p0, rtol=1e-15)          # two bumps of height h_b
+    assert f[2] < 1e-40                                              # none at theta = 0
+    np.testing.assert_allclose(f[3], (c0 + p0) * np.exp(-1.0), rtol=1e-14)
+    alpha = ramp_rate(2.0)
+    np.testing.assert_allclose(1 - np.exp(-alpha * 0.4), 0.99, rtol=1e-14)   # 99 % at 20 % of the run
+    n, s, _ = contact_frames(np.array([[0.25, 0.01, 0.02]]), "radial", -1)
+    np.testing.assert_allclose(np.linalg.norm(n), 1.0)
+    assert abs(n @ s.T) < 1e-15 and s[0, 1] < 0                       # sliding towards -theta
+
+
+@pytest.mark.parametrize("nonlinear", [False, True])
+def test_contact_constraints(ci_rom, nonlinear):
+    """After each correction no node penetrates, multipliers are >= 0 and friction opposes sliding; the recorded
+    gaps, recomputed independently from eq. 38, are >= -1e-12 m."""
+    scheme = CentralDifference(ci_rom, nonlinear=nonlinear, safety=0.5)
+    speeds = np.array([1300.0, 1450.0, 1550.0])
+    casing = Casing(mu=0.15)
+    res = simulate(scheme, speeds, casing, n_steps=30000, record_every=1)
+    assert (res.contact_steps > 100).all(), res.contact_steps
+    assert res.max_penetration.max() <= 1e-12, res.max_penetration
+    assert res.min_multiplier.min() >= 0.0
+    assert res.friction_power.max() < 0.0                              # f_t . v_slide < 0 at every contact
+    nodes = ci_rom.boundary_nodes.reshape(-1, 3)
+    _, _, theta0 = contact_frames(nodes, "x", -1)
+    alpha = ramp_rate(30000 * scheme.h)
+    for p, om in enumerate(speeds):
+        t = res.t[p]
+        gap = (casing.c0 - (1 - np.exp(-alpha * t))[None, :]
+               * casing_profile(theta0[:, None] - om * t[None, :], casing.c0, casing.p0)) - res.u_r[p]
+        assert gap.min() >= -1e-12, gap.min()
+        assert (res.lam[p] >= 0).all() and res.lam[p].max() > 0
+        assert ((res.lam[p] > 0) <= (np.abs(gap) < 1e-12)).all()        # force only where the gap is closed
+
+
+def _free_vibration_start(model, amplitude=3e-4, seed=0, noise=1e-3):
+    """1B-dominated initial displacement (node LE's e_x displacement = amplitude; the tip moves ~7x more along
+    e_y, e_z) plus ``noise`` of every mode."""
+    lam, V = scipy.linalg.eigh(model.K, model.M)
+    rng = np.random.default_rng(seed)
+    q = V[:, 0] + noise * V @ rng.standard_normal(model.r) * np.abs(V[:, 0]).max() / np.abs(V).max(axis=0)
+    return q * amplitude / abs(q[0])
+
+
+def test_discrete_energy_linear_conserved(ci_rom):
+    scheme = CentralDifference(ci_rom, nonlinear=False, damping=False, safety=0.98)
+    q0 = _free_vibration_start(ci_rom)
+    res = simulate(scheme, 1.0, n_steps=100_000, initial=(q0, q0), record_every=100, energy=True)
+    E = res.energy[0][1:]
+    drift = np.abs(E - E[0]).max() / E[0]
+    print("linear energy drift over 1e5 steps at 0.98 h_crit:", drift)
+    assert drift <= 1e-10
+
+
+def _static_start(model, amplitude):
+    """Rest state of the GNL model under the force that gives the linear model a 1B deflection with node LE's e_x
+    displacement = amplitude (the modal-derivative coordinates take their static values: a physical start)."""
+    from rotor37_rom.reduction import solve_reduced_static
+
+    lam, V = scipy.linalg.eigh(model.K, model.M)
+    q_lin = V[:, 0] * amplitude / abs(V[0, 0])
+    return solve_reduced_static(model, model.K @ q_lin, [0.5, 1.0])[-1]
+
+
+def test_discrete_energy_nonlinear_bounded(ci_rom):
+    """GNL, undamped, released from a static 1B deflection (0.3 mm at node LE along e_x, ~2 mm tip motion): stress
+    stiffening raises omega_max by ~2.6 %, so the step is 0.98 of the limit of the tangent at +-q0; the energy error
+    stays bounded over 1e5 steps. At 0.5 mm the tangent limit is 5 % below the linear one, and 0.98 of the linear
+    limit blows up: for GNL the linear limit is not enough."""
+    q0 = _static_start(ci_rom, 3e-4)
+    w_t = tangent_highest_frequency(ci_rom, np.column_stack([q0, -q0]))
+    lin_limit = CentralDifference(ci_rom, nonlinear=False).h_crit
+    assert 1.01 < w_t * lin_limit / 2 < 1.05
+    scheme = CentralDifference(ci_rom, nonlinear=True, damping=False, h=0.98 * 2 / w_t)
+    res = simulate(scheme, 1.0, n_steps=100_000, initial=(q0, q0), record_every=50, energy=True)
+    E = res.energy[0][1:]
+    err = np.abs(E - E[0]) / E[0]
+    tenth = len(err) // 10
+    first, last = err[:tenth].max(), err[-tenth:].max()
+    print("GNL energy error, first and last tenth:", first, last)
+    assert last <= 1.5 * first                                          # bounded, no secular growth
+    assert last < 1e-4
+    # the GNL run differs from the linear one (the cubic forces act)
+    lin = simulate(CentralDifference(ci_rom, nonlinear=False, damping=False, h=scheme.h), 1.0, n_steps=2000,
+                   initial=(q0, q0), record_every=50)
+    assert np.abs(lin.u_r[0][0] - res.u_r[0][0][:41]).max() > 1e-2 * abs(q0[0])
+    big = _static_start(ci_rom, 5e-4)
+    assert tangent_highest_frequency(ci_rom, np.column_stack([big, -big])) * lin_limit / 2 > 1.03
+    with pytest.raises(SimulationDiverged):
+        simulate(CentralDifference(ci_rom, nonlinear=True, damping=False, safety=0.98), 1.0, n_steps=100_000,
+                 initial=(big, big), check_every=50)
+
+
+def test_time_step_limit(ci_rom):
+    ref = CentralDifference(ci_rom, nonlinear=False, damping=False)
+    lam = scipy.linalg.eigh(ci_rom.K, ci_rom.M, eigvals_only=True)
+    np.testing.assert_allclose(ref.h_crit, 2 / np.sqrt(lam[-1]), rtol=1e-12)
+    with pytest.raises(ValueError, match="exceeds the stability limit"):
+        CentralDifference(ci_rom, h=1.02 * ref.h_crit)
+    scheme = CentralDifference(ci_rom, nonlinear=False, damping=False, h=1.02 * ref.h_crit, force=True)
+    q0 = _free_vibration_start(ci_rom)
+    with pytest.raises(SimulationDiverged, match=r"diverged at step \d+"):
+        simulate(scheme, 1.0, n_steps=100_000, initial=(q0, q0), check_every=50)
+    res = simulate(scheme, 1.0, n_steps=100_000, initial=(q0, q0), check_every=50, on_blowup="flag")
+    assert 0 < res.diverged_step[0] < 5000
+
+
+def test_massless_boundary_variant(ci_rom):
+    """Dropping the boundary inertia (Monjaraz Tec et al. 2022) removes the stiff single-node constraint modes:
+    h_crit grows > 2x. The scheme solves the massless model exactly: it matches an independent Newmark solution of
+    the condensed model (eta'' M_ii + K_c eta = f_i - K_ib K_bb^-1 f_b, u_b = K_bb^-1 (f_b - K_bi eta)) within 1 %.
+    The price: the constraint modes of the 24 tip DOFs carry much of the blade's 1B inertia, so the massless model
+    answers a point force at node LE differently from the full-inertia ROM (measured, printed; ~18 % on ci)."""
+    from rotor37_rom.reduction import simulate_linear_newmark
+
+    std = CentralDifference(ci_rom, nonlinear=False, damping=False)
+    ml = CentralDifference(ci_rom, nonlinear=False, damping=False, massless_boundary=True)
+    print("h_crit standard / massless:", std.h_crit, ml.h_crit)
+    assert ml.h_crit > 2.0 * std.h_crit
+    with pytest.raises(ValueError, match="linear model only"):
+        CentralDifference(ci_rom, nonlinear=True, massless_boundary=True)
+    w, T, rb = 3000.0, 2e-3, 24
+    f = np.zeros(ci_rom.r)
+    f[0] = 50.0
+    law = lambda t: np.sin(w * t)  # noqa: E731
+    b = simulate(ml, 1.0, n_steps=int(T / ml.h), forcing=lambda t: f * law(t), record_every=1)
+    K, M = ci_rom.K, ci_rom.M
+    Kbb_inv = np.linalg.inv(K[:rb, :rb])
+    Kc = K[rb:, rb:] - K[rb:, :rb] @ Kbb_inv @ K[:rb, rb:]
+    fc = f[rb:] - K[rb:, :rb] @ Kbb_inv @ f[:rb]
+    dt = 2e-6
+    t, eta = simulate_linear_newmark(M[rb:, rb:], np.zeros_like(Kc), Kc, lambda t: fc * law(t), dt, int(T / dt))
+    ub = Kbb_inv @ (f[:rb, None] * law(t)[None, :] - K[:rb, rb:] @ eta)
+    ref = ub[0]
+    got = np.interp(t, b.t[0], b.u_r[0][0])
+    err = np.abs(got - ref).max() / np.abs(ref).max()
+    print("massless scheme vs condensed Newmark:", err)
+    assert err < 0.01
+    a = simulate(std, 1.0, n_steps=int(T / std.h), forcing=lambda t: f * law(t), record_every=1)
+    full = np.interp(t, a.t[0], a.u_r[0][0])
+    print("massless vs full-inertia ROM, forced LE response:", np.abs(full - ref).max() / np.abs(full).max())
+
+
+def test_linear_rom_matches_full_order_transient(ci_blade, ci_ops, ci_rom):
+    """Point force F sin(3000 t) along e_x at node LE from rest, undamped, 2 ms: the linear ROM with central
+    differences equals the full-order linear Newmark transient within 1 % (max over time of node LE's e_x)."""
+    from rotor37_rom import fem
+
+    F0, w, T = 50.0, 3000.0, 2e-3
+    dof = int(ci_blade.tip_dofs[0, 0])
+    f = ci_ops.u.vector.copy()
+    f.set(0.0)
+    f.array[dof] = F0
+    dt = 5e-6
+    fom = fem.solve_newmark(ci_blade, f, lambda t: np.sin(w * t), dt, int(T / dt), ci_blade.tip_dofs,
+                            nonlinear=False, ops=ci_ops)
+    scheme = CentralDifference(ci_rom, nonlinear=False, damping=False)
+    fr = np.zeros(ci_rom.r)
+    fr[0] = F0
+    every = 1
+    rom = simulate(scheme, 1.0, n_steps=int(T / scheme.h) + 1, forcing=lambda t: fr * np.sin(w * t),
+                   record_every=every)
+    u_rom = np.interp(fom.t, rom.t[0], rom.u_r[0][0])
+    u_fom = fom.monitored.reshape(len(fom.t), -1)[:, 0]
+    err = np.abs(u_rom - u_fom).max() / np.abs(u_fom).max()
+    print("linear ROM vs full order (node LE, e_x):", err, "peak", np.abs(u_fom).max())
+    assert err < 0.01
+
+
+@pytest.mark.parametrize("P", [1, 8, 80])
+def test_batches_equal_one_by_one(ci_rom, P):
+    """P simulations at different speeds, clearances and friction coefficients in one batch equal the same
+    simulations run one by one to 1e-8 (relative, node LE), over 1e4 steps with contact."""
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
+    rng = np.random.default_rng(P)
+    speeds = np.linspace(1300.0, 1600.0, P)
+    casings = [Casing(c0=c0, mu=mu, h_b=c0 + 0.125e-3) for c0, mu in
+               zip(rng.uniform(0.45e-3, 0.55e-3, P), rng.uniform(0.0, 0.2, P))]
+    batch = simulate(scheme, speeds, casings, n_steps=10_000, record_every=10)
+    assert batch.contact_steps.min() > 0
+    picks = range(P) if P <= 8 else rng.choice(P, 10, replace=False)
+    for p in picks:
+        one = simulate(scheme, speeds[p], casings[p], n_steps=10_000, record_every=10)
+        scale = np.abs(one.u_r[0]).max()
+        assert np.abs(batch.u_r[p] - one.u_r[0]).max() <= 1e-8 * scale
+
+
+def test_nonlinear_batch_equals_one_by_one(ci_rom):
+    """GNL batches: a single state uses one GEMV over all cubic monomials, a batch the per-index GEMMs of eqs. 35-36;
+    the two summation orders differ by round-off (1e-16), which 8000 steps with contact grow to ~5e-8: 1e-6 here."""
+    scheme = CentralDifference(ci_rom, nonlinear=True, safety=0.5)
+    speeds = np.array([1300.0, 1400.0, 1500.0, 1600.0])
+    batch = simulate(scheme, speeds, Casing(), n_steps=8000, record_every=10)
+    assert batch.contact_steps.min() > 0
+    for p in (0, 3):
+        one = simulate(scheme, speeds[p], Casing(), n_steps=8000, record_every=10)
+        assert np.abs(batch.u_r[p] - one.u_r[0]).max() <= 1e-6 * np.abs(one.u_r[0]).max()
+
+
+def test_bad_input(ci_rom):
+    with pytest.raises(ValueError, match="c0"):
+        Casing(c0=-1e-4)
+    with pytest.raises(ValueError, match="mu"):
+        Casing(mu=-0.1)
+    scheme = CentralDifference(ci_rom, nonlinear=False)
+    with pytest.raises(ValueError, match="Omega must be > 0"):
+        simulate(scheme, [1300.0, 0.0], Casing(), n_steps=10)
+    with pytest.raises(ValueError, match="contact_nodes"):
+        simulate(scheme, 1300.0, Casing(contact_nodes=(0, 9)), n_steps=10)
+    with pytest.raises(ValueError, match="time step h"):
+        CentralDifference(ci_rom, h=-1.0)
+    with pytest.raises(ValueError, match="give revolutions or n_steps"):
+        simulate(scheme, 1300.0, Casing())
