@@ -5,7 +5,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["plot_clearance_consumption", "plot_md_weights"]
+__all__ = ["plot_clearance_consumption", "plot_md_weights", "plot_interaction_map", "plot_nfrc", "plot_time_history",
+           "plot_speed_accuracy"]
 
 
 def _pyplot():
@@ -70,4 +71,80 @@ def plot_md_weights(W: np.ndarray, pairs: np.ndarray, r_b: int, path: str | Path
     ax.set_title(title or "modal-derivative weights")
     fig.colorbar(im, ax=ax, label="log10 W_jk / max W")
     ax.legend(loc="lower left", fontsize=8)
+    return _save(fig, path)
+
+
+def plot_interaction_map(imap, path: str | Path, eigenfrequencies=(), engine_orders=range(1, 17), title: str = "",
+                         linear_resonance: float | None = None) -> Path:
+    """Fig. 6 analogue: spectrum amplitude of node LE's radial displacement (log colour) vs speed and frequency,
+    with the clamped eigenfrequencies (dashed) and engine-order lines (dotted)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7.5, 5.0))
+    amp = np.where(np.isfinite(imap.amplitude), imap.amplitude, np.nan) * 1e3
+    floor = np.nanmax(amp) * 1e-4 if np.isfinite(amp).any() else 1e-12
+    mesh = ax.pcolormesh(imap.speeds, imap.frequencies, np.log10(np.maximum(amp, floor)).T, shading="nearest",
+                         cmap="jet")
+    fig.colorbar(mesh, ax=ax, label="log10 amplitude (mm)")
+    for w in eigenfrequencies:
+        ax.axhline(w, color="w", ls="--", lw=0.8)
+    for k in engine_orders:
+        ax.plot(imap.speeds, k * imap.speeds, "w:", lw=0.7)
+    if linear_resonance is not None:
+        ax.plot([linear_resonance], [4 * linear_resonance], "ko", ms=6, label="linear 1B/EO4")
+    if np.isfinite(imap.nfrc).any():
+        i = int(np.nanargmax(imap.nfrc))
+        ax.plot([imap.speeds[i]], [4 * imap.speeds[i]], "k^", ms=7, label="largest response")
+    ax.set_ylim(imap.frequencies[0], imap.frequencies[-1])
+    ax.set_xlabel("angular speed Omega (rad/s)")
+    ax.set_ylabel("frequency (rad/s)")
+    ax.set_title(title)
+    ax.legend(loc="upper left", fontsize=8)
+    return _save(fig, path)
+
+
+def plot_nfrc(curves: dict, path: str | Path, linear_resonance: float | None = None,
+              paper: dict | None = None) -> Path:
+    """Fig. 7/11/12 analogue: max |u_LE,r| over the last revolution vs speed, one line (or markers) per curve.
+    curves: {label: (speeds, amplitudes (m), style)}."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7.5, 4.2))
+    for label, (speeds, amp, style) in curves.items():
+        ax.plot(speeds, np.asarray(amp) * 1e3, style, label=label, ms=4)
+    if linear_resonance is not None:
+        ax.axvline(linear_resonance, color="k", ls=":", lw=0.8, label=f"linear 1B/EO4 {linear_resonance:.0f} rad/s")
+    for label, speed in (paper or {}).items():
+        ax.axvline(speed, color="0.6", ls="--", lw=0.8)
+        ax.text(speed, ax.get_ylim()[1] * 0.95, label, rotation=90, va="top", ha="right", fontsize=7, color="0.4")
+    ax.set_xlabel("angular speed Omega (rad/s)")
+    ax.set_ylabel("max |u_LE,r| over the last revolution (mm)")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    return _save(fig, path)
+
+
+def plot_time_history(t: np.ndarray, series: dict, path: str | Path, title: str = "") -> Path:
+    """Radial displacement histories (mm) vs time (ms). series: {label: values (m)}."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(8, 3.6))
+    for label, values in series.items():
+        ax.plot(t * 1e3, np.asarray(values) * 1e3, lw=0.7, label=label)
+    ax.set_xlabel("time (ms)")
+    ax.set_ylabel("radial displacement (mm)")
+    ax.set_title(title)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    return _save(fig, path)
+
+
+def plot_speed_accuracy(rows: list, path: str | Path, title: str = "") -> Path:
+    """Cost vs error: rows of (label, cost (s), error (relative)); the 'speed vs accuracy' chart of a study."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    for k, (label, cost, err) in enumerate(rows):
+        ax.loglog([cost], [max(err, 1e-16)], "o", color=f"C{k % 10}", label=label)
+    ax.set_xlabel("cost (s)")
+    ax.set_ylabel("relative error")
+    ax.set_title(title)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7)
     return _save(fig, path)

@@ -817,3 +817,58 @@ def solve_clamped_static(sector: Sector, rhs: np.ndarray, ops: SvkOperators | No
     ksp.destroy()
     K.destroy()
     return out
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Stress recovery (issue: stress and visual results)
+# ---------------------------------------------------------------------------------------------------------------
+def displacement_function(sector: Sector, Phi: np.ndarray, q: np.ndarray, name: str = "displacement"):
+    """u = Phi q as a dolfinx Function on the sector (serial: Phi holds all DOFs)."""
+    _require_serial(sector, "displacement_function")
+    Phi = np.asarray(Phi)
+    q = np.asarray(q, float)
+    if Phi.ndim != 2 or Phi.shape[0] != sector.V.dofmap.index_map.size_local * 3:
+        raise ValueError(f"basis Phi has shape {Phi.shape}; the sector has "
+                         f"{sector.V.dofmap.index_map.size_local * 3} DOFs (was it built on another mesh?)")
+    if q.ndim != 1 or q.size != Phi.shape[1]:
+        raise ValueError(f"reduced state q has shape {q.shape}; the basis has r = {Phi.shape[1]} columns")
+    u = fem.Function(sector.V, name=name)
+    u.x.array[:] = Phi @ q
+    return u
+
+
+def _stress_expression(sector: Sector, u, nonlinear: bool):
+    lmbda, mu = sector.material.lame
+    sigma = forms.cauchy_stress(u, lmbda, mu) if nonlinear else forms.linear_stress(u, lmbda, mu)
+    return forms.von_mises(sigma)
+
+
+def von_mises_function(sector: Sector, u, nonlinear: bool = True, degree: int = 1):
+    """von Mises stress (Pa) of the displacement u interpolated into a DG space of the given degree (0 or 1)."""
+    if degree not in (0, 1):
+        raise ValueError(f"degree must be 0 or 1, got {degree}")
+    W = fem.FunctionSpace(sector.mesh, ("DG", degree))
+    expr = fem.Expression(_stress_expression(sector, u, nonlinear), W.element.interpolation_points(),
+                          jit_params=JIT_PARAMS)
+    out = fem.Function(W, name="von_mises")
+    out.interpolate(expr)
+    return out
+
+
+def von_mises_at_quadrature(sector: Sector, u, nonlinear: bool = True, degree: int = 4) -> np.ndarray:
+    """Direct UFL evaluation of von Mises at the quadrature points of every local cell, ordered as
+    ``quadrature_gradients`` (points grouped by cell), for checks of the NumPy recovery."""
+    import basix
+
+    points, _ = basix.make_quadrature(basix.CellType.tetrahedron, degree)
+    n_cells = sector.mesh.topology.index_map(3).size_local
+    expr = fem.Expression(_stress_expression(sector, u, nonlinear), points, jit_params=JIT_PARAMS)
+    return expr.eval(np.arange(n_cells, dtype=np.int32)).ravel()
+
+
+def cell_midpoints(sector: Sector) -> np.ndarray:
+    """Centroids (n_local_cells, 3) of the local cells (for locating stress maxima)."""
+    from dolfinx import mesh as dmesh
+
+    n_cells = sector.mesh.topology.index_map(3).size_local
+    return dmesh.compute_midpoints(sector.mesh, 3, np.arange(n_cells, dtype=np.int32))

@@ -7,7 +7,7 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["write_xdmf", "render_mode_shapes"]
+__all__ = ["write_xdmf", "render_mode_shapes", "render_stress", "vtk_grid"]
 
 LOG = logging.getLogger(__name__)
 
@@ -70,3 +70,61 @@ def run_render(scene: dict, scene_path: Path) -> None:
     if proc.returncode != 0:
         last = (proc.stderr.strip().splitlines() or ["no output"])[-1]
         raise RuntimeError(f"pyvista rendering failed: {last}")
+
+
+def vtk_grid(sector):
+    """(topology, cell_types, points) of the sector's function space for pyvista (serial)."""
+    from dolfinx import plot
+
+    return plot.create_vtk_mesh(sector.V)
+
+
+def _rotate_z(x: np.ndarray, angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return x @ R.T
+
+
+def render_stress(sector, u, cell_values: np.ndarray, path: str | Path, title: str, n_sectors: int = 1,
+                  factor: float = 1.0, clim=None, sector_displacements: Sequence | None = None) -> Path:
+    """PNG of a cell field (von Mises, MPa) on the deformed blade; with n_sectors > 1, the whole disk made of
+    rotated copies (sector k turned by 2 pi k / n_sectors about e_z; its displacement from
+    ``sector_displacements[k]`` (n_dofs,) or, if None, the same u rotated: a tuned, in-phase response).
+    Writes ``path`` and ``path.json`` (the scalar range drawn). Serial only."""
+    _check_serial(sector)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    topology, cell_types, x = vtk_grid(sector)
+    # the vtk mesh of V has one point per DOF node: the displacement reshapes directly
+    u_nodes = np.asarray(u.x.array if hasattr(u, "x") else u).reshape(-1, 3)
+    values = np.asarray(cell_values, float)
+    if values.size != len(cell_types):
+        raise ValueError(f"cell_values has {values.size} entries; the mesh has {len(cell_types)} cells")
+    if n_sectors < 1 or n_sectors > 360:
+        raise ValueError(f"n_sectors must be in [1, 360], got {n_sectors}")
+    tops, pts, us, vals = [], [], [], []
+    n_pts = len(x)
+    for k in range(n_sectors):
+        angle = 2 * np.pi * k / n_sectors
+        uk = u_nodes if sector_displacements is None else np.asarray(sector_displacements[k]).reshape(-1, 3)
+        top = topology.reshape(-1, topology[0] + 1).copy()
+        top[:, 1:] += k * n_pts
+        tops.append(top.ravel())
+        pts.append(_rotate_z(x, angle))
+        us.append(_rotate_z(uk, angle))
+        vals.append(values)
+    scene = {"topology": np.concatenate(tops), "cell_types": np.tile(cell_types, n_sectors),
+             "points": np.vstack(pts), "n_frames": 1, "scalar_name": "von Mises (MPa)", "cell_scalars": True,
+             "cmap": "jet", "u_0": np.vstack(us), "s_0": np.concatenate(vals) / 1e6, "title_0": title,
+             "path_0": str(path), "factor_0": factor, "no_ghost": n_sectors > 1}
+    if clim is not None:
+        scene["clim"] = np.asarray(clim, float) / 1e6
+    if n_sectors > 1:
+        scene.update(view=(0.0, 0.0, 1.0), viewup=(0.0, 1.0, 0.0))
+    run_render(scene, path.with_suffix(".scene.npz"))
+    return path
+
+
+def _check_serial(sector) -> None:
+    if sector.comm.size > 1:
+        raise RuntimeError("pyvista rendering runs serially; call it from a serial run")

@@ -89,20 +89,32 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
                                                       "spec": dataclasses.asdict(spec)}, default=str, indent=1))
     if comm is not None:
         comm.Barrier()
-    todo = [w for w in speeds if not _speed_file(folder, w).exists() or _load_result(_speed_file(folder, w)) is None]
+    # batches interrupted earlier resume first (their speeds stay together); then the speeds not done yet
+    pending = sorted(folder.glob("batch_*.ckpt.npz"))
+    resumed = []
+    for ckpt in pending:
+        data = _load_result(ckpt)
+        if data is None or "speeds" not in data:
+            ckpt.unlink(missing_ok=True)
+            continue
+        resumed.append((ckpt, np.asarray(data["speeds"], float)))
+    in_ckpt = set(np.concatenate([b for _, b in resumed]).tolist()) if resumed else set()
+    todo = [w for w in speeds if w not in in_ckpt and (not _speed_file(folder, w).exists()
+                                                       or _load_result(_speed_file(folder, w)) is None)]
     mine = todo[rank::size]
+    batches = [b for _, b in resumed[rank::size]] + [np.array(mine[i:i + spec.batch_size])
+                                                     for i in range(0, len(mine), spec.batch_size)]
     record_every = max(1, int(round(spec.record_dt / scheme.h)))
     bar = None
-    if progress and rank == 0 and mine:
+    if progress and rank == 0 and batches:
         try:
             from tqdm import tqdm
-            total = int(sum(np.ceil(spec.revolutions * 2 * np.pi / w / scheme.h) for w in mine))
+            total = int(sum(np.ceil(spec.revolutions * 2 * np.pi / w / scheme.h) for b in batches for w in b))
             bar = tqdm(total=total * size, unit="step", unit_scale=True, desc=f"sweep ({len(todo)} speeds)")
         except ImportError:
             bar = None
-    for start in range(0, len(mine), spec.batch_size):
-        batch = np.array(mine[start:start + spec.batch_size])
-        ckpt = folder / f"batch_{rank}_{batch[0]:.4f}_{batch.size}.ckpt.npz"
+    for batch in batches:
+        ckpt = folder / f"batch_{hashlib.sha256(batch.tobytes()).hexdigest()[:12]}.ckpt.npz"
 
         def on_finish(p, rec, batch=batch):
             _atomic_savez(_speed_file(folder, batch[p]), omega=batch[p], h=scheme.h, t=rec["t"], u_r=rec["u_r"],
@@ -113,8 +125,8 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
 
         state = _load_state(ckpt, batch.size)
 
-        def save_state(st, ckpt=ckpt):
-            _save_state(ckpt, st)
+        def save_state(st, ckpt=ckpt, batch=batch):
+            _save_state(ckpt, st, batch)
 
         simulate(scheme, batch, spec.casing, revolutions=spec.revolutions, record_every=record_every,
                  on_blowup="flag", on_finish=on_finish, state=state, checkpoint=save_state,
@@ -127,8 +139,8 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
     return folder
 
 
-def _save_state(path: Path, st: dict) -> None:
-    arrays = {"n": st["n"], "Q": st["Q"], "Qp": st["Qp"], "done": st["done"], "max_pen": st["max_pen"],
+def _save_state(path: Path, st: dict, speeds: np.ndarray) -> None:
+    arrays = {"speeds": speeds, "n": st["n"], "Q": st["Q"], "Qp": st["Qp"], "done": st["done"], "max_pen": st["max_pen"],
               "min_lam": st["min_lam"], "fric_pow": st["fric_pow"], "contact_steps": st["contact_steps"],
               "diverged": st["diverged"]}
     for p in range(len(st["u_r"])):

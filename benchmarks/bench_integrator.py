@@ -1,0 +1,144 @@
+"""Online cost of the reduced contact integrator (eq. 34): microseconds per simulation-step vs r and P.
+
+For each r, a synthetic reduced model (SPD M~, K~, random cubic tensors of the right sizes: timing only) is stepped
+with the batched prediction of eq. 34 (X1 Q + X2 Q_prev + cubic forces over unique monomials), against a naive
+loop that evaluates each simulation with numpy.einsum over the full r^3 and r^4 tensors, measured in the same run.
+The machine's GEMM rate (dgemm 2000 x 2000) gives the fraction of peak. Then, on the ci blade model (r = 45), the
+full step with casing contact, and the interaction-map throughput in simulated revolutions per wall second, GNL on,
+with the projection to the headline map (100 speeds x 200 revolutions).
+
+    python benchmarks/bench_integrator.py [--r 30 45 60 90] [--P 1 8 80]
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import write_results  # noqa: E402
+
+
+def gemm_rate(n: int = 2000) -> float:
+    a, b = np.random.rand(n, n), np.random.rand(n, n)
+    a @ b
+    t0 = time.perf_counter()
+    for _ in range(3):
+        a @ b
+    return 3 * 2 * n**3 / (time.perf_counter() - t0) / 1e9
+
+
+def synthetic_model(r: int, seed: int = 0):
+    from rotor37_rom.nonlinear_forces import PolynomialForces
+    from rotor37_rom.reduction import ReducedModel
+
+    rng = np.random.default_rng(seed)
+    X = rng.standard_normal((r, r))
+    M = X @ X.T / r + np.eye(r)
+    K = 1e8 * (X.T @ X / r + np.eye(r))
+    A = rng.standard_normal((r, r * (r + 1) // 2))
+    B = rng.standard_normal((r, r * (r + 1) * (r + 2) // 6))
+    nodes = np.column_stack([np.full(8, 0.25), np.linspace(-0.025, 0.023, 8), np.linspace(0.006, 0.034, 8)])
+    return ReducedModel(M=M, C=np.zeros_like(M), K=K, forces=PolynomialForces(A, B), boundary_dofs=np.arange(24),
+                        boundary_nodes=nodes, sizes={"r_b": 24, "r_c": r - 24, "r_md": 0}, md_pairs=np.zeros((0, 2)),
+                        Phi=None, metadata={"synthetic": r})
+
+
+def full_tensors(forces):
+    """Dense A (r, r, r) and B (r, r, r, r) holding the same polynomial (coefficient on the sorted index)."""
+    from rotor37_rom.nonlinear_forces import cubic_monomial_indices, quadratic_monomial_indices
+
+    r = forces.r
+    A3 = np.zeros((r, r, r))
+    a, b = quadratic_monomial_indices(r)
+    A3[:, a, b] = forces.A
+    B4 = np.zeros((r, r, r, r))
+    ca, cb, cc = cubic_monomial_indices(r)
+    B4[:, ca, cb, cc] = forces.B
+    return A3, B4
+
+
+def time_per_step(fn, min_time: float = 0.5) -> float:
+    fn()
+    n, t0 = 0, time.perf_counter()
+    while time.perf_counter() - t0 < min_time:
+        fn()
+        n += 1
+    return (time.perf_counter() - t0) / n
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--r", type=int, nargs="+", default=[30, 45, 60, 90])
+    parser.add_argument("--P", type=int, nargs="+", default=[1, 8, 80])
+    parser.add_argument("--preset", default="ci")
+    parser.add_argument("--throughput-speeds", type=int, default=16)
+    parser.add_argument("--throughput-revolutions", type=float, default=1.0)
+    args = parser.parse_args(argv)
+    from rotor37_rom.integrator import CentralDifference
+
+    gflops = gemm_rate()
+    print(f"dgemm 2000^3: {gflops:.1f} GFLOP/s")
+    rows = []
+    print(f"{'r':>4} {'P':>4} {'batched us/sim-step':>20} {'naive einsum':>13} {'speed-up':>9} {'GFLOP/s':>8} "
+          f"{'% of dgemm':>10}")
+    for r in args.r:
+        model = synthetic_model(r)
+        scheme = CentralDifference(model, nonlinear=True, safety=0.9)
+        A3, B4 = full_tensors(scheme.Xg)
+        n3 = scheme.Xg.B.shape[1]
+        flops = 2 * r * (2 * r + r * (r + 1) // 2 + n3)            # GEMMs of eq. 34 per simulation
+        for P in args.P:
+            Q = np.random.default_rng(1).standard_normal((r, P)) * 1e-4
+            Qp = Q.copy()
+            t_batch = time_per_step(lambda: scheme.predict(Q, Qp, None)) / P
+
+            def naive():
+                for p in range(P):
+                    q = Q[:, p]
+                    scheme.X1 @ q + scheme.X2 @ Qp[:, p] + np.einsum("mij,i,j->m", A3, q, q) + \
+                        np.einsum("mijk,i,j,k->m", B4, q, q, q)
+
+            t_naive = time_per_step(naive, min_time=0.3) / P
+            rate = flops / t_batch / 1e9
+            rows.append({"r": r, "P": P, "us_per_sim_step": t_batch * 1e6, "naive_us": t_naive * 1e6,
+                         "speedup": t_naive / t_batch, "gflops": rate, "fraction_of_dgemm": rate / gflops})
+            print(f"{r:>4} {P:>4} {t_batch * 1e6:>20.1f} {t_naive * 1e6:>13.1f} {t_naive / t_batch:>9.1f} "
+                  f"{rate:>8.1f} {100 * rate / gflops:>9.0f}%")
+        del A3, B4
+    # real model: full step with contact, and interaction-map throughput
+    from rotor37_rom import fem
+    from rotor37_rom.builder import ReductionConfig, build_reduced_model
+    from rotor37_rom.casing import Casing
+    from rotor37_rom.integrator import simulate
+
+    sector = fem.create_blade_sector(preset=args.preset)
+    model, _ = build_reduced_model(sector, ReductionConfig(r_c=15, r_md=0, global_md_modes=3, forces="intrusive"),
+                                   cache_dir="results/cache")
+    throughput = {}
+    for gnl in (False, True):
+        scheme = CentralDifference(model, nonlinear=gnl, safety=0.5)
+        speeds = np.linspace(1200.0, 1600.0, args.throughput_speeds)
+        res = simulate(scheme, speeds, Casing(), revolutions=args.throughput_revolutions, record_every=50)
+        revs = args.throughput_revolutions * len(speeds)
+        sim_steps = int(res.n_steps.sum())
+        # ovalization reaches 99 % at 20 % of the run: contacts happen in these short runs too
+        throughput["GNL" if gnl else "linear"] = {
+            "h": scheme.h, "rev_per_s": revs / res.wall, "us_per_sim_step": res.wall / sim_steps * 1e6,
+            "contact_steps": int(res.contact_steps.sum()),
+            "headline_hours": 100 * 200 / (revs / res.wall) / 3600}
+        t = throughput["GNL" if gnl else "linear"]
+        print(f"{args.preset} r = {model.r}, {'GNL' if gnl else 'linear'}, P = {len(speeds)}, h = {scheme.h:.3g} s: "
+              f"{t['rev_per_s']:.3f} rev/s, {t['us_per_sim_step']:.1f} us/sim-step with contact; "
+              f"100 speeds x 200 rev would take {t['headline_hours']:.1f} h")
+    machine = write_results("bench_integrator", rows, dgemm_gflops=gflops, throughput=throughput,
+                            model={"preset": args.preset, "r": model.r})
+    print(f"machine: {machine}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

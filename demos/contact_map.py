@@ -1,0 +1,173 @@
+# # Blade-tip/casing contact: interaction maps, NFRC and continuation (paper §2.3.1, §2.3.3; Figs. 6, 7, 11, 12)
+#
+# Builds (or loads) a reduced model of the clamped blade, then sweeps the angular speed with the casing ovalized into
+# two lobes (eqs. 37-38; c0 = 0.5 mm, h_b = 0.625 mm, mu = 0.15), GNL off and on. Every speed's result is written as
+# it finishes; a killed run started again resumes. The same command under `mpirun -n N` splits the speeds over the
+# ranks (give --model, the file the serial run saved).
+#
+#     python demos/contact_map.py --preset ci --speeds 1200 1600 21 --revolutions 20          # minutes
+#     python demos/contact_map.py --preset coarse --speeds 1200 1600 201 --revolutions 200      # paper scale (hours)
+#     mpirun -n 2 python demos/contact_map.py --model results/contact_map/rom.npz --speeds 1200 1600 21
+
+# +
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import scipy.linalg
+
+PAPER = {"linear 1B/EO4": 1317.0, "zero IC, no GNL": 1446.0, "zero IC, GNL": 1535.0,
+         "continuation, no GNL": 1520.0, "continuation, GNL": 1551.0}
+# -
+
+
+# +
+def build_or_load(args, comm):
+    from rotor37_rom.reduction import load_reduced_model, save_reduced_model
+
+    out = Path(args.out)
+    if args.model:
+        return load_reduced_model(args.model)
+    if comm is not None and comm.size > 1:
+        raise SystemExit("error: under MPI give --model (the rom.npz a serial run saved); the reduction is serial")
+    from rotor37_rom import fem
+    from rotor37_rom.builder import ReductionConfig, build_reduced_model
+
+    sector = fem.create_blade_sector(preset=args.preset)
+    config = ReductionConfig(r_c=args.r_c, r_md=args.r_md, global_md_modes=args.global_md, forces="intrusive")
+    t0 = time.perf_counter()
+    model, _ = build_reduced_model(sector, config, cache_dir=out / "cache")
+    print(f"reduced model: {args.preset} preset ({sector.n_dofs} DOF) -> r = {model.r} {model.sizes} "
+          f"in {time.perf_counter() - t0:.1f} s")
+    save_reduced_model(model, out / "rom.npz")
+    return model
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description="interaction maps of the reduced blade with casing contact")
+    parser.add_argument("--preset", default="ci")
+    parser.add_argument("--model", help="load this reduced model (.npz) instead of building one")
+    parser.add_argument("--r-c", type=int, default=15)
+    parser.add_argument("--r-md", type=int, default=0)
+    parser.add_argument("--global-md", type=int, default=3)
+    parser.add_argument("--speeds", type=float, nargs=3, default=[1200.0, 1600.0, 21], metavar=("START", "STOP", "N"))
+    parser.add_argument("--revolutions", type=float, default=20.0)
+    parser.add_argument("--gnl", choices=["off", "on", "both"], default="both")
+    parser.add_argument("--safety", type=float, default=0.5, help="h = safety * 2 / omega_max (linear model)")
+    parser.add_argument("--h", type=float, help="time step (s); overrides --safety")
+    parser.add_argument("--mu", type=float, default=0.15)
+    parser.add_argument("--c0", type=float, default=0.5e-3)
+    parser.add_argument("--hb", type=float, default=0.625e-3)
+    parser.add_argument("--direction", choices=["x", "radial"], default="x")
+    parser.add_argument("--batch", type=int, default=16)
+    parser.add_argument("--continuation", type=float, default=0.0,
+                        help="speed step (rad/s) of a continuation up and down (0: none)")
+    parser.add_argument("--out", default="results/contact_map")
+    parser.add_argument("--quiet", action="store_true")
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.WARNING, force=True)
+    logging.getLogger().handlers[0].setLevel(logging.WARNING)
+
+    from rotor37_rom.casing import Casing
+    from rotor37_rom.integrator import CentralDifference
+    from rotor37_rom.sweep import SweepSpec, continuation, interaction_map, load_sweep, run_sweep
+
+    try:
+        casing = Casing(c0=args.c0, h_b=args.hb, mu=args.mu, direction=args.direction)
+        start, stop, n = args.speeds
+        if not (0 < start <= stop) or n < 1:
+            raise ValueError(f"--speeds: need 0 < START <= STOP and N >= 1, got {args.speeds}")
+        speeds = np.linspace(start, stop, int(n))
+        spec = SweepSpec(revolutions=args.revolutions, casing=casing, batch_size=args.batch)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    comm = None
+    try:
+        from mpi4py import MPI
+
+        comm = MPI.COMM_WORLD if MPI.COMM_WORLD.size > 1 else None
+    except ImportError:
+        pass
+    rank = comm.rank if comm is not None else 0
+    out = Path(args.out)
+    model = build_or_load(args, comm)
+    lam = scipy.linalg.eigh(model.K, model.M, eigvals_only=True)
+    omega = np.sqrt(lam[:3])
+    lin_res = omega[0] / 4
+    summary = {"r": model.r, "sizes": model.sizes, "omega_1_3": omega.tolist(), "linear_resonance": lin_res,
+               "speeds": [start, stop, int(n)], "revolutions": args.revolutions, "casing": vars(casing), "runs": {}}
+    modes = {"off": [False], "on": [True], "both": [False, True]}[args.gnl]
+    for gnl in modes:
+        try:
+            scheme = CentralDifference(model, nonlinear=gnl, h=args.h, safety=args.safety)
+        except ValueError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+        label = "GNL" if gnl else "no GNL"
+        t0 = time.perf_counter()
+        folder = run_sweep(scheme, speeds, spec, out / "sweeps", comm=comm, progress=not args.quiet)
+        wall = time.perf_counter() - t0
+        if rank != 0:
+            continue
+        results = [r for r in load_sweep(folder) if np.isclose(float(r["omega"]), speeds).any()]
+        imap = interaction_map(results)
+        from rotor37_rom.charts import plot_interaction_map, plot_nfrc, plot_time_history
+
+        tag = "gnl" if gnl else "linear"
+        plot_interaction_map(imap, out / f"interaction_map_{tag}.png", eigenfrequencies=omega, linear_resonance=lin_res,
+                             title=f"node LE, {label}, r = {model.r}, {args.revolutions:g} rev., h = {scheme.h:.3g} s")
+        ok = np.isfinite(imap.nfrc)
+        peak = float(imap.speeds[ok][np.argmax(imap.nfrc[ok])]) if ok.any() else float("nan")
+        worst = results[int(np.nanargmax(np.where(ok, imap.nfrc, -1)))] if ok.any() else results[0]
+        plot_time_history(worst["t"], {"LE": worst["u_r"][0], "TE": worst["u_r"][-1]},
+                          out / f"time_history_{tag}.png", title=f"{label}, Omega = {float(worst['omega']):.0f} rad/s")
+        revs = float(np.sum(args.revolutions * np.ones(len(results))))
+        run = {"h": scheme.h, "h_crit": scheme.h_crit, "peak_speed": peak, "peak_amplitude": float(np.nanmax(imap.nfrc)),
+               "diverged": imap.speeds[imap.diverged].tolist(), "wall_s": wall,
+               "rev_per_s": revs / wall if wall > 1 else None, "nfrc": imap.nfrc.tolist(),
+               "speeds": imap.speeds.tolist(), "contact_checks": {
+                   "max_penetration": max(float(r["max_penetration"]) for r in results),
+                   "min_multiplier": min(float(r["min_multiplier"]) for r in results),
+                   "max_friction_power": max(float(r["friction_power"]) for r in results)}}
+        summary["runs"][label] = run
+        print(f"{label:>7}: h = {scheme.h:.3g} s (2/omega_max = {scheme.h_crit:.3g}), largest response at "
+              f"{peak:.0f} rad/s ({run['peak_amplitude'] * 1e3:.3f} mm), linear 1B/EO4 {lin_res:.0f} rad/s; "
+              f"{len(imap.diverged.nonzero()[0])} diverged; {wall:.0f} s")
+        if args.continuation > 0:
+            curves = {}
+            for a, b, name, style in ((start, stop, "up", "+"), (stop, start, "down", "o")):
+                pts = continuation(scheme, a, b, args.continuation, casing, first_revolutions=args.revolutions,
+                                   revolutions=max(5.0, args.revolutions * 0.15))
+                curves[f"continuation {name}"] = ([p.omega for p in pts], [p.amplitude for p in pts], style)
+                best = max(pts, key=lambda p: p.amplitude if np.isfinite(p.amplitude) else -1)
+                run[f"continuation_{name}_peak"] = best.omega
+                run[f"continuation_{name}"] = [(p.omega, p.amplitude, p.steady, p.halvings) for p in pts]
+                print(f"         continuation {name}: largest response at {best.omega:.0f} rad/s "
+                      f"({best.amplitude * 1e3:.3f} mm)")
+            curves["zero IC"] = (imap.speeds, imap.nfrc, "--")
+            plot_nfrc(curves, out / f"nfrc_continuation_{tag}.png", lin_res, PAPER)
+    if rank == 0:
+        from rotor37_rom.charts import plot_nfrc
+
+        curves = {label: (np.array(run["speeds"]), np.array(run["nfrc"]), "-" if label == "GNL" else "--")
+                  for label, run in summary["runs"].items()}
+        plot_nfrc(curves, out / "nfrc.png", lin_res, PAPER)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "summary.json").write_text(json.dumps(summary, indent=1, default=float))
+        print(f"paper: linear {PAPER['linear 1B/EO4']:.0f}, zero IC {PAPER['zero IC, no GNL']:.0f} / "
+              f"{PAPER['zero IC, GNL']:.0f} (no GNL / GNL), continuation {PAPER['continuation, no GNL']:.0f} / "
+              f"{PAPER['continuation, GNL']:.0f} rad/s")
+        print(f"charts and summary.json in {out}/")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
+# -

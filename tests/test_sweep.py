@@ -1,0 +1,110 @@
+"""Speed sweeps: a killed sweep resumes from its checkpoint with nothing lost; MPI ranks give the serial map;
+interaction-map spectra and the steady-state test recover known signals."""
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rotor37_rom import sweep as sweep_mod
+from rotor37_rom.casing import Casing
+from rotor37_rom.integrator import CentralDifference
+from rotor37_rom.reduction import save_reduced_model
+from rotor37_rom.sweep import SweepSpec, interaction_map, is_steady, load_sweep, run_sweep
+
+ROOT = Path(__file__).resolve().parents[1]
+SPEEDS = np.array([1300.0, 1600.0])
+
+
+class _Killed(Exception):
+    pass
+
+
+def test_killed_sweep_resumes(ci_rom, tmp_path, monkeypatch):
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
+    spec = SweepSpec(revolutions=0.25, casing=Casing(), record_dt=2e-6)
+    steps = np.ceil(0.25 * 2 * np.pi / SPEEDS / scheme.h).astype(int)     # 1600 rad/s finishes first
+    kill_at = (steps.min() + steps.max()) // 2
+    real = sweep_mod.simulate
+
+    def killed_simulate(*args, checkpoint=None, **kwargs):
+        def save_then_die(st):
+            checkpoint(st)
+            if st["n"] >= kill_at:
+                raise _Killed
+
+        return real(*args, checkpoint=save_then_die, **kwargs)
+
+    monkeypatch.setattr(sweep_mod, "simulate", killed_simulate)
+    with pytest.raises(_Killed):
+        run_sweep(scheme, SPEEDS, spec, tmp_path / "a", progress=False, checkpoint_seconds=0.0)
+    folder = next((tmp_path / "a").iterdir())
+    assert [float(r["omega"]) for r in load_sweep(folder)] == [1600.0]      # the finished speed was kept
+    assert len(list(folder.glob("batch_*.ckpt.npz"))) == 1
+    resumed_from = []
+
+    def spy(*args, state=None, **kwargs):
+        resumed_from.append(None if state is None else state["n"])
+        return real(*args, state=state, **kwargs)
+
+    monkeypatch.setattr(sweep_mod, "simulate", spy)
+    run_sweep(scheme, SPEEDS, spec, tmp_path / "a", progress=False)
+    assert resumed_from == [kill_at]                                          # one batch, resumed where it died
+    assert not list(folder.glob("batch_*.ckpt.npz"))
+    monkeypatch.setattr(sweep_mod, "simulate", real)
+    ref_folder = run_sweep(scheme, SPEEDS, spec, tmp_path / "b", progress=False)
+    for got, ref in zip(load_sweep(folder), load_sweep(ref_folder)):
+        assert got["omega"] == ref["omega"]
+        np.testing.assert_array_equal(got["u_r"], ref["u_r"])                # bit for bit: same operations
+        np.testing.assert_array_equal(got["lam"], ref["lam"])
+    # a corrupted result file is recomputed, not trusted
+    bad = sorted(folder.glob("omega_*.npz"))[0]
+    bad.write_bytes(b"garbage")
+    run_sweep(scheme, SPEEDS, spec, tmp_path / "a", progress=False)
+    assert len(load_sweep(folder)) == 2
+
+
+def test_mpi_sweep_equals_serial(ci_rom, tmp_path):
+    model_path = save_reduced_model(ci_rom, tmp_path / "rom.npz")
+    speeds = np.linspace(1300.0, 1600.0, 4)
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg")
+    cmd = ["mpirun", "-n", "2", sys.executable, str(ROOT / "demos" / "contact_map.py"), "--model", str(model_path),
+           "--speeds", "1300", "1600", "4", "--revolutions", "0.3", "--gnl", "off", "--safety", "0.9",
+           "--out", str(tmp_path / "mpi"), "--quiet"]
+    run = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
+    serial = run_sweep(scheme, speeds, SweepSpec(revolutions=0.3, casing=Casing()), tmp_path / "serial",
+                       progress=False)
+    mpi_folder = tmp_path / "mpi" / "sweeps" / serial.name
+    assert mpi_folder.is_dir(), "the MPI run used another key than the serial one"
+    got, ref = load_sweep(mpi_folder), load_sweep(serial)
+    assert len(got) == len(ref) == 4
+    for a, b in zip(got, ref):
+        assert float(a["omega"]) == float(b["omega"])
+        scale = np.abs(b["u_r"]).max()
+        assert np.abs(a["u_r"] - b["u_r"]).max() <= 1e-8 * scale
+    ma, mb = interaction_map(got), interaction_map(ref)
+    np.testing.assert_allclose(ma.nfrc, mb.nfrc, rtol=1e-8)
+
+
+def test_interaction_map_spectrum_and_steady_state():
+    """A sampled 2-tone signal: the map recovers both amplitudes (interpolated spectrum at the tones) and the
+    steady-state test accepts a periodic signal but not a growing one."""
+    omega = 1400.0
+    t = np.arange(0, 40 * 2 * np.pi / omega, 1e-5)
+    w1, w2 = 4 * omega, 9.5 * omega
+    u = 2e-4 * np.sin(w1 * t) + 5e-5 * np.cos(w2 * t)
+    res = {"t": t, "u_r": np.vstack([u, u]), "omega": omega, "diverged_step": -1}
+    imap = interaction_map([res], f_max=20000.0, n_freq=20001)
+    half = len(t) - len(t) // 2
+    for w, a in ((w1, 2e-4), (w2, 5e-5)):
+        k = np.argmin(np.abs(imap.frequencies - w))
+        assert abs(imap.amplitude[0, k] - a) < 0.1 * a          # leakage of a non-bin tone < 10 % (rectangular)
+    assert imap.nfrc[0] == pytest.approx(np.abs(u[t >= t[-1] - 2 * np.pi / omega]).max())
+    assert half > 0
+    assert is_steady(t, u, omega)
+    assert not is_steady(t, u * np.exp(0.05 * t * omega / (2 * np.pi)), omega)   # +5 % per revolution
