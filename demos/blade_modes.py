@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 import sys
 import time
@@ -96,6 +97,10 @@ def main(argv=None) -> int:
         report = study_blade(table, args.preset, args.modes, out, not args.no_pictures)
         if MPI.COMM_WORLD.rank == 0:
             print_report(report)
+            summary = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in report.items()}
+            summary.update(preset=args.preset, paper=PAPER_CLAMPED_OMEGA)
+            out.mkdir(parents=True, exist_ok=True)
+            (out / f"{report['name']}_summary.json").write_text(json.dumps(summary, indent=1, default=float))
     if MPI.COMM_WORLD.rank == 0:
         print(f"\nXDMF and PNG files in {out}/")
     return 0

@@ -872,3 +872,16 @@ def cell_midpoints(sector: Sector) -> np.ndarray:
 
     n_cells = sector.mesh.topology.index_map(3).size_local
     return dmesh.compute_midpoints(sector.mesh, 3, np.arange(n_cells, dtype=np.int32))
+
+
+def cells_touching_points(sector: Sector, points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    """Local cells having one of ``points`` (n, 3) among their geometry nodes (e.g. the contact nodes, where point
+    contact forces make the FE stress singular)."""
+    x = sector.mesh.geometry.x
+    dofmap = sector.mesh.geometry.dofmap
+    n_cells = sector.mesh.topology.index_map(3).size_local
+    geom = np.array([dofmap.links(c) for c in range(n_cells)])
+    hit = np.zeros(len(x), bool)
+    for p in np.asarray(points, float).reshape(-1, 3):
+        hit |= np.linalg.norm(x - p, axis=1) < tol
+    return np.nonzero(hit[geom].any(axis=1))[0]

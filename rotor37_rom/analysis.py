@@ -1,0 +1,39 @@
+"""Analyses that combine the FE adapter with the pure modules: stress at the worst instant of a simulation."""
+from __future__ import annotations
+
+import numpy as np
+
+from rotor37_rom import fem
+
+__all__ = ["stress_at_peak", "TIP_BAND"]
+
+TIP_BAND = 0.1     # fraction of the span below the tip where the contact impulses' local response is reported apart
+
+
+def stress_at_peak(sector, model, recovery, result, nonlinear: bool, sim: int = 0) -> dict:
+    """t_max (largest radial displacement of node LE toward the casing) and von Mises there: the maximum over the
+    blade below the top 10 % of the span, and apart, the maximum in that tip band and in the cells touching a
+    contact node (point contact forces make the FE stress singular there: it grows under mesh refinement)."""
+    if result is None or result.records_q is None:
+        raise ValueError("no simulation with recorded states yet: run the contact simulation first (record_q=True)")
+    if not 0 <= sim < len(result.t):
+        raise ValueError(f"sim must be in [0, {len(result.t) - 1}], got {sim}")
+    t, u_le = result.t[sim], result.u_r[sim][0]
+    if not np.isfinite(u_le).any():
+        raise ValueError("the simulation has no finite record of node LE (diverged?)")
+    k = int(np.nanargmax(u_le))
+    q = result.records_q[sim][:, k]
+    cell_max = recovery.cell_max(q, nonlinear)
+    singular = fem.cells_touching_points(sector, model.boundary_nodes)
+    mid = fem.cell_midpoints(sector)
+    radius = np.hypot(mid[:, 0], mid[:, 1])
+    band = radius > radius.max() - TIP_BAND * np.ptp(radius)       # contact-impulse zone below the tip nodes
+    regular = cell_max.copy()
+    regular[band] = -np.inf
+    cell = int(np.argmax(regular))
+    centroid = mid[cell]
+    return {"t_max": float(t[k]), "u_le": float(u_le[k]), "q": q, "vm_max": float(regular[cell]), "cell": cell,
+            "location": centroid.tolist(), "ratio_yield": float(regular[cell] / sector.material.sigma_y),
+            "vm_max_at_contact_nodes": float(cell_max[singular].max()), "cell_max": cell_max,
+            "vm_max_tip_band": float(cell_max[band].max()),
+            "clim": [0.0, float(np.percentile(cell_max[~band], 99.5))]}
