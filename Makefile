@@ -11,7 +11,7 @@ export OMPI_MCA_rmaps_base_oversubscribe := 1
 export MPLBACKEND := Agg
 export PYVISTA_OFF_SCREEN := true
 
-.PHONY: setup demo test test-fast bench clean
+.PHONY: setup demo test test-fast bench contact-map clean
 
 setup: $(STAMP)
 
@@ -31,12 +31,18 @@ $(STAMP): pyproject.toml /usr/lib/x86_64-linux-gnu/openblas-pthread/libblas.so.3
 
 demo: $(STAMP)
 	$(PY) demos/blade_modes.py
+	$(PY) demos/report.py --revolutions 3
+
+contact-map: $(STAMP)
+	$(PY) demos/contact_map.py --preset ci --speeds 1200 1600 41 --revolutions 30
+	$(PY) demos/report.py --preset ci --revolutions 5
 
 test: $(STAMP)
 	$(PY) -m pytest -q -ra tests
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_full_order.py
+	$(PY) benchmarks/bench_integrator.py
 
 clean:
 	rm -rf $(VENV) results .pytest_cache

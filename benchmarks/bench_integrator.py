@@ -108,7 +108,7 @@ def main(argv=None) -> int:
                          "speedup": t_naive / t_batch, "gflops": rate, "fraction_of_dgemm": rate / gflops})
             print(f"{r:>4} {P:>4} {t_batch * 1e6:>20.1f} {t_naive * 1e6:>13.1f} {t_naive / t_batch:>9.1f} "
                   f"{rate:>8.1f} {100 * rate / gflops:>9.0f}%")
-        del A3, B4
+        A3 = B4 = None          # free the dense tensors before the next r
     # real model: full step with contact, and interaction-map throughput
     from rotor37_rom import fem
     from rotor37_rom.builder import ReductionConfig, build_reduced_model

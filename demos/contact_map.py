@@ -129,7 +129,8 @@ def main(argv=None) -> int:
         plot_time_history(worst["t"], {"LE": worst["u_r"][0], "TE": worst["u_r"][-1]},
                           out / f"time_history_{tag}.png", title=f"{label}, Omega = {float(worst['omega']):.0f} rad/s")
         revs = float(np.sum(args.revolutions * np.ones(len(results))))
-        run = {"h": scheme.h, "h_crit": scheme.h_crit, "peak_speed": peak, "peak_amplitude": float(np.nanmax(imap.nfrc)),
+        run = {"h": scheme.h, "h_crit": scheme.h_crit, "peak_speed": peak,
+               "peak_amplitude": float(np.nanmax(imap.nfrc)),
                "diverged": imap.speeds[imap.diverged].tolist(), "wall_s": wall,
                "rev_per_s": revs / wall if wall > 1 else None, "nfrc": imap.nfrc.tolist(),
                "speeds": imap.speeds.tolist(), "contact_checks": {
@@ -156,6 +157,16 @@ def main(argv=None) -> int:
     if rank == 0:
         from rotor37_rom.charts import plot_nfrc
 
+        previous = out / "summary.json"
+        if previous.is_file():                     # keep the runs of an earlier call on the same set-up
+            old = json.loads(previous.read_text())
+            if (old.get("r"), old.get("speeds"), old.get("revolutions")) == (model.r, summary["speeds"],
+                                                                              args.revolutions):
+                for label, run in old.get("runs", {}).items():
+                    if label not in summary["runs"]:
+                        summary["runs"][label] = run
+                    else:
+                        summary["runs"][label] = {**run, **summary["runs"][label]}
         curves = {label: (np.array(run["speeds"]), np.array(run["nfrc"]), "-" if label == "GNL" else "--")
                   for label, run in summary["runs"].items()}
         plot_nfrc(curves, out / "nfrc.png", lin_res, PAPER)

@@ -327,87 +327,88 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
     if energy and scheme.nonlinear and not isinstance(energy_forces, PolynomialForces):
         raise ValueError("energy=True with nonlinear forces needs the polynomial (intrusive) tensors")
 
-    t_wall = time.perf_counter()
-    last_ckpt = t_wall
-    active = np.nonzero(~st["done"])[0]
-    forcing_full = None
-    n_max = int(steps.max())
-    lam_now = np.zeros((nc, P))
-    while st["n"] < n_max and active.size:
-        n = st["n"]
-        t1 = (n + 1) * h
-        Qa, Qpa = Q[:, active], Qp[:, active]
-        F = None
-        if forcing is not None:
-            forcing_full = np.asarray(forcing(n * h), float)
-            F = forcing_full if forcing_full.ndim == 1 else forcing_full.reshape(r, -1)[:, active]
-        Qn = scheme.predict(Qa, Qpa, F)
-        lam_now[:, active] = 0.0
-        if casings is not None:
-            om = omega[active]
-            ur = N @ Qn
-            theta = theta0[:, None] + sense * om[None, :] * t1
-            s = _gap_reference(theta, t1, c0[active], p0[active], alpha[active], casings[0].width)
-            g = s - ur
-            hits = np.nonzero((g < 0.0).any(axis=0))[0]
-            for j in hits:
-                p = active[j]
-                D = DN + mu[p] * DT                    # u_r += D lambda (negative definite)
-                lam = _solve_contact(D, g[:, j])
-                dq = (WN + mu[p] * WT) @ lam
-                Qn[:, j] += dq
-                gap_after = g[:, j] - D @ lam
-                st["max_pen"][p] = max(st["max_pen"][p], float(-gap_after.min()))
-                on = lam > 0
-                if on.any():
-                    st["min_lam"][p] = min(st["min_lam"][p], float(lam[on].min()))
-                    st["contact_steps"][p] += 1
-                    # sliding velocity of the node on the casing: rotation + its own tangential velocity
-                    v = (Qn[:, j] - Qa[:, j]) / h
-                    for k in np.nonzero(on)[0]:
-                        v_slide = om[j] * radius[k] + slide[k] @ v[dofs[k]]   # along s_k
-                        power = -mu[p] * lam[k] * v_slide
-                        st["fric_pow"][p] = max(st["fric_pow"][p], power)
-                lam_now[:, p] = lam
-        Qp[:, active] = Qa
-        Q[:, active] = Qn
-        st["n"] = n = n + 1
-        # records
-        if n % record_every == 0:
-            i = n // record_every
-            ur_all = N @ Qn
-            E = discrete_energy(scheme.M, scheme.K, energy_forces, Qn, Qa, h) if energy else None
-            for j, p in enumerate(active):
-                if n <= steps[p]:
-                    st["u_r"][p][:, i] = ur_all[:, j]
-                    st["lam"][p][:, i] = lam_now[:, p]
-                    if energy:
-                        st["energy"][p][i] = E[j]
-                    if record_q:
-                        st["q_rec"][p][:, i] = Qn[:, j]
-        if n % check_every == 0 or n in steps:
-            bad = ~np.isfinite(Qn[:rb]).all(axis=0) | (np.abs(Qn[:rb]).max(axis=0) > blowup_limit)
-            for j in np.nonzero(bad)[0]:
-                p = active[j]
-                st["diverged"][p] = n
-                if on_blowup == "raise":
-                    raise SimulationDiverged(
-                        f"simulation {p} (Omega = {omega[p]:g} rad/s) diverged at step {n} (t = {n * h:.6g} s): "
-                        f"boundary displacement NaN or above {blowup_limit:g} m; h = {h:.4g} s, "
-                        f"stability limit 2/omega_max = {scheme.h_crit:.4g} s")
-                st["done"][p] = True
-            finished = [p for p in active if n >= steps[p] and not st["done"][p]]
-            for p in finished:
-                st["done"][p] = True
-                if on_finish is not None:
-                    on_finish(p, _record(st, p, steps, h, record_every, omega))
-            if finished or bad.any():
-                active = np.nonzero(~st["done"])[0]
-        if progress is not None and n % check_every == 0:
-            progress(check_every)
-        if checkpoint is not None and time.perf_counter() - last_ckpt > checkpoint_seconds:
-            checkpoint(st)
-            last_ckpt = time.perf_counter()
+    with np.errstate(over="ignore", invalid="ignore"):     # a blow-up is detected and reported below
+        t_wall = time.perf_counter()
+        last_ckpt = t_wall
+        active = np.nonzero(~st["done"])[0]
+        forcing_full = None
+        n_max = int(steps.max())
+        lam_now = np.zeros((nc, P))
+        while st["n"] < n_max and active.size:
+            n = st["n"]
+            t1 = (n + 1) * h
+            Qa, Qpa = Q[:, active], Qp[:, active]
+            F = None
+            if forcing is not None:
+                forcing_full = np.asarray(forcing(n * h), float)
+                F = forcing_full if forcing_full.ndim == 1 else forcing_full.reshape(r, -1)[:, active]
+            Qn = scheme.predict(Qa, Qpa, F)
+            lam_now[:, active] = 0.0
+            if casings is not None:
+                om = omega[active]
+                ur = N @ Qn
+                theta = theta0[:, None] + sense * om[None, :] * t1
+                s = _gap_reference(theta, t1, c0[active], p0[active], alpha[active], casings[0].width)
+                g = s - ur
+                hits = np.nonzero((g < 0.0).any(axis=0))[0]
+                for j in hits:
+                    p = active[j]
+                    D = DN + mu[p] * DT                    # u_r += D lambda (negative definite)
+                    lam = _solve_contact(D, g[:, j])
+                    dq = (WN + mu[p] * WT) @ lam
+                    Qn[:, j] += dq
+                    gap_after = g[:, j] - D @ lam
+                    st["max_pen"][p] = max(st["max_pen"][p], float(-gap_after.min()))
+                    on = lam > 0
+                    if on.any():
+                        st["min_lam"][p] = min(st["min_lam"][p], float(lam[on].min()))
+                        st["contact_steps"][p] += 1
+                        # sliding velocity of the node on the casing: rotation + its own tangential velocity
+                        v = (Qn[:, j] - Qa[:, j]) / h
+                        for k in np.nonzero(on)[0]:
+                            v_slide = om[j] * radius[k] + slide[k] @ v[dofs[k]]   # along s_k
+                            power = -mu[p] * lam[k] * v_slide
+                            st["fric_pow"][p] = max(st["fric_pow"][p], power)
+                    lam_now[:, p] = lam
+            Qp[:, active] = Qa
+            Q[:, active] = Qn
+            st["n"] = n = n + 1
+            # records
+            if n % record_every == 0:
+                i = n // record_every
+                ur_all = N @ Qn
+                E = discrete_energy(scheme.M, scheme.K, energy_forces, Qn, Qa, h) if energy else None
+                for j, p in enumerate(active):
+                    if n <= steps[p]:
+                        st["u_r"][p][:, i] = ur_all[:, j]
+                        st["lam"][p][:, i] = lam_now[:, p]
+                        if energy:
+                            st["energy"][p][i] = E[j]
+                        if record_q:
+                            st["q_rec"][p][:, i] = Qn[:, j]
+            if n % check_every == 0 or n in steps:
+                bad = ~np.isfinite(Qn[:rb]).all(axis=0) | (np.abs(Qn[:rb]).max(axis=0) > blowup_limit)
+                for j in np.nonzero(bad)[0]:
+                    p = active[j]
+                    st["diverged"][p] = n
+                    if on_blowup == "raise":
+                        raise SimulationDiverged(
+                            f"simulation {p} (Omega = {omega[p]:g} rad/s) diverged at step {n} (t = {n * h:.6g} s): "
+                            f"boundary displacement NaN or above {blowup_limit:g} m; h = {h:.4g} s, "
+                            f"stability limit 2/omega_max = {scheme.h_crit:.4g} s")
+                    st["done"][p] = True
+                finished = [p for p in active if n >= steps[p] and not st["done"][p]]
+                for p in finished:
+                    st["done"][p] = True
+                    if on_finish is not None:
+                        on_finish(p, _record(st, p, steps, h, record_every, omega))
+                if finished or bad.any():
+                    active = np.nonzero(~st["done"])[0]
+            if progress is not None and n % check_every == 0:
+                progress(check_every)
+            if checkpoint is not None and time.perf_counter() - last_ckpt > checkpoint_seconds:
+                checkpoint(st)
+                last_ckpt = time.perf_counter()
     wall = time.perf_counter() - t_wall
     recs = [_record(st, p, steps, h, record_every, omega) for p in range(P)]
     return SimulationResult(

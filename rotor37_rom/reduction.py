@@ -15,7 +15,6 @@ import numpy as np
 import scipy.integrate
 import scipy.linalg
 
-from rotor37_rom import __version__
 from rotor37_rom.nonlinear_forces import PolynomialForces, QuadratureForces
 
 __all__ = [

@@ -12,7 +12,6 @@ import hashlib
 import json
 import logging
 import os
-import time
 from pathlib import Path
 from typing import Sequence
 
@@ -140,7 +139,8 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
 
 
 def _save_state(path: Path, st: dict, speeds: np.ndarray) -> None:
-    arrays = {"speeds": speeds, "n": st["n"], "Q": st["Q"], "Qp": st["Qp"], "done": st["done"], "max_pen": st["max_pen"],
+    arrays = {"speeds": speeds, "n": st["n"], "Q": st["Q"], "Qp": st["Qp"], "done": st["done"],
+              "max_pen": st["max_pen"],
               "min_lam": st["min_lam"], "fric_pow": st["fric_pow"], "contact_steps": st["contact_steps"],
               "diverged": st["diverged"]}
     for p in range(len(st["u_r"])):

@@ -10,7 +10,7 @@ from scipy.spatial import cKDTree
 
 from rotor37_rom import fem
 from rotor37_rom.geometry import blade as geo
-from rotor37_rom.geometry.parametric import default_blade_law, fit_blade_law, section_parameters
+from rotor37_rom.geometry.parametric import default_blade_law, fit_blade_law
 from rotor37_rom.geometry.tables import read_blade_table
 from rotor37_rom.modes import PAPER_CLAMPED_OMEGA, classify_blade_modes
 

@@ -1,6 +1,5 @@
 """Clearance consumption (§2.3.2): the geometric measure, and the full-order linear vs nonlinear statics."""
 import numpy as np
-import pytest
 
 from rotor37_rom.clearance import clearance_change, delta_range_within, relative_error
 

@@ -1,5 +1,4 @@
 """Craig-Bampton + modal derivatives + reduced cubic forces on the ci blade (identity and convergence checks)."""
-import dataclasses
 
 import numpy as np
 import pytest

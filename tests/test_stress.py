@@ -4,7 +4,6 @@ import json
 
 import numpy as np
 import pytest
-import ufl
 from dolfinx import fem as dfem
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
