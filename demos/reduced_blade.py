@@ -22,7 +22,8 @@ import scipy.linalg
 
 from rotor37_rom import fem
 from rotor37_rom.builder import ReductionConfig, build_reduced_model, clearance_consumption_study
-from rotor37_rom.charts import plot_clearance_consumption, plot_md_weights
+from rotor37_rom.charts import (plot_clearance_consumption, plot_indicator_vs_rmd, plot_md_weights,
+                                plot_speed_accuracy)
 from rotor37_rom.clearance import delta_range_within, relative_error
 
 PAPER_LINEAR_RANGE = {"1B": (-0.25, 0.2), "1T": (-0.1, 0.1)}
@@ -71,16 +72,27 @@ def main(argv=None) -> int:
         curves = clearance_consumption_study(sector, mode, zeta, args.levels, roms, ops)
         plot_clearance_consumption(curves, out / f"clearance_{mode}.png")
         ref = curves.curves["FOM nonlinear"]
+        accuracy = []
         print(f"\nclearance consumption at node LE along {mode} (zeta = {zeta * 1e3:g} mm along e_x)")
         print(f"{'model':>20} {'Delta(-1) mm':>12} {'Delta(+1) mm':>12} {'max rel. err':>12} "
               f"{'<=10 % for delta in':>20} {'cost (s)':>9}")
         for name, values in curves.curves.items():
+            cost = curves.costs.get(name, float("nan"))
+            if not np.isfinite(values).any():
+                print(f"{name:>20} {'no equilibrium: the reduced Newton lost it (poor basis)':>57} {cost:>9.1f}")
+                continue
             err = relative_error(values, ref)
             lo, hi = delta_range_within(curves.deltas, err)
-            cost = curves.costs.get(name, float("nan"))
             print(f"{name:>20} {values[0] * 1e3:>12.4f} {values[-1] * 1e3:>12.4f} {np.nanmax(err):>12.3f} "
                   f"{f'[{lo:+.2f}, {hi:+.2f}]':>20} {cost:>9.1f}")
+            if name != "FOM nonlinear" and np.isfinite(cost):
+                accuracy.append((name, cost, float(np.nanmax(err))))
         print(f"paper: the linear model's error exceeds 10 % outside {list(PAPER_LINEAR_RANGE[mode])}")
+        plot_speed_accuracy(accuracy, out / f"speed_accuracy_{mode}.png",
+                            f"clearance consumption {mode}: cost vs max relative error (FOM nonlinear = reference)")
+        md_rows = [(roms[n].sizes["r_md"], e) for n, _, e in accuracy if n.startswith("ROM r_MD=")]
+        if md_rows:
+            plot_indicator_vs_rmd(md_rows, out / f"error_vs_rmd_{mode}.png", f"{mode}: max clearance error vs r_MD")
     print(f"\ncharts in {out}/")
     return 0
 

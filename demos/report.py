@@ -143,13 +143,13 @@ def main(argv=None) -> int:
          f"c0 = {casing.c0 * 1e3:g} mm, h_b = {casing.h_b * 1e3:g} mm, mu = {casing.mu:g} (eqs. 37-38). "
          "Von Mises from the exact SVK Cauchy stress (GNL on) or the linear stress (GNL off), evaluated at the "
          f"quadrature points from q(t_max); yield stress sigma_Y = {sector.material.sigma_y / 1e9:g} GPa. The "
-         "maximum is over the blade below the top 10 % of the span; the tip band, where the contact impulses excite "
-         "the local response, and the cells touching a contact node, where the point forces of the Lagrange "
-         "multipliers make the FE stress singular (it grows under mesh refinement), are listed apart. Colour "
-         "scale: 0 to the 99.5th percentile below the tip band."],
+         "maximum is over the blade except the cells within 10 % of the span of a contact node; that tip band, "
+         "where the contact impulses excite the local response, and the cells touching a contact node, where the "
+         "point forces of the Lagrange multipliers make the FE stress singular (it grows under mesh refinement), "
+         "are listed apart. Colour scale: 0 to the 99.5th percentile outside the tip band."],
         tables=[("Peak instant and stress", ["model", "t_max (ms)", "u_LE,r (mm)", "max von Mises (MPa)",
                                              "% of sigma_Y", "location (mm)",
-                                             "top 10 % of span (MPa)", "at contact nodes (MPa, singular)",
+                                             "tip band (MPa)", "at contact nodes (MPa, singular)",
                                              "simulation (s)"], stress_rows)],
         figures=[(out / f"stress_blade_{t}.png", f"von Mises at t_max, {lab}") for t, lab in
                  (("linear", "GNL off"), ("gnl", "GNL on"))]

@@ -7,13 +7,14 @@ from rotor37_rom import fem
 
 __all__ = ["stress_at_peak", "TIP_BAND"]
 
-TIP_BAND = 0.1     # fraction of the span below the tip where the contact impulses' local response is reported apart
+TIP_BAND = 0.1     # cells closer to a contact node than this fraction of the span are reported apart
 
 
 def stress_at_peak(sector, model, recovery, result, nonlinear: bool, sim: int = 0) -> dict:
     """t_max (largest radial displacement of node LE toward the casing) and von Mises there: the maximum over the
-    blade below the top 10 % of the span, and apart, the maximum in that tip band and in the cells touching a
-    contact node (point contact forces make the FE stress singular there: it grows under mesh refinement)."""
+    blade except the cells within 10 % of the span of a contact node, and apart, the maximum in that tip band and in
+    the cells touching a contact node (point contact forces make the FE stress singular there: it grows under mesh
+    refinement)."""
     if result is None or result.records_q is None:
         raise ValueError("no simulation with recorded states yet: run the contact simulation first (record_q=True)")
     if not 0 <= sim < len(result.t):
@@ -26,8 +27,10 @@ def stress_at_peak(sector, model, recovery, result, nonlinear: bool, sim: int = 
     cell_max = recovery.cell_max(q, nonlinear)
     singular = fem.cells_touching_points(sector, model.boundary_nodes)
     mid = fem.cell_midpoints(sector)
-    radius = np.hypot(mid[:, 0], mid[:, 1])
-    band = radius > radius.max() - TIP_BAND * np.ptp(radius)       # contact-impulse zone below the tip nodes
+    span = np.ptp(np.hypot(mid[:, 0], mid[:, 1]))
+    nodes = np.asarray(model.boundary_nodes, float).reshape(-1, 3)
+    distance = np.min(np.linalg.norm(mid[:, None, :] - nodes[None, :, :], axis=2), axis=1)
+    band = distance < TIP_BAND * span                               # contact-impulse zone around the tip nodes
     regular = cell_max.copy()
     regular[band] = -np.inf
     cell = int(np.argmax(regular))

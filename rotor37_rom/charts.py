@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["plot_clearance_consumption", "plot_md_weights", "plot_interaction_map", "plot_nfrc", "plot_time_history",
-           "plot_speed_accuracy"]
+           "plot_speed_accuracy", "plot_indicator_vs_rmd"]
 
 
 def _pyplot():
@@ -147,4 +147,19 @@ def plot_speed_accuracy(rows: list, path: str | Path, title: str = "") -> Path:
     ax.set_title(title)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
+    return _save(fig, path)
+
+
+def plot_indicator_vs_rmd(rows: list, path: str | Path, title: str = "") -> Path:
+    """Accuracy indicator (max relative error) vs the number of modal derivatives. rows: (r_md, error)."""
+    plt = _pyplot()
+    rows = sorted(rows)
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.semilogy([r for r, _ in rows], [max(e, 1e-16) for _, e in rows], "o-")
+    ax.axhline(0.1, color="k", ls=":", lw=0.8, label="10 %")
+    ax.set_xlabel("r_MD")
+    ax.set_ylabel("max relative error")
+    ax.set_title(title)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend()
     return _save(fig, path)
