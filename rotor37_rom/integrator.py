@@ -397,6 +397,8 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                             f"boundary displacement NaN or above {blowup_limit:g} m; h = {h:.4g} s, "
                             f"stability limit 2/omega_max = {scheme.h_crit:.4g} s")
                     st["done"][p] = True
+                    if on_finish is not None:          # a diverged run is a result too (marked, kept)
+                        on_finish(p, _record(st, p, steps, h, record_every, omega))
                 finished = [p for p in active if n >= steps[p] and not st["done"][p]]
                 for p in finished:
                     st["done"][p] = True

@@ -108,3 +108,21 @@ def test_interaction_map_spectrum_and_steady_state():
     assert half > 0
     assert is_steady(t, u, omega)
     assert not is_steady(t, u * np.exp(0.05 * t * omega / (2 * np.pi)), omega)   # +5 % per revolution
+
+
+def test_diverged_runs_are_reported_as_results(ci_rom):
+    """A run that blows up is a result: on_finish receives it with its step (run_sweep saves it, so a resumed sweep
+    does not redo it), and the map draws it as NaN."""
+    import scipy.linalg
+
+    ref = CentralDifference(ci_rom, nonlinear=False)
+    scheme = CentralDifference(ci_rom, nonlinear=False, h=1.02 * ref.h_crit, force=True)
+    _, V = scipy.linalg.eigh(ci_rom.K, ci_rom.M)
+    q0 = 1e-4 * V[:, 0] / np.abs(V[:24, 0]).max() + 1e-9 * V[:, -1]
+    done = {}
+    simulate_ = sweep_mod.simulate
+    simulate_(scheme, [1300.0, 1600.0], None, n_steps=20_000, initial=(q0, q0), on_blowup="flag",
+              on_finish=lambda p, rec: done.setdefault(p, rec))
+    assert sorted(done) == [0, 1] and all(rec["diverged_step"] > 0 for rec in done.values())
+    imap = interaction_map([dict(rec, omega=1300.0 + 300 * p) for p, rec in done.items()])
+    assert imap.diverged.all() and np.isnan(imap.nfrc).all()
