@@ -108,8 +108,12 @@ def plot_nfrc(curves: dict, path: str | Path, linear_resonance: float | None = N
     curves: {label: (speeds, amplitudes (m), style)}."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
-    for label, (speeds, amp, style) in curves.items():
-        ax.plot(speeds, np.asarray(amp) * 1e3, style, label=label, ms=4)
+    for k, (label, (speeds, amp, style)) in enumerate(curves.items()):
+        speeds, amp = np.asarray(speeds, float), np.asarray(amp, float)
+        ax.plot(speeds, amp * 1e3, style, label=label, ms=4, color=f"C{k}")
+        lost = ~np.isfinite(amp)
+        if lost.any():                             # diverged runs: a gap in the curve and a cross on the axis
+            ax.plot(speeds[lost], np.zeros(lost.sum()), "x", color=f"C{k}", ms=7, label=f"{label}: diverged")
     if linear_resonance is not None:
         ax.axvline(linear_resonance, color="k", ls=":", lw=0.8, label=f"linear 1B/EO4 {linear_resonance:.0f} rad/s")
     for label, speed in (paper or {}).items():

@@ -232,7 +232,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
              blowup_limit: float = 0.02, check_every: int = 200, duration: float | Sequence[float] | None = None,
              progress: Callable[[int], None] | None = None, on_finish: Callable[[int, dict], None] | None = None,
              state: dict | None = None, checkpoint: Callable[[dict], None] | None = None,
-             checkpoint_seconds: float = 60.0) -> SimulationResult:
+             checkpoint_seconds: float = 60.0, phase: float | Sequence[float] = 0.0) -> SimulationResult:
     """Run P simulations of the reduced model together with central differences and casing contact.
 
     Args:
@@ -245,6 +245,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         forcing: f(t) -> (r,) or (r, P) reduced external force (N).
         initial: (Q_0, Q_-1), each (r,) or (r, P); default: rest.
         record_every: record every this many steps; record_q: also keep full states; energy: discrete energy.
+        phase: angle (rad) the rotor has turned through before t = 0 (continuation: the casing must not jump).
         on_blowup: 'raise' (SimulationDiverged naming the step) or 'flag' (stop that simulation, mark it).
         blowup_limit: largest admissible boundary displacement (m) before a run counts as blown up.
         progress: called with the number of steps done since the last call; on_finish(p, record dict) when a
@@ -271,6 +272,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         raise ValueError(f"n_steps must be >= 1, got {steps.min()}")
     run_length = steps * h if duration is None else np.broadcast_to(np.asarray(duration, float), (P,))
     casings = _per_sim(casing, P)
+    phase = np.broadcast_to(np.asarray(phase, float), (P,)).copy()
     nodes = np.asarray(scheme.model.boundary_nodes, float).reshape(-1, 3)
     if casings is not None:
         cidx = casings[0].node_indices(len(nodes))
@@ -347,7 +349,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
             if casings is not None:
                 om = omega[active]
                 ur = N @ Qn
-                theta = theta0[:, None] + sense * om[None, :] * t1
+                theta = theta0[:, None] + phase[active][None, :] + sense * om[None, :] * t1
                 s = _gap_reference(theta, t1, c0[active], p0[active], alpha[active], casings[0].width)
                 g = s - ur
                 hits = np.nonzero((g < 0.0).any(axis=0))[0]

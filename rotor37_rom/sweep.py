@@ -238,22 +238,26 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
     runs ``first_revolutions``, the next ``revolutions``; when a run is not steady the speed step is halved (at
     most ``max_halvings`` times) and the run redone from the last accepted state. Sweeps up if stop > start.
 
-    The casing is fully ovalized from the start of every continued run (the ramp only applies to the first)."""
+    The casing is fully ovalized from the start of every continued run (the ramp only applies to the first). A run
+    that diverges ends the branch (its point has amplitude NaN)."""
     if step <= 0:
         raise ValueError(f"continuation step must be > 0 rad/s, got {step}")
     sign = 1.0 if stop >= start else -1.0
     record_every = max(1, int(round(record_dt / scheme.h)))
     res = simulate(scheme, start, casing, revolutions=first_revolutions, record_every=record_every, on_blowup="flag")
+    if res.diverged_step[0] >= 0:
+        return [ContinuationPoint(start, np.nan, False, 0)]
     points = [ContinuationPoint(start, last_revolution_max(res.t[0], res.u_r[0][LE], start),
                                 is_steady(res.t[0], res.u_r[0][LE], start, tol), 0)]
     state = (res.q_final[:, 0], res.q_prev[:, 0])
+    phase = casing.rotation_sense * start * res.n_steps[0] * scheme.h    # the casing angle carries over
     omega = start
     while sign * (stop - omega) > 1e-9:
         halvings, accepted = 0, None
         while True:
             target = omega + sign * min(step / 2 ** halvings, abs(stop - omega))
             r = simulate(scheme, target, casing, revolutions=revolutions, record_every=record_every,
-                         initial=state, on_blowup="flag", duration=1e-12)
+                         initial=state, on_blowup="flag", duration=1e-12, phase=phase)
             steady = bool(r.diverged_step[0] < 0) and is_steady(r.t[0], r.u_r[0][LE], target, tol)
             if steady or halvings >= max_halvings:
                 accepted = (target, r, steady)
@@ -262,9 +266,14 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
         target, r, steady = accepted
         amp = last_revolution_max(r.t[0], r.u_r[0][LE], target) if r.diverged_step[0] < 0 else np.nan
         points.append(ContinuationPoint(target, amp, steady, halvings))
+        if r.diverged_step[0] >= 0:            # nothing sensible to continue from: the branch ends here
+            LOG.warning("continuation stopped at %.1f rad/s: the run diverged at step %d", target,
+                        r.diverged_step[0])
+            break
         if progress:
             LOG.warning("continuation %.1f rad/s: %.4g mm (%s, %d halvings)", target, amp * 1e3,
                         "steady" if steady else "not steady", halvings)
         state = (r.q_final[:, 0], r.q_prev[:, 0])
+        phase += casing.rotation_sense * target * r.n_steps[0] * scheme.h
         omega = target
     return points

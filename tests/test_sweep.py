@@ -126,3 +126,28 @@ def test_diverged_runs_are_reported_as_results(ci_rom):
     assert sorted(done) == [0, 1] and all(rec["diverged_step"] > 0 for rec in done.values())
     imap = interaction_map([dict(rec, omega=1300.0 + 300 * p) for p, rec in done.items()])
     assert imap.diverged.all() and np.isnan(imap.nfrc).all()
+
+
+def test_continuation_carries_state_and_casing_angle(ci_rom):
+    """A run split in two (final states and rotor angle handed over) equals the run in one piece; without the angle
+    the casing would jump under the blade. Continuation over 1200 -> 1250 rad/s, below the 1B/EO4 resonance, stays
+    bounded (mu = 0, linear)."""
+    from rotor37_rom.integrator import simulate
+    from rotor37_rom.sweep import continuation
+
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
+    casing, om, n1, n2 = Casing(mu=0.15), 1450.0, 6000, 4000
+    whole = simulate(scheme, om, casing, n_steps=n1 + n2, duration=1e-12)
+    a = simulate(scheme, om, casing, n_steps=n1, duration=1e-12)
+    b = simulate(scheme, om, casing, n_steps=n2, duration=1e-12, initial=(a.q_final, a.q_prev),
+                 phase=-om * n1 * scheme.h)
+    assert whole.contact_steps[0] > 0
+    scale = np.abs(whole.u_r[0]).max()
+    assert np.abs(b.u_r[0] - whole.u_r[0][:, n1:]).max() <= 1e-9 * scale
+    jumped = simulate(scheme, om, casing, n_steps=n2, duration=1e-12, initial=(a.q_final, a.q_prev))
+    assert np.abs(jumped.u_r[0] - whole.u_r[0][:, n1:]).max() > 1e-3 * scale
+    points = continuation(scheme, 1200.0, 1250.0, 25.0, Casing(mu=0.0), first_revolutions=2.0, revolutions=1.0,
+                          max_halvings=1)
+    speeds = [p.omega for p in points]
+    assert speeds[0] == 1200.0 and speeds[-1] == 1250.0 and np.all(np.diff(speeds) > 0)
+    assert all(np.isfinite(p.amplitude) and p.amplitude < 5e-3 for p in points)
