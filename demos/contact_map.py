@@ -128,7 +128,7 @@ def main(argv=None) -> int:
         worst = results[int(np.nanargmax(np.where(ok, imap.nfrc, -1)))] if ok.any() else results[0]
         plot_time_history(worst["t"], {"LE": worst["u_r"][0], "TE": worst["u_r"][-1]},
                           out / f"time_history_{tag}.png", title=f"{label}, Omega = {float(worst['omega']):.0f} rad/s")
-        revs = float(np.sum(args.revolutions * np.ones(len(results))))
+        revs = args.revolutions * len(results)
         run = {"h": scheme.h, "h_crit": scheme.h_crit, "peak_speed": peak,
                "peak_amplitude": float(np.nanmax(imap.nfrc)),
                "diverged": imap.speeds[imap.diverged].tolist(), "wall_s": wall,

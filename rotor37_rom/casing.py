@@ -10,7 +10,7 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["Casing", "casing_profile", "contact_frames", "ramp_rate"]
+__all__ = ["Casing", "casing_profile", "casing_clearance", "contact_frames", "ramp_rate"]
 
 
 def casing_profile(theta: np.ndarray, c0: float, p0: float, width: float = 0.15) -> np.ndarray:
@@ -18,6 +18,12 @@ def casing_profile(theta: np.ndarray, c0: float, p0: float, width: float = 0.15)
     theta = np.asarray(theta, float)
     x = theta - np.floor(theta / np.pi) * np.pi - 0.5 * np.pi
     return (c0 + p0) * np.exp(-(x / width) ** 2)
+
+
+def casing_clearance(theta, t: float, c0, p0, alpha, width: float = 0.15) -> np.ndarray:
+    """c0 - (1 - exp(-alpha t)) f(theta): the gap of eq. 38 before the node's own displacement. Arrays broadcast
+    (e.g. theta (nodes, P) with c0, p0, alpha (P,))."""
+    return c0 - (1.0 - np.exp(-alpha * t)) * casing_profile(theta, c0, p0, width)
 
 
 def ramp_rate(duration: np.ndarray, fraction: float = 0.2, level: float = 0.99) -> np.ndarray:
@@ -98,7 +104,3 @@ class Casing:
             raise ValueError(f"contact_nodes must be distinct boundary-node indices in [0, {n_boundary_nodes - 1}] "
                              f"(the nodes whose DOFs are kept in q), got {list(idx)}")
         return idx
-
-    def clearance(self, theta: np.ndarray, t: np.ndarray, alpha: np.ndarray) -> np.ndarray:
-        """c0 - (1 - exp(-alpha t)) f(theta): the gap before the node's own displacement (eq. 38)."""
-        return self.c0 - (1.0 - np.exp(-alpha * t)) * casing_profile(theta, self.c0, self.p0, self.width)

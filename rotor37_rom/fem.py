@@ -878,9 +878,9 @@ def cells_touching_points(sector: Sector, points: np.ndarray, tol: float = 1e-9)
     """Local cells having one of ``points`` (n, 3) among their geometry nodes (e.g. the contact nodes, where point
     contact forces make the FE stress singular)."""
     x = sector.mesh.geometry.x
-    dofmap = sector.mesh.geometry.dofmap
     n_cells = sector.mesh.topology.index_map(3).size_local
-    geom = np.array([dofmap.links(c) for c in range(n_cells)])
+    dofmap = sector.mesh.geometry.dofmap.array
+    geom = dofmap.reshape(-1, dofmap.size // sector.mesh.geometry.dofmap.num_nodes)[:n_cells]
     hit = np.zeros(len(x), bool)
     for p in np.asarray(points, float).reshape(-1, 3):
         hit |= np.linalg.norm(x - p, axis=1) < tol

@@ -27,7 +27,7 @@ from typing import Callable, Sequence
 import numpy as np
 import scipy.linalg
 
-from rotor37_rom.casing import Casing, contact_frames, ramp_rate
+from rotor37_rom.casing import Casing, casing_clearance, contact_frames, ramp_rate
 from rotor37_rom.nonlinear_forces import PolynomialForces, cubic_monomial_indices, quadratic_monomial_indices
 
 __all__ = ["CentralDifference", "SimulationResult", "SimulationDiverged", "highest_frequency", "simulate",
@@ -277,31 +277,26 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
     if casings is not None:
         cidx = casings[0].node_indices(len(nodes))
         normals, slide, theta0 = contact_frames(nodes[cidx], casings[0].direction, casings[0].rotation_sense)
-        nc = len(cidx)
+    else:                                      # no contact: record the e_x displacements of all tip nodes
+        cidx = np.arange(len(nodes))
+        normals = np.tile([1.0, 0.0, 0.0], (len(nodes), 1))
+    nc = len(cidx)
+    dofs = 3 * cidx[:, None] + np.arange(3)[None, :]           # (nc, 3) positions in q
+    N = np.zeros((nc, r))                                       # u_r = N q
+    N[np.arange(nc)[:, None], dofs] = normals
+    if casings is not None:
         c0 = np.array([c.c0 for c in casings])
         mu = np.array([c.mu for c in casings])
         p0 = np.array([c.p0 for c in casings])
         alpha = ramp_rate(run_length, casings[0].ramp_fraction, casings[0].ramp_level)
         sense = casings[0].rotation_sense
         radius = np.hypot(nodes[cidx, 0], nodes[cidx, 1])
-        # normal selection N (nc, r): u_r = N q; force directions at the DOFs
-        dofs = (3 * cidx[:, None] + np.arange(3)[None, :])       # (nc, 3) positions in q
-        N = np.zeros((nc, r))
-        Fn = np.zeros((r, nc))
-        Ft = np.zeros((r, nc))
-        for k in range(nc):
-            N[k, dofs[k]] = normals[k]
-            Fn[dofs[k], k] = -normals[k]
-            Ft[dofs[k], k] = -slide[k]
-        WN, WT = scheme.W @ Fn, scheme.W @ Ft                      # (r, nc)
-        DN, DT = N @ WN, N @ WT                                    # (nc, nc)
-    else:
-        nc = len(nodes)
-        cidx = np.arange(nc)
-        normals = np.tile([1.0, 0.0, 0.0], (nc, 1))
-        N = np.zeros((nc, r))
-        for k in range(nc):
-            N[k, 3 * k:3 * k + 3] = normals[k]
+        # response to unit multipliers: normal force -n_k, friction force -s_k (times mu)
+        WN = -scheme.W @ N.T                                    # (r, nc)
+        S = np.zeros((nc, r))                                   # sliding directions at the DOFs
+        S[np.arange(nc)[:, None], dofs] = slide
+        WT = -scheme.W @ S.T                                    # (r, nc)
+        DN, DT = N @ WN, N @ WT                                 # (nc, nc)
 
     # state
     if state is None:
@@ -333,8 +328,8 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         t_wall = time.perf_counter()
         last_ckpt = t_wall
         active = np.nonzero(~st["done"])[0]
-        forcing_full = None
         n_max = int(steps.max())
+        ends = set(steps.tolist())
         lam_now = np.zeros((nc, P))
         while st["n"] < n_max and active.size:
             n = st["n"]
@@ -342,16 +337,15 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
             Qa, Qpa = Q[:, active], Qp[:, active]
             F = None
             if forcing is not None:
-                forcing_full = np.asarray(forcing(n * h), float)
-                F = forcing_full if forcing_full.ndim == 1 else forcing_full.reshape(r, -1)[:, active]
+                F = np.asarray(forcing(n * h), float)
+                F = F if F.ndim == 1 else F.reshape(r, -1)[:, active]
             Qn = scheme.predict(Qa, Qpa, F)
             lam_now[:, active] = 0.0
             if casings is not None:
                 om = omega[active]
                 ur = N @ Qn
                 theta = theta0[:, None] + phase[active][None, :] + sense * om[None, :] * t1
-                s = _gap_reference(theta, t1, c0[active], p0[active], alpha[active], casings[0].width)
-                g = s - ur
+                g = casing_clearance(theta, t1, c0[active], p0[active], alpha[active], casings[0].width) - ur
                 hits = np.nonzero((g < 0.0).any(axis=0))[0]
                 for j in hits:
                     p = active[j]
@@ -366,11 +360,9 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                         st["min_lam"][p] = min(st["min_lam"][p], float(lam[on].min()))
                         st["contact_steps"][p] += 1
                         # sliding velocity of the node on the casing: rotation + its own tangential velocity
-                        v = (Qn[:, j] - Qa[:, j]) / h
-                        for k in np.nonzero(on)[0]:
-                            v_slide = om[j] * radius[k] + slide[k] @ v[dofs[k]]   # along s_k
-                            power = -mu[p] * lam[k] * v_slide
-                            st["fric_pow"][p] = max(st["fric_pow"][p], power)
+                        v = (S[on] @ (Qn[:, j] - Qa[:, j])) / h          # own velocity along s_k
+                        power = -mu[p] * lam[on] * (om[j] * radius[on] + v)
+                        st["fric_pow"][p] = max(st["fric_pow"][p], float(power.max()))
                     lam_now[:, p] = lam
             Qp[:, active] = Qa
             Q[:, active] = Qn
@@ -388,7 +380,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                             st["energy"][p][i] = E[j]
                         if record_q:
                             st["q_rec"][p][:, i] = Qn[:, j]
-            if n % check_every == 0 or n in steps:
+            if n % check_every == 0 or n in ends:
                 bad = ~np.isfinite(Qn[:rb]).all(axis=0) | (np.abs(Qn[:rb]).max(axis=0) > blowup_limit)
                 for j in np.nonzero(bad)[0]:
                     p = active[j]
@@ -422,13 +414,6 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         max_penetration=np.maximum(st["max_pen"], 0.0), min_multiplier=st["min_lam"], friction_power=st["fric_pow"],
         contact_steps=st["contact_steps"], diverged_step=st["diverged"], wall=wall,
         records_q=[st["q_rec"][p] for p in range(P)] if record_q else None)
-
-
-def _gap_reference(theta, t, c0, p0, alpha, width):
-    """c0 - (1 - exp(-alpha t)) f(theta) for arrays over (node, simulation)."""
-    x = theta - np.floor(theta / np.pi) * np.pi - 0.5 * np.pi
-    f = (c0 + p0)[None, :] * np.exp(-(x / width) ** 2)
-    return c0[None, :] - (1.0 - np.exp(-alpha * t))[None, :] * f
 
 
 def _record(st, p, steps, h, record_every, omega):

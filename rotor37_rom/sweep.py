@@ -98,8 +98,7 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
             continue
         resumed.append((ckpt, np.asarray(data["speeds"], float)))
     in_ckpt = set(np.concatenate([b for _, b in resumed]).tolist()) if resumed else set()
-    todo = [w for w in speeds if w not in in_ckpt and (not _speed_file(folder, w).exists()
-                                                       or _load_result(_speed_file(folder, w)) is None)]
+    todo = [w for w in speeds if w not in in_ckpt and not _readable(_speed_file(folder, w))]
     mine = todo[rank::size]
     batches = [b for _, b in resumed[rank::size]] + [np.array(mine[i:i + spec.batch_size])
                                                      for i in range(0, len(mine), spec.batch_size)]
@@ -160,6 +159,16 @@ def _load_state(path: Path, P: int) -> dict | None:
     st["energy"] = st["q_rec"] = None
     LOG.info("resuming batch from %s at step %d", path, st["n"])
     return st
+
+
+def _readable(path: Path) -> bool:
+    """The file opens as an npz with its speed (a cheap check: the arrays are not read)."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            float(data["omega"])
+        return True
+    except Exception:
+        return False
 
 
 def load_sweep(folder: str | Path) -> list[dict]:
