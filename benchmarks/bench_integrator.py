@@ -12,6 +12,7 @@ with the projection to the headline map (100 speeds x 200 revolutions).
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from pathlib import Path
@@ -77,6 +78,7 @@ def main(argv=None) -> int:
     parser.add_argument("--preset", default="ci")
     parser.add_argument("--throughput-speeds", type=int, default=16)
     parser.add_argument("--throughput-revolutions", type=float, default=1.0)
+    parser.add_argument("--headline-speeds", type=int, default=100)
     args = parser.parse_args(argv)
     from rotor37_rom.integrator import CentralDifference
 
@@ -119,21 +121,49 @@ def main(argv=None) -> int:
     model, _ = build_reduced_model(sector, ReductionConfig(r_c=15, r_md=0, global_md_modes=3, forces="intrusive"),
                                    cache_dir="results/cache")
     throughput = {}
-    for gnl in (False, True):
+    # unscaled, P = throughput speeds; GNL also with all headline speeds in one batch (the batch lever)
+    for key, gnl, n_speeds in (("linear", False, args.throughput_speeds), ("GNL", True, args.throughput_speeds),
+                               (f"GNL, P = {args.headline_speeds}", True, args.headline_speeds)):
         scheme = CentralDifference(model, nonlinear=gnl, safety=0.5)
-        speeds = np.linspace(1200.0, 1600.0, args.throughput_speeds)
+        speeds = np.linspace(1200.0, 1600.0, n_speeds)
         res = simulate(scheme, speeds, Casing(), revolutions=args.throughput_revolutions, record_every=50)
         revs = args.throughput_revolutions * len(speeds)
         sim_steps = int(res.n_steps.sum())
         # ovalization reaches 99 % at 20 % of the run: contacts happen in these short runs too
-        throughput["GNL" if gnl else "linear"] = {
-            "h": scheme.h, "rev_per_s": revs / res.wall, "us_per_sim_step": res.wall / sim_steps * 1e6,
+        throughput[key] = {
+            "h": scheme.h, "P": n_speeds, "rev_per_s": revs / res.wall, "us_per_sim_step": res.wall / sim_steps * 1e6,
             "contact_steps": int(res.contact_steps.sum()),
             "headline_hours": 100 * 200 / (revs / res.wall) / 3600}
-        t = throughput["GNL" if gnl else "linear"]
+        t = throughput[key]
         print(f"{args.preset} r = {model.r}, {'GNL' if gnl else 'linear'}, P = {len(speeds)}, h = {scheme.h:.3g} s: "
               f"{t['rev_per_s']:.3f} rev/s, {t['us_per_sim_step']:.1f} us/sim-step with contact; "
               f"100 speeds x 200 rev would take {t['headline_hours']:.1f} h")
+    # the setting the convergence study found sufficient (bench_contact_convergence.py): frequency cap and step,
+    # all headline speeds in one batch
+    conv = Path("results/bench_contact_convergence.json")
+    found = json.loads(conv.read_text()).get("summary", {}) if conv.exists() else {}
+    for tag, gnl in (("linear", False), ("GNL", True)):
+        best = found.get(tag)
+        if not (best and best.get("h")):
+            print(f"{tag}: no cheaper setting met the accuracy in results/bench_contact_convergence.json "
+                  f"({'not run' if not conv.exists() else 'none sufficient'}): the unscaled figure above stands")
+            continue
+        cap_khz, h = best["cheapest_sufficient_cap_khz"], best["h"]
+        scheme = CentralDifference(model, nonlinear=gnl, h=h,
+                                   frequency_cap=None if cap_khz is None else 2 * np.pi * cap_khz * 1e3)
+        speeds = np.linspace(1200.0, 1600.0, args.headline_speeds)
+        res = simulate(scheme, speeds, Casing(), revolutions=args.throughput_revolutions, record_every=50,
+                       on_blowup="flag")
+        revs = args.throughput_revolutions * len(speeds)
+        t = throughput[f"{tag}, capped"] = {
+            "h": scheme.h, "cap_khz": cap_khz, "P": len(speeds), "rev_per_s": revs / res.wall,
+            "us_per_sim_step": res.wall / int(res.n_steps.sum()) * 1e6, "contact_steps": int(res.contact_steps.sum()),
+            "diverged": int((res.diverged_step >= 0).sum()), "p90_nfrc_error": best.get("p90_error"),
+            "headline_hours": 100 * 200 / (revs / res.wall) / 3600}
+        print(f"{args.preset} r = {model.r}, {tag}, {best['cheapest_sufficient']} (kHz), P = {len(speeds)}, h = {h:.3g} s: "
+              f"{t['rev_per_s']:.3f} rev/s, {t['us_per_sim_step']:.1f} us/sim-step with contact; "
+              f"100 speeds x 200 rev would take {t['headline_hours']:.2f} h "
+              f"({throughput[tag]['headline_hours'] / t['headline_hours']:.1f}x less than unscaled)")
     machine = write_results("bench_integrator", rows, dgemm_gflops=gflops, throughput=throughput,
                             model={"preset": args.preset, "r": model.r})
     print(f"machine: {machine}")

@@ -1,5 +1,6 @@
 """Speed sweeps: a killed sweep resumes from its checkpoint with nothing lost; MPI ranks give the serial map;
 interaction-map spectra and the steady-state test recover known signals."""
+import json
 import os
 import subprocess
 import sys
@@ -151,3 +152,28 @@ def test_continuation_carries_state_and_casing_angle(ci_rom):
     speeds = [p.omega for p in points]
     assert speeds[0] == 1200.0 and speeds[-1] == 1250.0 and np.all(np.diff(speeds) > 0)
     assert all(np.isfinite(p.amplitude) and p.amplitude < 5e-3 for p in points)
+
+
+def test_contact_map_frequency_cap_flag(ci_rom, tmp_path):
+    """demos/contact_map.py --frequency-cap: the sweep runs with h = safety x 2/cap (its own key: capped and unscaled
+    results never mix) and the NFRC equals an in-process capped sweep; a cap <= 0 is a one-line error."""
+    model_path = save_reduced_model(ci_rom, tmp_path / "rom.npz")
+    env = dict(os.environ, MPLBACKEND="Agg")
+    base = [sys.executable, str(ROOT / "demos" / "contact_map.py"), "--model", str(model_path), "--quiet",
+            "--out", str(tmp_path / "cap")]
+    run = subprocess.run(base + ["--speeds", "1400", "1450", "2", "--revolutions", "2", "--gnl", "off",
+                                 "--frequency-cap", "60"], env=env, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    summary = json.loads((tmp_path / "cap" / "summary.json").read_text())
+    got = summary["runs"]["no GNL, cap 60 kHz"]
+    cap = 2 * np.pi * 60e3
+    assert got["h"] == pytest.approx(0.5 * 2 / cap, rel=1e-9) and got["frequency_cap_khz"] == 60
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.5, frequency_cap=cap)
+    folder = run_sweep(scheme, [1400.0, 1450.0], SweepSpec(revolutions=2, casing=Casing()), tmp_path / "inproc",
+                       progress=False)
+    np.testing.assert_allclose(got["nfrc"], interaction_map(load_sweep(folder)).nfrc, rtol=1e-10)
+    uncapped = run_sweep(CentralDifference(ci_rom, nonlinear=False, safety=0.5), [1400.0],
+                         SweepSpec(revolutions=0.1, casing=Casing()), tmp_path / "inproc", progress=False)
+    assert uncapped.name != folder.name
+    bad = subprocess.run(base + ["--frequency-cap", "-1"], env=env, capture_output=True, text=True, timeout=600)
+    assert bad.returncode == 2 and bad.stderr.strip().splitlines() == ["error: --frequency-cap must be > 0 kHz, got -1.0"]
