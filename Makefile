@@ -43,6 +43,7 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(PY) benchmarks/bench_full_order.py
 	$(PY) benchmarks/bench_contact_convergence.py
+	$(PY) benchmarks/bench_contact_rom_size.py
 	$(PY) benchmarks/bench_integrator.py
 
 clean:
