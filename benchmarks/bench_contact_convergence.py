@@ -38,7 +38,7 @@ RESULTS = Path("results/bench_contact_convergence.json")
 def nfrc_run(model, gnl, speeds, casing, revolutions, safety, cap, h=None, states=0):
     """NFRC at each speed; with ``states`` > 0 also the that many largest-amplitude reduced states of the run (the
     GNL tangent stability limit is evaluated on them)."""
-    from rotor37_rom.integrator import CentralDifference, simulate
+    from rotor37_rom.integrator import CentralDifference, largest_states, simulate
     from rotor37_rom.sweep import last_revolution_max
 
     scheme = CentralDifference(model, nonlinear=gnl, safety=safety, frequency_cap=cap, h=h)
@@ -51,10 +51,7 @@ def nfrc_run(model, gnl, speeds, casing, revolutions, safety, cap, h=None, state
            "wall_s": res.wall, "rev_per_s": revolutions * len(speeds) / res.wall, "nfrc": amp,
            "max_penetration": float(res.max_penetration.max()), "diverged": int((res.diverged_step >= 0).sum())}
     if states:
-        Q = np.hstack(res.records_q)
-        Q = Q[:, np.isfinite(Q).all(axis=0)]
-        size = np.abs(Q[:scheme.r_b]).max(axis=0)
-        out["states"] = Q[:, np.argsort(-size)[:states]].T.tolist()
+        out["states"] = largest_states(res, scheme.r_b, states).T.tolist()
     return out
 
 
@@ -83,7 +80,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     from rotor37_rom.casing import Casing
     from rotor37_rom.charts import plot_nfrc, plot_speed_accuracy
-    from rotor37_rom.integrator import capped_mass, highest_frequency, tangent_highest_frequency
+    from rotor37_rom.integrator import gnl_time_step
     from rotor37_rom.reduction import load_reduced_model, save_reduced_model
 
     if Path(args.model).exists():
@@ -144,17 +141,14 @@ def main(argv=None) -> int:
             # None: no cap, the largest step the unscaled model takes (0.9 h_crit linear, the tangent limit GNL)
             cap = None if cap_khz is None else 2 * np.pi * cap_khz * 1e3
             name = "no cap, larger h" if cap is None else f"cap {cap_khz:g} kHz"
+            safety = 0.9 if cap is None else args.safety
+            h = None
             if gnl:         # stress stiffening: the tangent limit on the reference's largest states, not 2/cap
-                Ms = model.M if cap is None else capped_mass(model.M, model.K, cap)
-                w_t = tangent_highest_frequency(model, np.asarray(ref["states"]).T, mass=Ms)
-                w_lin = highest_frequency(Ms, model.K)
-                h = min((0.9 if cap is None else args.safety) * 2 / w_lin, args.tangent_safety * 2 / w_t)
-                print(f"  {name}: tangent omega_max on the reference's largest states = {w_t / w_lin:.2f} x the "
-                      f"linear one -> h = {h:.3g} s")
-            else:
-                h = 0.9 * 2 / highest_frequency(model.M, model.K) if cap is None else None
-            run = cached(f"{tag} {name}", lambda: nfrc_run(model, gnl, speeds, casing, args.revolutions,
-                                                           args.safety, cap, h=h))
+                h = gnl_time_step(model, np.asarray(ref["states"]).T, cap, safety=args.tangent_safety,
+                                  cap_safety=safety)
+                print(f"  {name}: h = {h:.3g} s (tangent limit on the reference's largest states)")
+            run = cached(f"{tag} {name}", lambda: nfrc_run(model, gnl, speeds, casing, args.revolutions, safety,
+                                                           cap, h=h))
             err = compare(run, ref)
             run["error"] = err
             show(name, run, err)

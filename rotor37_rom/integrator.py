@@ -32,9 +32,8 @@ import scipy.linalg
 from rotor37_rom.casing import Casing, casing_clearance, contact_frames, ramp_rate
 from rotor37_rom.nonlinear_forces import PolynomialForces, cubic_monomial_indices, quadratic_monomial_indices
 
-__all__ = ["CentralDifference", "SimulationResult", "SimulationDiverged", "capped_mass", "gnl_time_step", "highest_frequency",
-           "probe_states", "simulate",
-           "tangent_highest_frequency",
+__all__ = ["CentralDifference", "SimulationResult", "SimulationDiverged", "capped_mass", "gnl_time_step",
+           "highest_frequency", "largest_states", "probe_states", "simulate", "tangent_highest_frequency",
            "discrete_energy", "polynomial_potential"]
 
 
@@ -106,10 +105,14 @@ def probe_states(model, speeds, casing, revolutions: float = 4.0, n: int = 24, s
                                                                    "duration": duration}
     res = simulate(scheme, speeds, casing, record_every=max(1, int(2e-5 / scheme.h)), record_q=True,
                    on_blowup="flag", **length)
-    Q = np.hstack(res.records_q)
+    return largest_states(res, scheme.r_b, n)
+
+
+def largest_states(result: "SimulationResult", r_b: int, n: int) -> np.ndarray:
+    """The n finite recorded states (r, n) of a run (``record_q=True``) with the largest boundary-DOF motion."""
+    Q = np.hstack(result.records_q)
     Q = Q[:, np.isfinite(Q).all(axis=0)]
-    size = np.abs(Q[:scheme.r_b]).max(axis=0)
-    return Q[:, np.argsort(-size)[:n]]
+    return Q[:, np.argsort(-np.abs(Q[:r_b]).max(axis=0))[:n]]
 
 
 def polynomial_potential(forces: PolynomialForces, Q: np.ndarray) -> np.ndarray:

@@ -48,7 +48,7 @@ class SweepSpec:
 def _key(scheme: CentralDifference, spec: SweepSpec) -> str:
     info = {"model": scheme.model.key, "h": scheme.h, "nonlinear": scheme.nonlinear, "massless": scheme.massless,
             "spec": dataclasses.asdict(spec) | {"batch_size": None}}
-    if getattr(scheme, "frequency_cap", None) is not None:     # absent from older keys: their results stay valid
+    if scheme.frequency_cap is not None:                 # absent from older keys: their results stay valid
         info["frequency_cap"] = scheme.frequency_cap
     return hashlib.sha256(json.dumps(info, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
