@@ -44,6 +44,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_full_order.py
 	$(PY) benchmarks/bench_contact_convergence.py
 	$(PY) benchmarks/bench_contact_rom_size.py
+	$(PY) benchmarks/bench_contact_ecsw.py
 	$(PY) benchmarks/bench_integrator.py
 
 clean:

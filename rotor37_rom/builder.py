@@ -21,7 +21,7 @@ from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, ReducedModel, fi
                                    select_pairs, selection_weights, simulate_linear_newmark)
 from rotor37_rom.step import identify_step
 
-__all__ = ["ReductionConfig", "build_reduced_model", "mesh_signature", "compute_modal_derivatives",
+__all__ = ["ReductionConfig", "build_reduced_model", "hyper_reduce", "mesh_signature", "compute_modal_derivatives",
            "training_states", "clearance_consumption_study"]
 
 LOG = logging.getLogger(__name__)
@@ -244,6 +244,34 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
     if cache is not None:
         save_reduced_model(model, cache)
     return model, report
+
+
+def hyper_reduce(sector, model: ReducedModel, Q_train: np.ndarray, tol: float = 1e-3, level: str = "point",
+                 label: str = "") -> tuple[ReducedModel, dict]:
+    """The model with its nonlinear forces replaced by a hyper-reduced quadrature trained on the states Q_train
+    (r, n): cells (ECSW) or single points (empirical cubature), see ``ecsw.train_ecsw``. Train on the states the
+    model will visit (e.g. those of contact runs): smooth lifted modes miss the local tip deformations of contact.
+
+    Returns (model, report): report has the exact quadrature forces ('exact'), the EcswResult ('result') and the
+    training time (s). The model's metadata records the hyper-reduction (level, tol, points, a hash of Q_train and
+    ``label``), so sweeps cached under its key are not mixed up with the exact model's.
+    """
+    if model.Phi is None:
+        raise ValueError("hyper_reduce needs the model's basis: build it with keep_basis=True")
+    if model.metadata.get("mesh") not in (None, mesh_signature(sector)):
+        raise ValueError("hyper_reduce: the sector is not the mesh the model was built on (mesh signatures differ)")
+    Q_train = np.asarray(Q_train, float)
+    if Q_train.ndim != 2 or Q_train.shape[0] != model.r or not np.all(np.isfinite(Q_train)):
+        raise ValueError(f"Q_train must be finite with shape (r = {model.r}, n), got {Q_train.shape}")
+    t0 = time.perf_counter()
+    H, w, cells = fem.quadrature_gradients(sector, model.Phi.T)
+    exact = QuadratureForces(H, w, *sector.material.lame)
+    result = train_ecsw(exact, cells, Q_train, tol=tol, level=level)
+    info = {"level": level, "tol": tol, "columns": int(result.cells.size), "points": result.n_points,
+            "training": hashlib.sha256(np.ascontiguousarray(Q_train).tobytes()).hexdigest()[:16], "label": label}
+    reduced = dataclasses.replace(model, forces=result.forces,
+                                  metadata={**model.metadata, "hyper_reduction": info})
+    return reduced, {"exact": exact, "result": result, "seconds": time.perf_counter() - t0, **info}
 
 
 def clearance_consumption_study(sector, mode: str = "1B", zeta: float = 1e-3, n_levels: int = 10,

@@ -1,5 +1,11 @@
-"""ECSW hyper-reduction (Farhat, Avery, Chapman & Cortial, IJNME 98 (2014) 625): a sparse, non-negatively weighted
-subset of cells whose reduced nonlinear forces reproduce the full ones on training states (pure NumPy/SciPy)."""
+"""Hyper-reduction of the reduced SVK forces (pure NumPy/SciPy): a sparse, non-negatively weighted subset of the
+quadrature whose reduced nonlinear forces reproduce the full ones on training states.
+
+Two granularities: whole cells (ECSW, Farhat, Avery, Chapman & Cortial, IJNME 98 (2014) 625) or single quadrature
+points (empirical cubature, Hernandez, Caicedo & Ferrer, CMAME 313 (2017) 687). Either way the hyper-reduced force
+is the gradient of a non-negatively weighted sum of SVK point energies, so it stays conservative, and the linear
+part K~ is kept exact: only g~ is approximated.
+"""
 from __future__ import annotations
 
 import dataclasses
@@ -9,60 +15,81 @@ import scipy.optimize
 
 from rotor37_rom.nonlinear_forces import QuadratureForces
 
-__all__ = ["EcswResult", "cell_contributions", "train_ecsw"]
+__all__ = ["EcswResult", "cell_contributions", "train_ecsw", "state_errors"]
 
 
-def cell_contributions(forces: QuadratureForces, cells: np.ndarray, Q: np.ndarray) -> np.ndarray:
-    """Per-cell reduced nonlinear forces: (r * n_states, n_cells) for the states Q (r, n_states)."""
-    n_cells = int(cells.max()) + 1
-    per_point = []
-    for k in range(Q.shape[1]):
-        single = QuadratureForces(forces.H, np.ones_like(forces.w), forces.lmbda, forces.mu)
-        # contribution of each point: w_p * (first PK - linear) : H_p,m, summed per cell
-        G = single._gradients(Q[:, [k]])[..., 0]
-        F = np.eye(3) + G
-        eps = 0.5 * (G + np.swapaxes(G, 1, 2))
-        E = eps + 0.5 * np.einsum("nki,nkj->nij", G, G)
-        S, S_lin = single._stress(E[..., None])[..., 0], single._stress(eps[..., None])[..., 0]
-        P1 = np.einsum("nik,nkj->nij", F, S) - S_lin
-        contrib = forces.w[:, None] * np.einsum("nij,nmij->nm", P1, forces.H)    # (n_points, r)
-        per_cell = np.zeros((n_cells, forces.r))
-        np.add.at(per_cell, cells, contrib)
-        per_point.append(per_cell.T)
-    return np.vstack(per_point)
+def cell_contributions(forces: QuadratureForces, cells: np.ndarray, Q: np.ndarray,
+                       chunk_states: int = 16) -> np.ndarray:
+    """Per-cell (or per-group) reduced nonlinear forces: (n_states * r, n_cells) for the states Q (r, n_states),
+    rows ordered state by state."""
+    Q = np.asarray(Q, float).reshape(forces.r, -1)
+    cells = np.asarray(cells)
+    n_cells, r, n_states = int(cells.max()) + 1, forces.r, Q.shape[1]
+    out = np.zeros((n_states, r, n_cells))
+    grouped = cells.size != n_cells or np.any(cells != np.arange(n_cells))
+    for k in range(0, n_states, chunk_states):
+        contrib = forces.point_contributions(Q[:, k:k + chunk_states])     # (n_points, r, S)
+        block = out[k:k + chunk_states]                                    # (S, r, n_cells)
+        if grouped:
+            for s in range(contrib.shape[2]):
+                np.add.at(block[s].T, cells, contrib[:, :, s])
+        else:
+            block[...] = contrib.transpose(2, 1, 0)
+    return out.reshape(n_states * r, n_cells)
+
+
+def state_errors(exact: QuadratureForces, hyper: QuadratureForces, Q: np.ndarray) -> np.ndarray:
+    """Relative error ||g_hyper - g|| / ||g|| of the reduced nonlinear force at each state (column of Q)."""
+    g = exact.evaluate(Q)
+    return np.linalg.norm(hyper.evaluate(Q) - g, axis=0) / np.maximum(np.linalg.norm(g, axis=0), 1e-300)
 
 
 @dataclasses.dataclass(frozen=True)
 class EcswResult:
-    """Selected cells, their weights, the hyper-reduced forces and the training residual (relative)."""
+    """Selected cells (or points), their weights, the hyper-reduced forces and the training residual (relative)."""
 
     cells: np.ndarray
     weights: np.ndarray
     forces: QuadratureForces
     training_error: float
 
+    @property
+    def n_points(self) -> int:
+        """Quadrature points the hyper-reduced force evaluates (what its cost scales with)."""
+        return int(self.forces.w.size)
+
 
 def train_ecsw(forces: QuadratureForces, cells: np.ndarray, Q_train: np.ndarray, tol: float = 1e-3,
-               max_cells: int | None = None) -> EcswResult:
-    """Sparse NNLS (greedy active set, Lawson-Hanson on the active columns) until
-    ||G xi - b|| <= tol ||b||, with G the per-cell contributions on the training states and b their sum.
+               max_cells: int | None = None, level: str = "cell", grow: float = 0.05) -> EcswResult:
+    """Sparse NNLS (greedy active set, Lawson-Hanson on the active columns) until ||G xi - b|| <= tol ||b||, with
+    G the per-cell (level='cell') or per-point (level='point') contributions on the training states and b their sum.
+    Each training state's block is normalised by the norm of its total force, so small states count as much as
+    large ones.
 
     Args:
         forces: exact quadrature forces on all points; cells: (n_points,) cell of each point.
         Q_train: (r, n_states) training states. tol: relative training tolerance, in (0, 1).
+        max_cells: stop after this many selected columns. level: 'cell' or 'point'.
+        grow: columns added per greedy pass, as a fraction of those already selected (at least one): fewer NNLS
+            solves when hundreds of points are needed.
     """
     if not (0.0 < tol < 1.0):
         raise ValueError(f"tol must be in (0, 1), got {tol}")
-    G = cell_contributions(forces, cells, Q_train)
-    # every training state counts equally: normalise its block of r rows by the norm of its total force
+    if level not in ("cell", "point"):
+        raise ValueError(f"level must be 'cell' or 'point', got {level!r}")
+    if not (0.0 <= grow <= 1.0):
+        raise ValueError(f"grow must be in [0, 1], got {grow}")
+    cells = np.asarray(cells)
+    groups = cells if level == "cell" else np.arange(cells.size)
+    G = cell_contributions(forces, groups, Q_train)
     r = forces.r
     blocks = G.reshape(-1, r, G.shape[1])
     norms = np.linalg.norm(blocks.sum(axis=2), axis=1)
     norms[norms == 0] = 1.0
     G = (blocks / norms[:, None, None]).reshape(G.shape)
     b = G.sum(axis=1)
-    n_cells = G.shape[1]
-    max_cells = max_cells or n_cells
+    n_cols = G.shape[1]
+    max_cells = max_cells or n_cols
     active: list[int] = []
     xi = np.zeros(0)
     residual = b.copy()
@@ -70,18 +97,20 @@ def train_ecsw(forces: QuadratureForces, cells: np.ndarray, Q_train: np.ndarray,
     while np.linalg.norm(residual) > tol * b_norm and len(active) < max_cells:
         grad = G.T @ residual
         grad[active] = -np.inf
-        j = int(np.argmax(grad))
-        if grad[j] <= 0:
+        n_new = min(max(1, int(grow * len(active))), max_cells - len(active))
+        new = np.argsort(grad)[::-1][:n_new]
+        new = new[grad[new] > 0]
+        if new.size == 0:
             break
-        active.append(j)
-        xi, _ = scipy.optimize.nnls(G[:, active], b)
+        active.extend(int(j) for j in new)
+        xi, _ = scipy.optimize.nnls(G[:, active], b, maxiter=50 * len(active))
         keep = xi > 0
         active = [a for a, k in zip(active, keep) if k]
         xi = xi[keep]
         residual = b - G[:, active] @ xi
     sel = np.array(active, dtype=np.int64)
-    mask = np.isin(cells, sel)
-    cell_weight = np.zeros(n_cells)
-    cell_weight[sel] = xi
-    hr = QuadratureForces(forces.H[mask], forces.w[mask] * cell_weight[cells[mask]], forces.lmbda, forces.mu)
+    mask = np.isin(groups, sel)
+    weight = np.zeros(n_cols)
+    weight[sel] = xi
+    hr = QuadratureForces(forces.H[mask], forces.w[mask] * weight[groups[mask]], forces.lmbda, forces.mu)
     return EcswResult(cells=sel, weights=xi, forces=hr, training_error=float(np.linalg.norm(residual) / b_norm))

@@ -102,29 +102,93 @@ class QuadratureForces:
     def r(self) -> int:
         return self.H.shape[1]
 
-    def _gradients(self, Q: np.ndarray) -> np.ndarray:
+    @functools.cached_property
+    def _planes(self) -> tuple[np.ndarray, np.ndarray]:
+        """The basis gradients as (9 n, r) with rows ordered (i, j, point), so that each component of a batch of
+        displacement gradients is a contiguous (n, P) plane, and the weighted transpose (r, 9 n) that projects."""
         n = self.H.shape[0]
-        Ht = np.moveaxis(self.H, 1, -1).reshape(n * 9, self.r)
-        return (Ht @ Q).reshape(n, 3, 3, -1)
+        planes = np.ascontiguousarray(self.H.transpose(2, 3, 0, 1)).reshape(9 * n, self.r)
+        weighted = (self.H * self.w[:, None, None, None]).transpose(2, 3, 0, 1).reshape(9 * n, self.r)
+        return planes, np.ascontiguousarray(weighted.T)
 
-    def _project(self, P1: np.ndarray) -> np.ndarray:
-        """sum_p w_p P1_p : H_p,m for a batch P1 (n, 3, 3, P) -> (r, P)."""
-        n = self.H.shape[0]
-        Hw = (np.moveaxis(self.H, 1, -1) * self.w[:, None, None, None]).reshape(n * 9, self.r)
-        return Hw.T @ P1.reshape(n * 9, -1)
+    def _first_pk_nonlinear(self, G: np.ndarray) -> np.ndarray:
+        """For displacement gradients G (3, 3, n, P): F S - C eps, the nonlinear part of the first Piola-Kirchhoff
+        stress, component by component on contiguous (n, P) planes into preallocated buffers (numpy's matmul loops
+        over tiny 3 x 3 products, and fresh temporaries of this size cost a page-mapping each):
 
-    def evaluate(self, Q: np.ndarray, linear: bool = False) -> np.ndarray:
-        """Nonlinear reduced force g~(q) (eq. 23) for a batch Q (r, P) -> (r, P); with linear=True, K~ q instead."""
+            F S - C eps = mu A + lambda/2 tr(A) I + G S,  A = G^T G,  S = 2 mu (sym G + A/2) + lambda tr(...) I.
+        """
+        lmbda, mu = self.lmbda, self.mu
+        A = np.empty_like(G)
+        S = np.empty_like(G)
+        tmp = np.empty_like(G[0, 0])
+        for i in range(3):
+            for j in range(i, 3):
+                a = A[i, j]
+                np.multiply(G[0, i], G[0, j], out=a)
+                for k in (1, 2):
+                    np.multiply(G[k, i], G[k, j], out=tmp)
+                    a += tmp
+        tr_A = A[0, 0] + A[1, 1]
+        tr_A += A[2, 2]
+        tr_E = G[0, 0] + G[1, 1]
+        tr_E += G[2, 2]
+        tr_E += 0.5 * tr_A
+        tr_E *= lmbda
+        tr_A *= 0.5 * lmbda
+        for i in range(3):
+            for j in range(i, 3):
+                s = S[i, j]
+                np.add(G[i, j], G[j, i], out=s)
+                s += A[i, j]
+                s *= mu
+                if i == j:
+                    s += tr_E
+                else:
+                    S[j, i] = s
+        out = A
+        for i in range(3):
+            for j in range(i, 3):
+                A[i, j] *= mu
+            for j in range(i):
+                A[i, j] = A[j, i]
+            A[i, i] += tr_A
+        for i in range(3):
+            for j in range(3):
+                o = out[i, j]
+                for k in range(3):
+                    np.multiply(G[i, k], S[k, j], out=tmp)
+                    o += tmp
+        return out
+
+    def evaluate(self, Q: np.ndarray, linear: bool = False, chunk: int = 1 << 22) -> np.ndarray:
+        """Nonlinear reduced force g~(q) (eq. 23) for a batch Q (r, P) -> (r, P); with linear=True, K~ q instead.
+
+        Two GEMMs with the cached gradient planes (gradients, projection) around ~60 flops per point and state;
+        states are taken in chunks of about ``chunk`` / n_points to bound the temporaries."""
         Q = np.asarray(Q, float).reshape(self.r, -1)
-        G = self._gradients(Q)                       # (n, 3, 3, P)
-        Gt = np.swapaxes(G, 1, 2)
-        eps = 0.5 * (G + Gt)
+        n, P = self.H.shape[0], Q.shape[1]
+        planes, weighted = self._planes
+        step = max(1, chunk // max(n, 1))
+        if P > step:
+            return np.hstack([self.evaluate(Q[:, k:k + step], linear, chunk) for k in range(0, P, step)])
+        G = (planes @ Q).reshape(3, 3, n, P)
         if linear:
-            return self._project(self._stress(eps))
-        E = eps + 0.5 * np.einsum("nkiP,nkjP->nijP", G, G)
-        S = self._stress(E)
-        first_pk = S + np.einsum("nikP,nkjP->nijP", G, S)  # F S with F = I + G
-        return self._project(first_pk - self._stress(eps))
+            S = self.mu * (G + G.transpose(1, 0, 2, 3))
+            tr = self.lmbda * (G[0, 0] + G[1, 1] + G[2, 2])
+            for k in range(3):
+                S[k, k] += tr
+            return weighted @ S.reshape(9 * n, P)
+        return weighted @ self._first_pk_nonlinear(G).reshape(9 * n, P)
+
+    def point_contributions(self, Q: np.ndarray) -> np.ndarray:
+        """Each point's share of g~ (the summand of eq. 23 before the sum over points): (n, r, P) for Q (r, P)."""
+        Q = np.asarray(Q, float).reshape(self.r, -1)
+        n, P = self.H.shape[0], Q.shape[1]
+        planes, _ = self._planes
+        P1 = self._first_pk_nonlinear((planes @ Q).reshape(3, 3, n, P))          # (3, 3, n, P)
+        Hw = (self.H * self.w[:, None, None, None]).reshape(n, self.r, 9)
+        return Hw @ np.ascontiguousarray(P1.reshape(9, n, P).transpose(1, 0, 2))
 
     def _stress(self, E: np.ndarray) -> np.ndarray:
         tr = E[:, 0, 0] + E[:, 1, 1] + E[:, 2, 2]

@@ -1,11 +1,14 @@
 """Reduced contact integrator (§2.1.3, §2.2.2): constraints, discrete energy, stability limit, batches, full-order
 agreement, bad input. Model: the ci blade, r = 45 (24 tip DOFs + 15 fixed-interface modes + 6 global MDs)."""
+import dataclasses
+
 import numpy as np
 import pytest
 import scipy.linalg
 
 from rotor37_rom.casing import Casing, casing_profile, contact_frames, ramp_rate
 from rotor37_rom.integrator import CentralDifference, SimulationDiverged, simulate, tangent_highest_frequency
+from rotor37_rom.nonlinear_forces import PolynomialForces
 
 
 def test_casing_profile_and_ramp():
@@ -296,3 +299,47 @@ def test_bad_input(ci_rom):
         CentralDifference(ci_rom, h=-1.0)
     with pytest.raises(ValueError, match="give revolutions or n_steps"):
         simulate(scheme, 1300.0, Casing())
+
+
+def test_point_cubature_trained_on_contact_states(ci_blade, ci_rom):
+    """Empirical cubature (single quadrature points, non-negative weights) trained on the states of a GNL contact
+    run: it reproduces the exact reduced force on the states of a run at another speed, keeps K~ exact, and a
+    contact run with it follows the exact one. Weights >= 0 keep the force the gradient of a sum of SVK point
+    energies (conservative)."""
+    from rotor37_rom.builder import hyper_reduce
+    from rotor37_rom.ecsw import state_errors
+
+    scheme = CentralDifference(ci_rom, nonlinear=True, safety=0.5)
+    speeds = [1340.0, 1460.0]
+    exact = simulate(scheme, speeds, Casing(mu=0.0), n_steps=20_000, record_every=100, record_q=True)
+    assert exact.contact_steps.min() > 0
+    Q_train, Q_held = exact.records_q[0][:, ::3], exact.records_q[1]
+    hr, rep = hyper_reduce(ci_blade, ci_rom, Q_train, tol=1e-3, level="point")
+    n_all = rep["exact"].w.size
+    Q_held = Q_held[:, np.abs(Q_held[:ci_rom.sizes["r_b"]]).max(axis=0) > 1e-5]   # in motion
+    err = state_errors(rep["exact"], hr.forces, Q_held)
+    g = rep["exact"].evaluate(Q_held)
+    err_run = np.linalg.norm(hr.forces.evaluate(Q_held) - g, axis=0).max() / np.linalg.norm(g, axis=0).max()
+    print(f"cubature: {rep['points']} of {n_all} points, training error {rep['result'].training_error:.1e}, "
+          f"held-out force error median {np.median(err):.1e} max {err.max():.1e}, largest relative to the run's "
+          f"largest force {err_run:.1e}")
+    assert rep["result"].training_error <= 1e-3
+    assert rep["points"] < 0.02 * n_all and np.all(hr.forces.w > 0)
+    assert hr.K is ci_rom.K and hr.key != ci_rom.key
+    assert np.median(err) <= 5e-3 and err_run <= 1e-2
+    # contact dynamics amplify any force perturbation (~30x over this revolution): compare with the exact model's
+    # forces scaled by 1 + the cubature's largest held-out error, a perturbation of the same size
+    def deviation(model):
+        run = simulate(CentralDifference(model, nonlinear=True, h=scheme.h), speeds[1], Casing(mu=0.0),
+                       n_steps=20_000, record_every=100)
+        u = exact.u_r[1][0]
+        return np.abs(run.u_r[0][0] - u).max() / np.abs(u).max()
+
+    scaled = dataclasses.replace(ci_rom, forces=PolynomialForces(ci_rom.forces.A * (1 + err_run),
+                                                                 ci_rom.forces.B * (1 + err_run)))
+    dev, dev_scaled = deviation(hr), deviation(scaled)
+    print(f"LE normal displacement, 20,000 steps at {speeds[1]:g} rad/s: largest deviation {dev:.1e} of its peak "
+          f"(exact forces x (1 + {err_run:.1e}): {dev_scaled:.1e})")
+    assert dev <= 3.0 * dev_scaled
+    with pytest.raises(ValueError, match="Q_train"):
+        hyper_reduce(ci_blade, ci_rom, Q_train[:-1])

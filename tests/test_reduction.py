@@ -5,6 +5,7 @@ import pytest
 
 from rotor37_rom import fem
 from rotor37_rom.builder import ReductionConfig, build_reduced_model, compute_modal_derivatives, training_states
+from rotor37_rom.ecsw import state_errors, train_ecsw
 from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces
 from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, load_reduced_model, save_reduced_model,
                                    select_pairs, selection_weights)
@@ -68,9 +69,13 @@ def test_intrusive_forces_equal_projection(ci_blade, ci_ops, rom):
                             - model.forces.evaluate(q - h[k] * np.eye(model.r)[k]))[:, 0] / (2 * h[k])
                            for k in range(model.r)])
     assert np.abs(J - Jfd).max() <= 1e-6 * np.abs(J).max()
-    # the tensor-free quadrature Jacobian is the same
+    # the tensor-free quadrature forces (batched, component planes) and their Jacobian are the same
     H, w, _ = fem.quadrature_gradients(ci_blade, Phi.T)
-    J_qp = QuadratureForces(H, w, *ci_blade.material.lame).jacobian(q)
+    qp = QuadratureForces(H, w, *ci_blade.material.lame)
+    assert np.linalg.norm(qp.evaluate(Q) - direct) <= 1e-10 * np.linalg.norm(direct)
+    assert np.linalg.norm(qp.evaluate(Q, linear=True) - model.K @ Q) <= 1e-10 * np.linalg.norm(model.K @ Q)
+    assert np.linalg.norm(qp.evaluate(Q, chunk=2 * H.shape[0]) - direct) <= 1e-10 * np.linalg.norm(direct)
+    J_qp = qp.jacobian(q)
     assert np.abs(J_qp - J).max() <= 1e-9 * np.abs(J).max()
 
 
@@ -122,6 +127,14 @@ def test_ecsw_held_out_accuracy(ci_blade, ci_ops):
     print(f"ECSW: {report['ecsw_cells']} of {n_cells} cells, held-out max error {err.max():.1e}")
     assert err.max() <= 1e-2
     assert report["ecsw_cells"] < 0.1 * n_cells
+    # single quadrature points instead of whole cells: same states and tolerance, fewer points to evaluate
+    exact = report["ecsw_exact"]
+    Q_train = training_states(*report["linear_operators"], report["pairs"], report["md_scale"], 24, 80)
+    points = train_ecsw(exact, np.arange(exact.w.size), Q_train, tol=1e-3, level="point")
+    err_p = state_errors(exact, points.forces, Q)
+    print(f"points: {points.n_points} (cells: {model.forces.w.size} points), held-out max error {err_p.max():.1e}")
+    assert points.training_error <= 1e-3 and err_p.max() <= 1e-2
+    assert points.n_points < model.forces.w.size and np.all(points.forces.w > 0)
 
 
 def test_selection_weights():
