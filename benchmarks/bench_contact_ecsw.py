@@ -31,7 +31,6 @@ import argparse
 import dataclasses
 import json
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -43,35 +42,24 @@ from bench_contact_convergence import compare, nfrc_run  # noqa: E402
 RESULTS = Path("results/bench_contact_ecsw.json")
 
 
-def training_runs(model, speeds, casing, revolutions, h, cache: Path) -> list[np.ndarray]:
-    """Recorded states (r, n) of exact GNL contact runs at the training speeds (cached as .npz)."""
+def training_runs(model, speeds, casing, revolutions, h, cache: Path) -> tuple[list[np.ndarray], float | None]:
+    """Recorded states (r, n) of exact GNL contact runs at the training speeds, and the wall time of those runs
+    (cached as .npz)."""
     from rotor37_rom.integrator import CentralDifference, simulate
 
     if cache.is_file():
         with np.load(cache) as data:
-            return [data[f"q{p}"] for p in range(len(speeds))]
+            wall = float(data["wall"]) if "wall" in data.files else None
+            return [data[f"q{p}"] for p in range(len(speeds))], wall
     scheme = CentralDifference(model, nonlinear=True, h=h)
     res = simulate(scheme, speeds, casing, revolutions=revolutions, on_blowup="flag",
                    record_every=max(1, int(round(1e-5 / scheme.h))), record_q=True)
     states = [q[:, np.isfinite(q).all(axis=0)] for q in res.records_q]
     cache.parent.mkdir(parents=True, exist_ok=True)
     tmp = cache.with_suffix(".tmp.npz")
-    np.savez(tmp, **{f"q{p}": q for p, q in enumerate(states)})
+    np.savez(tmp, wall=res.wall, **{f"q{p}": q for p, q in enumerate(states)})
     tmp.replace(cache)
-    return states
-
-
-def split_states(runs, r_b: int, n_per_run: int, seed: int = 1):
-    """Training: n_per_run instants spread over each run (after its first tenth) plus its 5 largest; held-out:
-    20 random instants of each run."""
-    rng = np.random.default_rng(seed)
-    train, held = [], []
-    for q in runs:
-        amp = np.abs(q[:r_b]).max(axis=0)
-        spread = np.linspace(q.shape[1] // 10, q.shape[1] - 1, n_per_run).astype(int)
-        train.append(q[:, np.unique(np.r_[spread, np.argsort(amp)[::-1][:5]])])
-        held.append(q[:, rng.choice(q.shape[1], 20, replace=False)])
-    return np.hstack(train), np.hstack(held)
+    return states, res.wall
 
 
 def step_cost(model, h, n_speeds, n_steps):
@@ -113,7 +101,7 @@ def main(argv=None) -> int:
     from rotor37_rom import fem
     from rotor37_rom.builder import ReductionConfig, build_reduced_model, hyper_reduce
     from rotor37_rom.casing import Casing
-    from rotor37_rom.ecsw import state_errors
+    from rotor37_rom.ecsw import state_errors, trajectory_states
     from rotor37_rom.integrator import (CentralDifference, gnl_time_step, highest_frequency,
                                         tangent_highest_frequency)
     from rotor37_rom.nonlinear_forces import PolynomialForces
@@ -165,11 +153,9 @@ def main(argv=None) -> int:
     omega_max = highest_frequency(model.M, model.K)
 
     key = f"{model.key}_{'_'.join(f'{w:g}' for w in args.train_speeds)}_{args.revolutions:g}"
-    t0 = time.perf_counter()
-    runs = training_runs(model, np.array(args.train_speeds), casing, args.revolutions, h,
-                         Path(f"results/cache/ecsw_training_{key}.npz"))
-    store["training_run_s"] = store.get("training_run_s") or time.perf_counter() - t0
-    Q_train, Q_held = split_states(runs, int(model.sizes["r_b"]), args.states)
+    runs, store["training_runs_s"] = training_runs(model, np.array(args.train_speeds), casing, args.revolutions, h,
+                                                   Path(f"results/cache/ecsw_training_{key}.npz"))
+    Q_train, Q_held = trajectory_states(runs, int(model.sizes["r_b"]), args.states, n_held=20)
     print(f"training: {Q_train.shape[1]} states from {len(runs)} GNL contact runs; held-out {Q_held.shape[1]} + the "
           f"reference's {Q_ref.shape[1]} largest (tip DOFs up to {np.abs(Q_ref[:24]).max() * 1e3:.1f} mm)")
 

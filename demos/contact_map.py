@@ -8,6 +8,8 @@
 #     python demos/contact_map.py --preset ci --speeds 1200 1600 21 --revolutions 20          # minutes
 #     python demos/contact_map.py --preset coarse --speeds 1200 1600 201 --revolutions 200      # paper scale (hours)
 #     mpirun -n 2 python demos/contact_map.py --model results/contact_map/rom.npz --speeds 1200 1600 21
+#     python demos/contact_map.py --gnl on --cubature 1e-4 --frequency-cap 120 --mu 0 --speeds 1200 1600 100 \
+#         --revolutions 200 --batch 100      # the GNL headline map, ~3 h on 2 cores (bench_contact_ecsw)
 
 # +
 from __future__ import annotations
@@ -49,6 +51,49 @@ def build_or_load(args, comm):
     return model
 
 
+def cubature_model(args, model, speeds, casing, comm):
+    """The model with point-cubature GNL forces trained on exact GNL runs at 6 of the speeds (trajectory states), and
+    the largest states of those runs (for the GNL step)."""
+    from rotor37_rom import fem
+    from rotor37_rom.builder import hyper_reduce
+    from rotor37_rom.ecsw import trajectory_states
+    from rotor37_rom.integrator import CentralDifference, largest_states, simulate
+
+    import hashlib
+
+    from rotor37_rom.reduction import load_reduced_model, save_reduced_model
+
+    if comm is not None and comm.size > 1:
+        raise ValueError("--cubature needs the serial FE quadrature: run it without mpirun")
+    train = np.unique(speeds[np.linspace(0, len(speeds) - 1, min(6, len(speeds))).astype(int)])
+    revolutions = min(args.revolutions, 12.0)
+    scheme = CentralDifference(model, nonlinear=True, safety=args.safety)
+    # a restarted map reuses the trained model (the training runs are the expensive part)
+    key = hashlib.sha256(json.dumps([model.key, train.tolist(), revolutions, scheme.h, vars(casing), args.cubature],
+                                    sort_keys=True, default=str).encode()).hexdigest()[:16]
+    cache = Path(args.out) / "cache" / f"cubature_{key}.npz"
+    if cache.is_file():
+        with np.load(cache.with_suffix(".states.npz")) as data:
+            states = data["states"]
+        print(f"cubature: reusing {cache}")
+        return load_reduced_model(cache), states
+    t0 = time.perf_counter()
+    res = simulate(scheme, train, casing, revolutions=revolutions, record_q=True, on_blowup="flag",
+                   record_every=max(1, int(round(1e-5 / scheme.h))))
+    Q_train, _ = trajectory_states(res.records_q, scheme.r_b)
+    sector = fem.create_blade_sector(preset=args.preset)
+    reduced, rep = hyper_reduce(sector, model, Q_train, tol=args.cubature, level="point",
+                                label=f"contact runs {train.tolist()} x {revolutions:g} rev, mu = {casing.mu:g}")
+    print(f"cubature: {rep['points']} of {rep['exact'].w.size} quadrature points (training error "
+          f"{rep['result'].training_error:.1e}) from {Q_train.shape[1]} states of exact GNL runs at "
+          f"{len(train)} speeds x {revolutions:g} rev; {time.perf_counter() - t0:.0f} s")
+    states = largest_states(res, scheme.r_b, 24)
+    cache.parent.mkdir(parents=True, exist_ok=True)
+    np.savez(cache.with_suffix(".states.npz"), states=states)
+    save_reduced_model(reduced, cache)                  # written last: its presence means both are complete
+    return reduced, states
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description="interaction maps of the reduced blade with casing contact")
     parser.add_argument("--preset", default="ci")
@@ -65,6 +110,15 @@ def main(argv=None) -> int:
                         help="spectral mass scaling: slow the modes above this frequency (kHz) to it; the GNL step "
                              "then comes from the tangent limit on a short unscaled probe run "
                              "(benchmarks/bench_contact_convergence.py measures the error: 60 kHz is within 3 %%)")
+    parser.add_argument("--tangent-safety", type=float, default=0.5,
+                        help="GNL with a cap: h = this x 2 / tangent omega_max on the probe's largest states "
+                             "(0.7 lost speeds at 120 kHz in bench_contact_convergence, 0.5 none in "
+                             "bench_contact_ecsw)")
+    parser.add_argument("--cubature", type=float, metavar="TOL",
+                        help="GNL: replace the exact cubic forces by point cubature trained to this relative "
+                             "tolerance on exact GNL runs at 6 of the speeds (min(revolutions, 12) each; "
+                             "bench_contact_ecsw: 1e-4 with a 120 kHz cap is the cheapest setting within the "
+                             "problem's own sensitivity)")
     parser.add_argument("--mu", type=float, default=0.15)
     parser.add_argument("--c0", type=float, default=0.5e-3)
     parser.add_argument("--hb", type=float, default=0.625e-3)
@@ -90,6 +144,10 @@ def main(argv=None) -> int:
         speeds = np.linspace(start, stop, int(n))
         if args.frequency_cap is not None and not args.frequency_cap > 0:
             raise ValueError(f"--frequency-cap must be > 0 kHz, got {args.frequency_cap}")
+        if args.cubature is not None and not 0 < args.cubature < 1:
+            raise ValueError(f"--cubature must be in (0, 1), got {args.cubature}")
+        if not 0 < args.tangent_safety <= 1:
+            raise ValueError(f"--tangent-safety must be in (0, 1], got {args.tangent_safety}")
         spec = SweepSpec(revolutions=args.revolutions, casing=casing, batch_size=args.batch)
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -114,19 +172,25 @@ def main(argv=None) -> int:
         try:
             cap = None if args.frequency_cap is None else 2 * np.pi * 1e3 * args.frequency_cap
             h = args.h
+            run_model, states = model, None
+            if gnl and args.cubature is not None:
+                run_model, states = cubature_model(args, model, speeds, casing, comm)
             if cap is not None and gnl and h is None:
                 from rotor37_rom.integrator import gnl_time_step, probe_states
 
-                probe = speeds[:: max(1, len(speeds) // 16)]
-                states = probe_states(model, probe, casing, revolutions=min(4.0, args.revolutions))
-                h = gnl_time_step(model, states, cap, cap_safety=args.safety)
-                print(f"GNL with a {args.frequency_cap:g} kHz cap: h = {h:.3g} s from the tangent limit on a "
-                      f"{min(4.0, args.revolutions):g}-revolution unscaled probe at {len(probe)} speeds")
-            scheme = CentralDifference(model, nonlinear=gnl, h=h, safety=args.safety, frequency_cap=cap)
+                if states is None:
+                    probe = speeds[:: max(1, len(speeds) // 16)]
+                    states = probe_states(model, probe, casing, revolutions=min(4.0, args.revolutions))
+                    print(f"GNL step from the tangent limit on a {min(4.0, args.revolutions):g}-revolution unscaled "
+                          f"probe at {len(probe)} speeds")
+                h = gnl_time_step(run_model, states, cap, safety=args.tangent_safety, cap_safety=args.safety)
+                print(f"GNL with a {args.frequency_cap:g} kHz cap: h = {h:.3g} s")
+            scheme = CentralDifference(run_model, nonlinear=gnl, h=h, safety=args.safety, frequency_cap=cap)
         except ValueError as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 2
-        label = ("GNL" if gnl else "no GNL") + ("" if cap is None else f", cap {args.frequency_cap:g} kHz")
+        label = ("GNL" if gnl else "no GNL") + (f", cubature {args.cubature:g}" if gnl and args.cubature else "") \
+            + ("" if cap is None else f", cap {args.frequency_cap:g} kHz")
         t0 = time.perf_counter()
         folder = run_sweep(scheme, speeds, spec, out / "sweeps", comm=comm, progress=not args.quiet)
         wall = time.perf_counter() - t0
@@ -136,7 +200,8 @@ def main(argv=None) -> int:
         imap = interaction_map(results)
         from rotor37_rom.charts import plot_interaction_map, plot_nfrc, plot_time_history
 
-        tag = ("gnl" if gnl else "linear") + ("" if cap is None else f"_cap{args.frequency_cap:g}k")
+        tag = ("gnl" if gnl else "linear") + (f"_cub{args.cubature:g}" if gnl and args.cubature else "") \
+            + ("" if cap is None else f"_cap{args.frequency_cap:g}k")
         plot_interaction_map(imap, out / f"interaction_map_{tag}.png", eigenfrequencies=omega, linear_resonance=lin_res,
                              title=f"node LE, {label}, r = {model.r}, {args.revolutions:g} rev., h = {scheme.h:.3g} s")
         ok = np.isfinite(imap.nfrc)
@@ -145,7 +210,8 @@ def main(argv=None) -> int:
         plot_time_history(worst["t"], {"LE": worst["u_r"][0], "TE": worst["u_r"][-1]},
                           out / f"time_history_{tag}.png", title=f"{label}, Omega = {float(worst['omega']):.0f} rad/s")
         revs = args.revolutions * len(results)
-        run = {"h": scheme.h, "h_crit": scheme.h_crit, "frequency_cap_khz": args.frequency_cap, "peak_speed": peak,
+        run = {"h": scheme.h, "h_crit": scheme.h_crit, "frequency_cap_khz": args.frequency_cap,
+               "cubature": run_model.metadata.get("hyper_reduction"), "peak_speed": peak,
                "peak_amplitude": float(np.nanmax(imap.nfrc)),
                "diverged": imap.speeds[imap.diverged].tolist(), "wall_s": wall,
                "rev_per_s": revs / wall if wall > 1 else None, "nfrc": imap.nfrc.tolist(),

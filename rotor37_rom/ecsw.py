@@ -15,7 +15,7 @@ import scipy.optimize
 
 from rotor37_rom.nonlinear_forces import QuadratureForces
 
-__all__ = ["EcswResult", "cell_contributions", "train_ecsw", "state_errors"]
+__all__ = ["EcswResult", "cell_contributions", "train_ecsw", "state_errors", "trajectory_states"]
 
 
 def cell_contributions(forces: QuadratureForces, cells: np.ndarray, Q: np.ndarray,
@@ -42,6 +42,29 @@ def state_errors(exact: QuadratureForces, hyper: QuadratureForces, Q: np.ndarray
     """Relative error ||g_hyper - g|| / ||g|| of the reduced nonlinear force at each state (column of Q)."""
     g = exact.evaluate(Q)
     return np.linalg.norm(hyper.evaluate(Q) - g, axis=0) / np.maximum(np.linalg.norm(g, axis=0), 1e-300)
+
+
+def trajectory_states(runs, r_b: int, n_per_run: int = 25, n_largest: int = 5, n_held: int = 0,
+                      seed: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """Training states from recorded runs (each (r, n_rec), e.g. ``SimulationResult.records_q``): per run,
+    n_per_run finite instants spread over it after its first tenth (the ramp) plus its n_largest states of largest
+    boundary motion; and n_held random other instants of each run for checking. Returns (train, held)."""
+    rng = np.random.default_rng(seed)
+    train, held = [], []
+    for q in runs:
+        q = np.asarray(q, float)
+        q = q[:, np.isfinite(q).all(axis=0)]
+        if q.shape[1] == 0:
+            continue
+        amp = np.abs(q[:r_b]).max(axis=0)
+        spread = np.linspace(q.shape[1] // 10, q.shape[1] - 1, n_per_run).astype(int)
+        train.append(q[:, np.unique(np.r_[spread, np.argsort(amp)[::-1][:n_largest]])])
+        if n_held:
+            held.append(q[:, rng.choice(q.shape[1], min(n_held, q.shape[1]), replace=False)])
+    if not train:
+        raise ValueError("trajectory_states: no finite recorded state in the runs")
+    r = train[0].shape[0]
+    return np.hstack(train), (np.hstack(held) if held else np.zeros((r, 0)))
 
 
 @dataclasses.dataclass(frozen=True)

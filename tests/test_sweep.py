@@ -177,3 +177,33 @@ def test_contact_map_frequency_cap_flag(ci_rom, tmp_path):
     assert uncapped.name != folder.name
     bad = subprocess.run(base + ["--frequency-cap", "-1"], env=env, capture_output=True, text=True, timeout=600)
     assert bad.returncode == 2 and bad.stderr.strip().splitlines() == ["error: --frequency-cap must be > 0 kHz, got -1.0"]
+
+
+def test_contact_map_cubature_flag(ci_rom, tmp_path):
+    """demos/contact_map.py --cubature: the GNL sweep runs on point cubature trained on exact GNL runs at the sweep's
+    speeds (recorded in the summary); its NFRC follows the exact GNL sweep (over half a revolution the contact
+    dynamics amplify the ~1e-3 force error about tenfold, test_contact); a tolerance outside (0, 1) is a one-line
+    error."""
+    model_path = save_reduced_model(ci_rom, tmp_path / "rom.npz")
+    env = dict(os.environ, MPLBACKEND="Agg")
+    base = [sys.executable, str(ROOT / "demos" / "contact_map.py"), "--model", str(model_path), "--quiet",
+            "--out", str(tmp_path / "cub")]
+    run = subprocess.run(base + ["--speeds", "1400", "1450", "2", "--revolutions", "0.5", "--gnl", "on", "--mu", "0",
+                                 "--cubature", "1e-3"], env=env, capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr[-2000:]
+    got = json.loads((tmp_path / "cub" / "summary.json").read_text())["runs"]["GNL, cubature 0.001"]
+    assert got["cubature"]["level"] == "point" and 0 < got["cubature"]["points"] < 1000
+    scheme = CentralDifference(ci_rom, nonlinear=True, safety=0.5)
+    folder = run_sweep(scheme, [1400.0, 1450.0], SweepSpec(revolutions=0.5, casing=Casing(mu=0.0)),
+                       tmp_path / "exact", progress=False)
+    exact = interaction_map(load_sweep(folder)).nfrc
+    dev = np.abs(np.asarray(got["nfrc"]) - exact) / exact.max()
+    print(f"cubature {got['cubature']['points']} points: NFRC {got['nfrc']} vs exact {exact.tolist()}")
+    assert dev.max() <= 0.05 and dev.max() > 1e-10       # close, and not the exact tensors
+    again = subprocess.run(base + ["--speeds", "1400", "1450", "2", "--revolutions", "0.5", "--gnl", "on", "--mu", "0",
+                                   "--cubature", "1e-3"], env=env, capture_output=True, text=True, timeout=900)
+    assert again.returncode == 0 and "cubature: reusing" in again.stdout            # a restart does not retrain
+    rerun = json.loads((tmp_path / "cub" / "summary.json").read_text())["runs"]["GNL, cubature 0.001"]
+    assert rerun["nfrc"] == got["nfrc"]
+    bad = subprocess.run(base + ["--cubature", "0"], env=env, capture_output=True, text=True, timeout=600)
+    assert bad.returncode == 2 and bad.stderr.strip().splitlines() == ["error: --cubature must be in (0, 1), got 0.0"]
