@@ -55,11 +55,15 @@ def nfrc_run(model, gnl, speeds, casing, revolutions, safety, cap, h=None, state
     return out
 
 
-def compare(run, ref):
+def speed_errors(run, ref) -> np.ndarray:
+    """|NFRC - NFRC_ref| / max(NFRC_ref) at each speed; a diverged run (NaN) counts as infinitely wrong."""
     a, b = np.asarray(run["nfrc"], float), np.asarray(ref["nfrc"], float)
-    scale = np.nanmax(b)
-    err = np.abs(a - b) / scale
-    err = np.where(np.isfinite(err), err, np.inf)
+    err = np.abs(a - b) / np.nanmax(b)
+    return np.where(np.isfinite(err), err, np.inf)
+
+
+def compare(run, ref):
+    err = speed_errors(run, ref)
     return {"median": float(np.median(err)), "p90": float(np.quantile(err, 0.9, method="higher")),
             "max": float(err.max())}
 

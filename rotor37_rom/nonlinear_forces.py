@@ -129,6 +129,8 @@ class QuadratureForces:
                 for k in (1, 2):
                     np.multiply(G[k, i], G[k, j], out=tmp)
                     a += tmp
+                if i != j:
+                    A[j, i] = a                                  # A is symmetric
         tr_A = A[0, 0] + A[1, 1]
         tr_A += A[2, 2]
         tr_E = G[0, 0] + G[1, 1]
@@ -147,12 +149,9 @@ class QuadratureForces:
                 else:
                     S[j, i] = s
         out = A
-        for i in range(3):
-            for j in range(i, 3):
-                A[i, j] *= mu
-            for j in range(i):
-                A[i, j] = A[j, i]
-            A[i, i] += tr_A
+        out *= mu
+        for k in range(3):
+            out[k, k] += tr_A
         for i in range(3):
             for j in range(3):
                 o = out[i, j]
