@@ -27,6 +27,9 @@ $(STAMP): pyproject.toml /usr/lib/x86_64-linux-gnu/openblas-pthread/libblas.so.3
 	$(PY) -m pip install -q -c $(VENV)/constraints.txt pyvista matplotlib tqdm pytest
 	$(PY) -m pip install -q -c $(VENV)/constraints.txt --no-build-isolation --no-deps -e .
 	$(PY) -c "import numpy, dolfinx; assert numpy.__version__ == '$$(/usr/bin/python3 -c 'import numpy; print(numpy.__version__)')'"
+	# OpenBLAS 0.3.21 falls back to SSE3 kernels on CPUs it does not know (6x slower dgemm here): see blas_check.py
+	env -u OPENBLAS_CORETYPE /usr/bin/python3 -S rotor37_rom/blas_check.py \
+	  --pth "$$($(PY) -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')/rotor37_openblas.pth"
 	touch $(STAMP)
 
 demo: $(STAMP)

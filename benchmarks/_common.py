@@ -11,6 +11,13 @@ def machine_description() -> str:
     """CPU, core count, BLAS and Python version, for the tables."""
     blas = Path("/etc/alternatives/libblas.so.3-x86_64-linux-gnu")
     name = "OpenBLAS" if blas.exists() and "openblas" in str(blas.resolve()) else "reference BLAS"
+    if name == "OpenBLAS":
+        import importlib
+
+        from rotor37_rom.blas_check import openblas_core
+
+        importlib.import_module("numpy")                 # the BLAS as this interpreter loads it
+        name += f" ({openblas_core()} kernels)"
     return f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, {name}, " \
            f"Python {platform.python_version()}"
 

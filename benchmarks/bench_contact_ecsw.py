@@ -95,6 +95,8 @@ def main(argv=None) -> int:
     parser.add_argument("--caps", type=float, nargs="*", default=[120.0], help="frequency caps (kHz) to combine")
     parser.add_argument("--tangent-safety", type=float, default=0.5,
                         help="with a cap: h = this x 2 / tangent omega_max on the reference's largest states")
+    parser.add_argument("--single", action=argparse.BooleanOptionalAction, default=True,
+                        help="also each point selection evaluated in float32 (QuadratureForces precision 'single')")
     parser.add_argument("--batch", type=int, default=100)
     parser.add_argument("--cost-steps", type=int, default=4000)
     parser.add_argument("--tol", type=float, default=0.05, help="admissible NFRC error, fraction of the peak")
@@ -108,7 +110,7 @@ def main(argv=None) -> int:
     from rotor37_rom.ecsw import state_errors, trajectory_states
     from rotor37_rom.integrator import gnl_time_step, highest_frequency, tangent_highest_frequency
     from rotor37_rom.nonlinear_forces import PolynomialForces
-    from rotor37_rom.reduction import load_reduced_model, save_reduced_model
+    from rotor37_rom.reduction import load_reduced_model, save_reduced_model, with_force_precision
 
     sector = fem.create_blade_sector(preset="ci")
     if Path(args.model).exists():
@@ -183,6 +185,18 @@ def main(argv=None) -> int:
               f"tangent omega_max {sel['tangent_ratio']:.3f} x linear")
         if level == "point":
             models[label] = reduced
+            if args.single:
+                # the same points evaluated in float32: its own force error next to the double one's
+                single = with_force_precision(reduced, "single")
+                e_single = state_errors(exact_q, single.forces, Q_held)
+                dev = state_errors(hyper, single.forces, Q_held)
+                store["selection"][f"{label} single"] = {
+                    **sel, "held_out_median": float(np.median(e_single)), "held_out_max": float(e_single.max()),
+                    "single_vs_double_max": float(dev.max())}
+                save()
+                print(f"{label} single: held-out force error median {np.median(e_single):.1e} max "
+                      f"{e_single.max():.1e}; float32 vs float64 evaluation at most {dev.max():.1e}")
+                models[f"{label} single"] = single
 
     exact_tangent = tangent_highest_frequency(model, Q_ref) / omega_max
     perturbed = dataclasses.replace(model, forces=PolynomialForces(model.forces.A * (1 + args.perturbation),

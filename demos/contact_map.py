@@ -3,7 +3,7 @@
 # Builds (or loads) a reduced model of the clamped blade, then sweeps the angular speed with the casing ovalized into
 # two lobes (eqs. 37-38; c0 = 0.5 mm, h_b = 0.625 mm, mu = 0.15), GNL off and on. Every speed's result is written as
 # it finishes; a killed run started again resumes. The same command under `mpirun -n N` splits the speeds over the
-# ranks (give --model, the file the serial run saved).
+# ranks (give --model, the file the serial run saved; with --cubature rank 0 trains, the others wait).
 #
 #     python demos/contact_map.py --preset ci --speeds 1200 1600 21 --revolutions 20          # minutes
 #     python demos/contact_map.py --preset coarse --speeds 1200 1600 201 --revolutions 200      # paper scale (hours)
@@ -53,45 +53,63 @@ def build_or_load(args, comm):
 
 def cubature_model(args, model, speeds, casing, comm):
     """The model with point-cubature GNL forces trained on exact GNL runs at 6 of the speeds (trajectory states), and
-    the largest states of those runs (for the GNL step)."""
-    from rotor37_rom import fem
-    from rotor37_rom.builder import hyper_reduce
-    from rotor37_rom.ecsw import trajectory_states
-    from rotor37_rom.integrator import CentralDifference, largest_states, simulate
-
+    the largest states of those runs (for the GNL step). Cached in <out>/cache: a restarted map does not retrain.
+    Under MPI rank 0 trains (serial FE quadrature on its own copy of the mesh) while the others wait."""
     import hashlib
+    import importlib
 
-    from rotor37_rom.reduction import load_reduced_model, save_reduced_model
+    importlib.import_module("rotor37_rom.fem")    # on every rank: importing dolfinx initializes PETSc (collective)
+    from rotor37_rom.integrator import CentralDifference
+    from rotor37_rom.reduction import load_reduced_model
 
-    if comm is not None and comm.size > 1:
-        raise ValueError("--cubature needs the serial FE quadrature: run it without mpirun")
     train = np.unique(speeds[np.linspace(0, len(speeds) - 1, min(6, len(speeds))).astype(int)])
     revolutions = min(args.revolutions, 12.0)
     scheme = CentralDifference(model, nonlinear=True, safety=args.safety)
-    # a restarted map reuses the trained model (the training runs are the expensive part)
     key = hashlib.sha256(json.dumps([model.key, train.tolist(), revolutions, scheme.h, vars(casing), args.cubature],
                                     sort_keys=True, default=str).encode()).hexdigest()[:16]
     cache = Path(args.out) / "cache" / f"cubature_{key}.npz"
+    rank = 0 if comm is None else comm.rank
     if cache.is_file():
-        with np.load(cache.with_suffix(".states.npz")) as data:
-            states = data["states"]
-        print(f"cubature: reusing {cache}")
-        return load_reduced_model(cache), states
+        if rank == 0:
+            print(f"cubature: reusing {cache}")
+    else:
+        error = None
+        if rank == 0:
+            try:
+                _train_cubature(args, model, scheme, train, revolutions, casing, cache)
+            except ValueError as exc:
+                error = str(exc)
+        if comm is not None:
+            error = comm.bcast(error, root=0)
+        if error is not None:
+            raise ValueError(error)
+    with np.load(cache.with_suffix(".states.npz")) as data:
+        states = data["states"]
+    return load_reduced_model(cache), states
+
+
+def _train_cubature(args, model, scheme, train, revolutions, casing, cache: Path):
+    from mpi4py import MPI
+
+    from rotor37_rom import fem
+    from rotor37_rom.builder import hyper_reduce
+    from rotor37_rom.ecsw import trajectory_states
+    from rotor37_rom.integrator import largest_states, simulate
+    from rotor37_rom.reduction import save_reduced_model
+
     t0 = time.perf_counter()
     res = simulate(scheme, train, casing, revolutions=revolutions, record_q=True, on_blowup="flag",
                    record_every=max(1, int(round(1e-5 / scheme.h))))
     Q_train, _ = trajectory_states(res.records_q, scheme.r_b)
-    sector = fem.create_blade_sector(preset=args.preset)
+    sector = fem.create_blade_sector(MPI.COMM_SELF, preset=args.preset)
     reduced, rep = hyper_reduce(sector, model, Q_train, tol=args.cubature, level="point",
                                 label=f"contact runs {train.tolist()} x {revolutions:g} rev, mu = {casing.mu:g}")
     print(f"cubature: {rep['points']} of {rep['exact'].w.size} quadrature points (training error "
           f"{rep['result'].training_error:.1e}) from {Q_train.shape[1]} states of exact GNL runs at "
           f"{len(train)} speeds x {revolutions:g} rev; {time.perf_counter() - t0:.0f} s")
-    states = largest_states(res, scheme.r_b, 24)
     cache.parent.mkdir(parents=True, exist_ok=True)
-    np.savez(cache.with_suffix(".states.npz"), states=states)
+    np.savez(cache.with_suffix(".states.npz"), states=largest_states(res, scheme.r_b, 24))
     save_reduced_model(reduced, cache)                  # written last: its presence means both are complete
-    return reduced, states
 
 
 def main(argv=None) -> int:
@@ -119,6 +137,9 @@ def main(argv=None) -> int:
                              "tolerance on exact GNL runs at 6 of the speeds (min(revolutions, 12) each; "
                              "bench_contact_ecsw: 1e-4 with a 120 kHz cap is the cheapest setting within the "
                              "problem's own sensitivity)")
+    parser.add_argument("--precision", choices=["double", "single"], default="double",
+                        help="with --cubature: arithmetic of the cubature forces (single: float32, ~3x faster, "
+                             "differs from double by ~1e-6 of the force)")
     parser.add_argument("--mu", type=float, default=0.15)
     parser.add_argument("--c0", type=float, default=0.5e-3)
     parser.add_argument("--hb", type=float, default=0.625e-3)
@@ -146,6 +167,8 @@ def main(argv=None) -> int:
             raise ValueError(f"--frequency-cap must be > 0 kHz, got {args.frequency_cap}")
         if args.cubature is not None and not 0 < args.cubature < 1:
             raise ValueError(f"--cubature must be in (0, 1), got {args.cubature}")
+        if args.precision != "double" and args.cubature is None:
+            raise ValueError("--precision single needs --cubature (the exact cubic tensors are evaluated in double)")
         if not 0 < args.tangent_safety <= 1:
             raise ValueError(f"--tangent-safety must be in (0, 1], got {args.tangent_safety}")
         spec = SweepSpec(revolutions=args.revolutions, casing=casing, batch_size=args.batch)
@@ -174,7 +197,10 @@ def main(argv=None) -> int:
             h = args.h
             run_model, states = model, None
             if gnl and args.cubature is not None:
+                from rotor37_rom.reduction import with_force_precision
+
                 run_model, states = cubature_model(args, model, speeds, casing, comm)
+                run_model = with_force_precision(run_model, args.precision)
             if cap is not None and gnl and h is None:
                 from rotor37_rom.integrator import gnl_time_step, probe_states
 
@@ -189,7 +215,9 @@ def main(argv=None) -> int:
         except ValueError as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 2
-        label = ("GNL" if gnl else "no GNL") + (f", cubature {args.cubature:g}" if gnl and args.cubature else "") \
+        cub = gnl and args.cubature
+        label = ("GNL" if gnl else "no GNL") + (f", cubature {args.cubature:g}" if cub else "") \
+            + (", single" if cub and args.precision == "single" else "") \
             + ("" if cap is None else f", cap {args.frequency_cap:g} kHz")
         t0 = time.perf_counter()
         folder = run_sweep(scheme, speeds, spec, out / "sweeps", comm=comm, progress=not args.quiet)
@@ -200,7 +228,8 @@ def main(argv=None) -> int:
         imap = interaction_map(results)
         from rotor37_rom.charts import plot_interaction_map, plot_nfrc, plot_time_history
 
-        tag = ("gnl" if gnl else "linear") + (f"_cub{args.cubature:g}" if gnl and args.cubature else "") \
+        tag = ("gnl" if gnl else "linear") + (f"_cub{args.cubature:g}" if cub else "") \
+            + ("_f32" if cub and args.precision == "single" else "") \
             + ("" if cap is None else f"_cap{args.frequency_cap:g}k")
         plot_interaction_map(imap, out / f"interaction_map_{tag}.png", eigenfrequencies=omega, linear_resonance=lin_res,
                              title=f"node LE, {label}, r = {model.r}, {args.revolutions:g} rev., h = {scheme.h:.3g} s")
@@ -211,7 +240,8 @@ def main(argv=None) -> int:
                           out / f"time_history_{tag}.png", title=f"{label}, Omega = {float(worst['omega']):.0f} rad/s")
         revs = args.revolutions * len(results)
         run = {"h": scheme.h, "h_crit": scheme.h_crit, "frequency_cap_khz": args.frequency_cap,
-               "cubature": run_model.metadata.get("hyper_reduction"), "peak_speed": peak,
+               "cubature": run_model.metadata.get("hyper_reduction"),
+               "force_precision": getattr(run_model.forces, "precision", "double"), "peak_speed": peak,
                "peak_amplitude": float(np.nanmax(imap.nfrc)),
                "diverged": imap.speeds[imap.diverged].tolist(), "wall_s": wall,
                "rev_per_s": revs / wall if wall > 1 else None, "nfrc": imap.nfrc.tolist(),

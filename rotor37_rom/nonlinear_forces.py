@@ -78,6 +78,9 @@ def _apply_C(V: np.ndarray, lmbda: float, mu: float) -> np.ndarray:
     return out
 
 
+_PRECISIONS = {"double": np.float64, "single": np.float32}
+
+
 def _batched_product(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
     """X @ Y over the last two axes (3 x 3), broadcasting the leading ones, as three multiply-adds (numpy's
     matmul loops over tiny matrices one by one)."""
@@ -91,37 +94,65 @@ class QuadratureForces:
 
     Attributes:
         H: (n_points, r, 3, 3) basis gradients; w: (n_points,) weights (m^3, or ECSW-modified); lmbda, mu (Pa).
+        precision: arithmetic of ``evaluate`` (the time integrator's force): 'double', or 'single' (float32
+            gradients, stresses and projection, about 3x faster on few points; the nonlinear stress is formed from
+            products of gradients, not as a difference from the linear one, so it keeps float32's relative accuracy,
+            ~1e-7, before the sum over points). ``jacobian``, ``stiffness`` and ``point_contributions`` stay double.
     """
 
     H: np.ndarray
     w: np.ndarray
     lmbda: float
     mu: float
+    precision: str = "double"
+
+    def __post_init__(self):
+        if self.precision not in _PRECISIONS:
+            raise ValueError(f"precision must be one of {sorted(_PRECISIONS)}, got {self.precision!r}")
 
     @property
     def r(self) -> int:
         return self.H.shape[1]
 
+    def with_precision(self, precision: str) -> "QuadratureForces":
+        """The same quadrature evaluated in ``precision`` ('double' or 'single')."""
+        return dataclasses.replace(self, precision=precision)
+
     @functools.cached_property
     def _planes(self) -> tuple[np.ndarray, np.ndarray]:
         """The basis gradients as (9 n, r) with rows ordered (i, j, point), so that each component of a batch of
-        displacement gradients is a contiguous (n, P) plane, and the weighted transpose (r, 9 n) that projects."""
+        displacement gradients is a contiguous (n, P) plane, and the weighted transpose (r, 9 n) that projects,
+        both in the evaluation precision."""
         n = self.H.shape[0]
-        planes = np.ascontiguousarray(self.H.transpose(2, 3, 0, 1)).reshape(9 * n, self.r)
+        dtype = _PRECISIONS[self.precision]
+        planes = np.ascontiguousarray(self.H.transpose(2, 3, 0, 1), dtype=dtype).reshape(9 * n, self.r)
         weighted = (self.H * self.w[:, None, None, None]).transpose(2, 3, 0, 1).reshape(9 * n, self.r)
-        return planes, np.ascontiguousarray(weighted.T)
+        return planes, np.ascontiguousarray(weighted.T, dtype=dtype)
 
-    def _first_pk_nonlinear(self, G: np.ndarray) -> np.ndarray:
+    def _buffers(self, n: int, P: int, dtype) -> dict:
+        """Work arrays for a batch of P states, kept between calls with the same shape: fresh arrays of this size
+        cost a page-mapping and first-touch faults each, which doubled the force's time inside the integrator."""
+        cache = self.__dict__.setdefault("_work", {})
+        key = (n, P, np.dtype(dtype).str)
+        if key not in cache:
+            cache.clear()                                # one batch shape at a time (the integrator's)
+            cache[key] = {"G": np.empty((9 * n, P), dtype), "A": np.empty((3, 3, n, P), dtype),
+                          "S": np.empty((3, 3, n, P), dtype), "tmp": np.empty((n, P), dtype),
+                          "tr_A": np.empty((n, P), dtype), "tr_E": np.empty((n, P), dtype)}
+        return cache[key]
+
+    def _first_pk_nonlinear(self, G: np.ndarray, work: dict | None = None) -> np.ndarray:
         """For displacement gradients G (3, 3, n, P): F S - C eps, the nonlinear part of the first Piola-Kirchhoff
         stress, component by component on contiguous (n, P) planes into preallocated buffers (numpy's matmul loops
-        over tiny 3 x 3 products, and fresh temporaries of this size cost a page-mapping each):
+        over tiny 3 x 3 products), ``work`` (``_buffers``) or fresh ones; the result is work['A'] then:
 
             F S - C eps = mu A + lambda/2 tr(A) I + G S,  A = G^T G,  S = 2 mu (sym G + A/2) + lambda tr(...) I.
         """
         lmbda, mu = self.lmbda, self.mu
-        A = np.empty_like(G)
-        S = np.empty_like(G)
-        tmp = np.empty_like(G[0, 0])
+        if work is None:
+            work = {k: np.empty_like(G) for k in ("A", "S")}
+            work.update({k: np.empty_like(G[0, 0]) for k in ("tmp", "tr_A", "tr_E")})
+        A, S, tmp, tr_A, tr_E = work["A"], work["S"], work["tmp"], work["tr_A"], work["tr_E"]
         for i in range(3):
             for j in range(i, 3):
                 a = A[i, j]
@@ -131,11 +162,12 @@ class QuadratureForces:
                     a += tmp
                 if i != j:
                     A[j, i] = a                                  # A is symmetric
-        tr_A = A[0, 0] + A[1, 1]
+        np.add(A[0, 0], A[1, 1], out=tr_A)
         tr_A += A[2, 2]
-        tr_E = G[0, 0] + G[1, 1]
+        np.add(G[0, 0], G[1, 1], out=tr_E)
         tr_E += G[2, 2]
-        tr_E += 0.5 * tr_A
+        np.multiply(tr_A, 0.5, out=tmp)
+        tr_E += tmp
         tr_E *= lmbda
         tr_A *= 0.5 * lmbda
         for i in range(3):
@@ -171,20 +203,23 @@ class QuadratureForces:
         step = max(1, chunk // max(n, 1))
         if P > step:
             return np.hstack([self.evaluate(Q[:, k:k + step], linear, chunk) for k in range(0, P, step)])
-        G = (planes @ Q).reshape(3, 3, n, P)
         if linear:
+            G = (planes @ Q.astype(planes.dtype, copy=False)).reshape(3, 3, n, P)
             S = self.mu * (G + G.transpose(1, 0, 2, 3))
             tr = self.lmbda * (G[0, 0] + G[1, 1] + G[2, 2])
             for k in range(3):
                 S[k, k] += tr
-            return weighted @ S.reshape(9 * n, P)
-        return weighted @ self._first_pk_nonlinear(G).reshape(9 * n, P)
+            return (weighted @ S.reshape(9 * n, P)).astype(float, copy=False)
+        work = self._buffers(n, P, planes.dtype)
+        G = np.matmul(planes, Q.astype(planes.dtype, copy=False), out=work["G"]).reshape(3, 3, n, P)
+        return (weighted @ self._first_pk_nonlinear(G, work).reshape(9 * n, P)).astype(float, copy=False)
 
     def point_contributions(self, Q: np.ndarray) -> np.ndarray:
         """Each point's share of g~ (the summand of eq. 23 before the sum over points): (n, r, P) for Q (r, P)."""
         Q = np.asarray(Q, float).reshape(self.r, -1)
         n, P = self.H.shape[0], Q.shape[1]
-        planes, _ = self._planes
+        planes = self._planes[0] if self.precision == "double" else \
+            np.ascontiguousarray(self.H.transpose(2, 3, 0, 1)).reshape(9 * n, self.r)
         P1 = self._first_pk_nonlinear((planes @ Q).reshape(3, 3, n, P))          # (3, 3, n, P)
         Hw = (self.H * self.w[:, None, None, None]).reshape(n, self.r, 9)
         return Hw @ np.ascontiguousarray(P1.reshape(9, n, P).transpose(1, 0, 2))

@@ -29,6 +29,7 @@ __all__ = [
     "ReducedModel",
     "save_reduced_model",
     "load_reduced_model",
+    "with_force_precision",
     "solve_reduced_static",
     "CRITERIA",
 ]
@@ -213,6 +214,19 @@ class ReducedModel:
         return self.forces.evaluate(Q)
 
 
+def with_force_precision(model: ReducedModel, precision: str) -> ReducedModel:
+    """The model with its quadrature forces (exact or hyper-reduced) evaluated in ``precision``, 'double' or
+    'single'; the key changes with it (single: metadata 'force_precision'), so cached sweeps are not mixed up."""
+    if not isinstance(model.forces, QuadratureForces):
+        raise ValueError("force precision applies to quadrature forces (exact or hyper-reduced), not to "
+                         f"{type(model.forces).__name__}")
+    forces = model.forces.with_precision(precision)          # checks the name
+    metadata = {k: v for k, v in model.metadata.items() if k != "force_precision"}
+    if precision != "double":
+        metadata["force_precision"] = precision
+    return dataclasses.replace(model, forces=forces, metadata=metadata)
+
+
 def reduced_model_key(metadata: dict) -> str:
     """sha256 of the metadata (parameters, mesh signature, version) as canonical JSON."""
     return hashlib.sha256(json.dumps(metadata, sort_keys=True, default=str).encode()).hexdigest()[:24]
@@ -232,7 +246,7 @@ def save_reduced_model(model: ReducedModel, path: str | Path) -> Path:
         arrays.update(forces="polynomial", A=model.forces.A, B=model.forces.B)
     elif isinstance(model.forces, QuadratureForces):
         arrays.update(forces="quadrature", H=model.forces.H, w=model.forces.w,
-                      lame=np.array([model.forces.lmbda, model.forces.mu]))
+                      lame=np.array([model.forces.lmbda, model.forces.mu]), precision=model.forces.precision)
     else:
         arrays["forces"] = "none"
     tmp = path.with_name(path.name + ".tmp.npz")
@@ -264,7 +278,8 @@ def load_reduced_model(path: str | Path, expected_key: str | None = None) -> Red
     if kind == "polynomial":
         forces = PolynomialForces(arrays["A"], arrays["B"])
     elif kind == "quadrature":
-        forces = QuadratureForces(arrays["H"], arrays["w"], *arrays["lame"])
+        forces = QuadratureForces(arrays["H"], arrays["w"], *arrays["lame"],
+                                  precision=str(arrays.get("precision", "double")))
     return ReducedModel(M=arrays["M"], C=arrays["C"], K=arrays["K"], forces=forces,
                         boundary_dofs=arrays["boundary_dofs"], boundary_nodes=arrays["boundary_nodes"],
                         sizes=info["sizes"], md_pairs=arrays["md_pairs"], Phi=arrays.get("Phi"),

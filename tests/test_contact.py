@@ -9,6 +9,7 @@ import scipy.linalg
 from rotor37_rom.casing import Casing, casing_profile, contact_frames, ramp_rate
 from rotor37_rom.integrator import CentralDifference, SimulationDiverged, simulate, tangent_highest_frequency
 from rotor37_rom.nonlinear_forces import PolynomialForces
+from rotor37_rom.reduction import load_reduced_model, save_reduced_model, with_force_precision
 
 
 def test_casing_profile_and_ramp():
@@ -301,7 +302,7 @@ def test_bad_input(ci_rom):
         simulate(scheme, 1300.0, Casing())
 
 
-def test_point_cubature_trained_on_contact_states(ci_blade, ci_rom):
+def test_point_cubature_trained_on_contact_states(ci_blade, ci_rom, tmp_path):
     """Empirical cubature (single quadrature points, non-negative weights) trained on the states of a GNL contact
     run: it reproduces the exact reduced force on the states of a run at another speed, keeps K~ exact, and a
     contact run with it follows the exact one. Weights >= 0 keep the force the gradient of a sum of SVK point
@@ -341,5 +342,32 @@ def test_point_cubature_trained_on_contact_states(ci_blade, ci_rom):
     print(f"LE normal displacement, 20,000 steps at {speeds[1]:g} rad/s: largest deviation {dev:.1e} of its peak "
           f"(exact forces x (1 + {err_run:.1e}): {dev_scaled:.1e})")
     assert dev <= 3.0 * dev_scaled
+    # float32 evaluation of the same cubature: the nonlinear stress is formed from products of gradients (no
+    # cancellation against the linear part), so each point's term carries ~10 u (u = 2^-24 = 6e-8); the sums over
+    # r and over the 9 n terms add ~sqrt(K) u (probabilistic rounding, Higham & Mary 2019) of the absolute sum,
+    # which the cancellation |sum of |terms|| / |sum| scales (measured ~1 here: the points push the same way).
+    # Bound per state: 10 u sqrt(9 n) times that ratio (~2e-5; measured ~4e-7).
+    single = with_force_precision(hr, "single")
+    assert single.key != hr.key and single.forces.precision == "single"
+    g_double = hr.forces.evaluate(Q_held)
+    g_single = single.forces.evaluate(Q_held)
+    assert g_single.dtype == np.float64
+    some = Q_held[:, :3]
+    assert np.array_equal(single.forces.point_contributions(some), hr.forces.point_contributions(some))  # training
+    terms = np.abs(hr.forces.point_contributions(Q_held)).sum(axis=0)               # (r, n_states)
+    cancel = np.linalg.norm(terms, axis=0) / np.linalg.norm(g_double, axis=0)
+    u = float(np.finfo(np.float32).eps) / 2
+    dev32 = np.linalg.norm(g_single - g_double, axis=0) / np.linalg.norm(g_double, axis=0)
+    bound = 10 * u * np.sqrt(9 * rep["points"]) * cancel
+    print(f"float32 cubature: force deviation from float64 median {np.median(dev32):.1e} max {dev32.max():.1e} "
+          f"(cancellation up to {cancel.max():.0f}, bound {bound.min():.1e}-{bound.max():.1e})")
+    assert np.all(dev32 <= bound) and np.all(dev32 > 0)
+    assert dev32.max() <= 1e-2 * np.median(err)                   # far below the cubature's own error
+    loaded = load_reduced_model(save_reduced_model(single, tmp_path / "single.npz"), expected_key=single.key)
+    assert loaded.forces.precision == "single" and np.array_equal(loaded.forces.evaluate(Q_held), g_single)
+    with pytest.raises(ValueError, match="precision"):
+        with_force_precision(hr, "half")
+    with pytest.raises(ValueError, match="quadrature forces"):
+        with_force_precision(ci_rom, "single")
     with pytest.raises(ValueError, match="Q_train"):
         hyper_reduce(ci_blade, ci_rom, Q_train[:-1])

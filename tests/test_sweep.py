@@ -200,10 +200,31 @@ def test_contact_map_cubature_flag(ci_rom, tmp_path):
     dev = np.abs(np.asarray(got["nfrc"]) - exact) / exact.max()
     print(f"cubature {got['cubature']['points']} points: NFRC {got['nfrc']} vs exact {exact.tolist()}")
     assert dev.max() <= 0.05 and dev.max() > 1e-10       # close, and not the exact tensors
+    # again in float32: the trained cubature is reused (no retraining), the sweep is new (its model key differs), and
+    # float32 rounding (~1e-6 of the force, amplified ~10x by the contacts) stays far below the cubature's own error
     again = subprocess.run(base + ["--speeds", "1400", "1450", "2", "--revolutions", "0.5", "--gnl", "on", "--mu", "0",
-                                   "--cubature", "1e-3"], env=env, capture_output=True, text=True, timeout=900)
-    assert again.returncode == 0 and "cubature: reusing" in again.stdout            # a restart does not retrain
-    rerun = json.loads((tmp_path / "cub" / "summary.json").read_text())["runs"]["GNL, cubature 0.001"]
-    assert rerun["nfrc"] == got["nfrc"]
+                                   "--cubature", "1e-3", "--precision", "single"], env=env, capture_output=True,
+                           text=True, timeout=900)
+    assert again.returncode == 0 and "cubature: reusing" in again.stdout, again.stderr[-2000:]
+    single = json.loads((tmp_path / "cub" / "summary.json").read_text())["runs"]["GNL, cubature 0.001, single"]
+    assert single["force_precision"] == "single" and single["cubature"] == got["cubature"]
+    dev_single = np.abs(np.asarray(single["nfrc"]) - got["nfrc"]) / exact.max()
+    print(f"float32 cubature: NFRC {single['nfrc']}, {dev_single.max():.1e} of the peak from float64")
+    assert dev_single.max() <= 1e-4 and dev_single.max() <= 0.1 * dev.max()
+    # under MPI rank 0 trains the same cubature (deterministic selection) and the two ranks split the speeds: the
+    # serial map to the batching round-off (1e-8 over 1e4 steps, amplified ~10x by the contacts)
+    mpi_env = dict(env, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+                   OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1")
+    mpi = subprocess.run(["mpirun", "-n", "2"] + base[:-1] + [str(tmp_path / "cub_mpi"), "--speeds", "1400", "1450",
+                                                              "2", "--revolutions", "0.5", "--gnl", "on", "--mu", "0",
+                                                              "--cubature", "1e-3"],
+                         env=mpi_env, capture_output=True, text=True, timeout=900)
+    assert mpi.returncode == 0, mpi.stderr[-2000:]
+    got_mpi = json.loads((tmp_path / "cub_mpi" / "summary.json").read_text())["runs"]["GNL, cubature 0.001"]
+    assert got_mpi["cubature"]["points"] == got["cubature"]["points"]
+    np.testing.assert_allclose(got_mpi["nfrc"], got["nfrc"], rtol=1e-6)
     bad = subprocess.run(base + ["--cubature", "0"], env=env, capture_output=True, text=True, timeout=600)
     assert bad.returncode == 2 and bad.stderr.strip().splitlines() == ["error: --cubature must be in (0, 1), got 0.0"]
+    bad = subprocess.run(base + ["--precision", "single"], env=env, capture_output=True, text=True, timeout=600)
+    assert bad.returncode == 2 and bad.stderr.strip().splitlines() == [
+        "error: --precision single needs --cubature (the exact cubic tensors are evaluated in double)"]
