@@ -10,7 +10,7 @@ visit, not on smooth lifted modes.
    plus its 5 largest. Held-out: other instants of the same runs, and the 24 largest states of the validation
    reference (other speeds).
 2. Selection at each tolerance (point level; cell level at the first for comparison): columns, points, training
-   time, force errors on the held-out states.
+   time, force errors on the held-out states; each point selection also evaluated in float32 (``--single``).
 3. Validation: the NFRC (max |u_LE| over the last revolution) at the 11 speeds of bench_contact_convergence against
    its GNL reference (exact tensors, h = 0.5 h_crit), read from results/bench_contact_convergence.json when its
    settings match, else run here. Floors: the reference at h/2, and the exact model with its nonlinear forces scaled

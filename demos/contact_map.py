@@ -8,8 +8,9 @@
 #     python demos/contact_map.py --preset ci --speeds 1200 1600 21 --revolutions 20          # minutes
 #     python demos/contact_map.py --preset coarse --speeds 1200 1600 201 --revolutions 200      # paper scale (hours)
 #     mpirun -n 2 python demos/contact_map.py --model results/contact_map/rom.npz --speeds 1200 1600 21
-#     python demos/contact_map.py --gnl on --cubature 1e-4 --frequency-cap 120 --mu 0 --speeds 1200 1600 100 \
-#         --revolutions 200 --batch 100      # the GNL headline map, ~3 h on 2 cores (bench_contact_ecsw)
+#     OPENBLAS_NUM_THREADS=1 mpirun -n 2 python demos/contact_map.py --model results/contact_map/rom.npz --gnl on \
+#         --cubature 1e-4 --precision single --frequency-cap 120 --mu 0 --speeds 1200 1600 100 --revolutions 200 \
+#         --batch 50 --out results/headline     # the GNL headline map on 2 cores (README: measured wall time)
 
 # +
 from __future__ import annotations
@@ -140,6 +141,8 @@ def main(argv=None) -> int:
     parser.add_argument("--precision", choices=["double", "single"], default="double",
                         help="with --cubature: arithmetic of the cubature forces (single: float32, ~3x faster, "
                              "differs from double by ~1e-6 of the force)")
+    parser.add_argument("--retry-diverged", type=int, default=0, metavar="N",
+                        help="run the speeds that blew up again with the step halved, up to N times")
     parser.add_argument("--mu", type=float, default=0.15)
     parser.add_argument("--c0", type=float, default=0.5e-3)
     parser.add_argument("--hb", type=float, default=0.625e-3)
@@ -169,6 +172,8 @@ def main(argv=None) -> int:
             raise ValueError(f"--cubature must be in (0, 1), got {args.cubature}")
         if args.precision != "double" and args.cubature is None:
             raise ValueError("--precision single needs --cubature (the exact cubic tensors are evaluated in double)")
+        if not 0 <= args.retry_diverged <= 4:
+            raise ValueError(f"--retry-diverged must be in 0..4, got {args.retry_diverged}")
         if not 0 < args.tangent_safety <= 1:
             raise ValueError(f"--tangent-safety must be in (0, 1], got {args.tangent_safety}")
         spec = SweepSpec(revolutions=args.revolutions, casing=casing, batch_size=args.batch)
@@ -222,9 +227,24 @@ def main(argv=None) -> int:
         t0 = time.perf_counter()
         folder = run_sweep(scheme, speeds, spec, out / "sweeps", comm=comm, progress=not args.quiet)
         wall = time.perf_counter() - t0
+        results = [r for r in load_sweep(folder) if np.isclose(float(r["omega"]), speeds).any()]
+        # speeds that blew up are run again with the step halved (each retry is a sweep of its own: cached, resumable)
+        retried = {}
+        for k in range(1, args.retry_diverged + 1):
+            bad = np.array([float(r["omega"]) for r in results if int(r["diverged_step"]) >= 0])
+            if bad.size == 0:
+                break
+            h_k = scheme.h / 2 ** k
+            if rank == 0:
+                print(f"{bad.size} speeds blew up: again with h = {h_k:.3g} s")
+            retry = CentralDifference(run_model, nonlinear=gnl, h=h_k, frequency_cap=cap)
+            again = {float(r["omega"]): r for r in load_sweep(run_sweep(retry, bad, spec, out / "sweeps", comm=comm,
+                                                                        progress=not args.quiet))}
+            results = [again.get(float(r["omega"]), r) if int(r["diverged_step"]) >= 0 else r for r in results]
+            retried.update({w: h_k for w in bad.tolist()})
+        wall = time.perf_counter() - t0
         if rank != 0:
             continue
-        results = [r for r in load_sweep(folder) if np.isclose(float(r["omega"]), speeds).any()]
         imap = interaction_map(results)
         from rotor37_rom.charts import plot_interaction_map, plot_nfrc, plot_time_history
 
@@ -244,6 +264,7 @@ def main(argv=None) -> int:
                "force_precision": getattr(run_model.forces, "precision", "double"), "peak_speed": peak,
                "peak_amplitude": float(np.nanmax(imap.nfrc)),
                "diverged": imap.speeds[imap.diverged].tolist(), "wall_s": wall,
+               "retried": {f"{w:g}": hk for w, hk in retried.items()},
                "rev_per_s": revs / wall if wall > 1 else None, "nfrc": imap.nfrc.tolist(),
                "speeds": imap.speeds.tolist(), "contact_checks": {
                    "max_penetration": max(float(r["max_penetration"]) for r in results),
@@ -252,7 +273,7 @@ def main(argv=None) -> int:
         summary["runs"][label] = run
         print(f"{label:>7}: h = {scheme.h:.3g} s (2/omega_max = {scheme.h_crit:.3g}), largest response at "
               f"{peak:.0f} rad/s ({run['peak_amplitude'] * 1e3:.3f} mm), linear 1B/EO4 {lin_res:.0f} rad/s; "
-              f"{len(imap.diverged.nonzero()[0])} diverged; {wall:.0f} s")
+              f"{len(imap.diverged.nonzero()[0])} diverged ({len(retried)} run again with a smaller step); {wall:.0f} s")
         if args.continuation > 0:
             curves = {}
             for a, b, name, style in ((start, stop, "up", "+"), (stop, start, "down", "o")):

@@ -319,7 +319,8 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         phase: angle (rad) the rotor has turned through before t = 0 (continuation: the casing must not jump).
         on_blowup: 'raise' (SimulationDiverged naming the step) or 'flag' (stop that simulation, mark it).
         blowup_limit: largest admissible boundary displacement (m) before a run counts as blown up.
-        progress: called with the number of steps done since the last call; on_finish(p, record dict) when a
+        progress: called with the simulation-steps done since the last call (steps x running simulations: the
+            batch's share of ``n_steps``.sum()); on_finish(p, record dict) when a
             simulation ends; state/checkpoint: resume from / save the loop state every ``checkpoint_seconds``.
     """
     omega = np.atleast_1d(np.asarray(omega, float)).ravel()
@@ -402,6 +403,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         n_max = int(steps.max())
         ends = set(steps.tolist())
         lam_now = np.zeros((nc, P))
+        stepped = 0                                     # simulation-steps since the last progress call
         while st["n"] < n_max and active.size:
             n = st["n"]
             t1 = (n + 1) * h
@@ -440,6 +442,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
             Qp[:, active] = Qa
             Q[:, active] = Qn
             st["n"] = n = n + 1
+            stepped += active.size
             # records
             if n % record_every == 0:
                 i = n // record_every
@@ -473,8 +476,9 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                         on_finish(p, _record(st, p, steps, h, record_every, omega))
                 if finished or bad.any():
                     active = np.nonzero(~st["done"])[0]
-            if progress is not None and n % check_every == 0:
-                progress(check_every)
+            if progress is not None and (n % check_every == 0 or not active.size):
+                progress(stepped)
+                stepped = 0
             if checkpoint is not None and time.perf_counter() - last_ckpt > checkpoint_seconds:
                 checkpoint(st)
                 last_ckpt = time.perf_counter()

@@ -110,7 +110,8 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
         try:
             from tqdm import tqdm
             total = int(sum(np.ceil(spec.revolutions * 2 * np.pi / w / scheme.h) for b in batches for w in b))
-            bar = tqdm(total=total * size, unit="step", unit_scale=True, desc=f"sweep ({len(todo)} speeds)")
+            # rank 0's simulation-steps, scaled by the ranks (they run equal shares)
+            bar = tqdm(total=total * size, unit="sim-step", unit_scale=True, desc=f"sweep ({len(todo)} speeds)")
         except ImportError:
             bar = None
     for batch in batches:
@@ -130,7 +131,8 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
 
         simulate(scheme, batch, spec.casing, revolutions=spec.revolutions, record_every=record_every,
                  on_blowup="flag", on_finish=on_finish, state=state, checkpoint=save_state,
-                 checkpoint_seconds=checkpoint_seconds, progress=(bar.update if bar is not None else None))
+                 checkpoint_seconds=checkpoint_seconds,
+                 progress=(None if bar is None else lambda k: bar.update(k * size)))
         ckpt.unlink(missing_ok=True)
     if bar is not None:
         bar.close()

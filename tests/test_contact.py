@@ -265,8 +265,9 @@ def test_batches_equal_one_by_one(ci_rom, P):
     speeds = np.linspace(1300.0, 1600.0, P)
     casings = [Casing(c0=c0, mu=mu, h_b=c0 + 0.125e-3) for c0, mu in
                zip(rng.uniform(0.45e-3, 0.55e-3, P), rng.uniform(0.0, 0.2, P))]
-    batch = simulate(scheme, speeds, casings, n_steps=10_000, record_every=10)
-    assert batch.contact_steps.min() > 0
+    done = []                                   # progress reports simulation-steps (the sweep's progress bar)
+    batch = simulate(scheme, speeds, casings, n_steps=10_000, record_every=10, progress=done.append)
+    assert batch.contact_steps.min() > 0 and sum(done) == batch.n_steps.sum() == 10_000 * P
     picks = range(P) if P <= 8 else rng.choice(P, 10, replace=False)
     for p in picks:
         one = simulate(scheme, speeds[p], casings[p], n_steps=10_000, record_every=10)
