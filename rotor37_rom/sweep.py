@@ -20,7 +20,8 @@ import numpy as np
 from rotor37_rom.casing import Casing
 from rotor37_rom.integrator import CentralDifference, simulate
 
-__all__ = ["SweepSpec", "run_sweep", "load_sweep", "interaction_map", "InteractionMap", "last_revolution_max",
+__all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "interaction_map", "InteractionMap",
+           "last_revolution_max",
            "continuation", "ContinuationPoint", "is_steady"]
 
 LOG = logging.getLogger(__name__)
@@ -139,6 +140,33 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
     if comm is not None:
         comm.Barrier()
     return folder
+
+
+def rerun_diverged(scheme: CentralDifference, results: Sequence[dict], spec: SweepSpec, out: str | Path,
+                   retries: int = 1, comm=None, progress: bool = True) -> tuple[list[dict], dict]:
+    """Run the speeds of ``results`` (``load_sweep``) that blew up again with the step halved, up to ``retries``
+    times; each retry is a sweep of its own under ``out`` (cached, resumable, distributed like ``run_sweep``).
+
+    Returns the results with the retried speeds replaced, and {speed: step of its last retry}. A speed still blown up
+    after the last retry stays marked (``diverged_step`` >= 0)."""
+    if not 0 <= retries <= 8:
+        raise ValueError(f"retries must be in 0..8, got {retries}")
+    results, retried = list(results), {}
+    for k in range(1, retries + 1):
+        bad = np.array([float(r["omega"]) for r in results if int(r["diverged_step"]) >= 0])
+        if bad.size == 0:
+            break
+        h = scheme.h / 2 ** k
+        if progress and (comm is None or comm.rank == 0):
+            LOG.warning("%d speeds blew up: again with h = %.3g s", bad.size, h)
+        smaller = CentralDifference(scheme.model, h=h, nonlinear=scheme.nonlinear, force=True,
+                                    damping=bool(np.any(scheme.C)), massless_boundary=scheme.massless,
+                                    frequency_cap=scheme.frequency_cap)
+        again = {float(r["omega"]): r for r in load_sweep(run_sweep(smaller, bad, spec, out, comm=comm,
+                                                                    progress=progress))}
+        results = [again.get(float(r["omega"]), r) if int(r["diverged_step"]) >= 0 else r for r in results]
+        retried.update({w: h for w in bad.tolist()})
+    return results, retried
 
 
 def _save_state(path: Path, st: dict, speeds: np.ndarray) -> None:

@@ -13,7 +13,7 @@ from rotor37_rom import sweep as sweep_mod
 from rotor37_rom.casing import Casing
 from rotor37_rom.integrator import CentralDifference
 from rotor37_rom.reduction import save_reduced_model
-from rotor37_rom.sweep import SweepSpec, interaction_map, is_steady, load_sweep, run_sweep
+from rotor37_rom.sweep import SweepSpec, interaction_map, is_steady, load_sweep, rerun_diverged, run_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEEDS = np.array([1300.0, 1600.0])
@@ -228,3 +228,26 @@ def test_contact_map_cubature_flag(ci_rom, tmp_path):
     bad = subprocess.run(base + ["--precision", "single"], env=env, capture_output=True, text=True, timeout=600)
     assert bad.returncode == 2 and bad.stderr.strip().splitlines() == [
         "error: --precision single needs --cubature (the exact cubic tensors are evaluated in double)"]
+
+
+def test_blown_up_speeds_run_again_with_half_the_step(ci_rom, tmp_path):
+    """rerun_diverged: at 1.05 h_crit (forced) the unstable mode grows ~1.9x per step once the casing excites it, so
+    both speeds blow up; halving the step (0.525 h_crit) makes them stable, and they then equal a plain sweep at that
+    step. Speeds that did not blow up are left alone; the retries are sweeps of their own (a second call recomputes
+    nothing)."""
+    spec = SweepSpec(revolutions=0.3, casing=Casing(mu=0.0))
+    ref = CentralDifference(ci_rom, nonlinear=False, safety=0.5)
+    fast = CentralDifference(ci_rom, nonlinear=False, h=1.05 * ref.h_crit, force=True)
+    results = load_sweep(run_sweep(fast, SPEEDS, spec, tmp_path / "sweeps", progress=False))
+    assert all(int(r["diverged_step"]) >= 0 for r in results)
+    fixed, retried = rerun_diverged(fast, results, spec, tmp_path / "sweeps", retries=2, progress=False)
+    assert retried == {w: fast.h / 2 for w in SPEEDS.tolist()}                  # one retry was enough
+    assert all(int(r["diverged_step"]) < 0 for r in fixed)
+    plain = load_sweep(run_sweep(CentralDifference(ci_rom, nonlinear=False, h=fast.h / 2), SPEEDS, spec,
+                                 tmp_path / "plain", progress=False))
+    for a, b in zip(fixed, plain):
+        assert float(a["omega"]) == float(b["omega"]) and np.array_equal(a["u_r"], b["u_r"])
+    again, retried_again = rerun_diverged(fast, fixed, spec, tmp_path / "sweeps", retries=2, progress=False)
+    assert retried_again == {} and all(a is b for a, b in zip(again, fixed))
+    with pytest.raises(ValueError, match="retries"):
+        rerun_diverged(fast, results, spec, tmp_path / "sweeps", retries=-1)
