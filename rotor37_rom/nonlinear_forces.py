@@ -79,6 +79,7 @@ def _apply_C(V: np.ndarray, lmbda: float, mu: float) -> np.ndarray:
 
 
 _PRECISIONS = {"double": np.float64, "single": np.float32}
+_KEEP_BUFFERS = 64 << 20        # bytes of work arrays a QuadratureForces keeps between evaluations (few points)
 
 
 def _batched_product(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
@@ -195,8 +196,9 @@ class QuadratureForces:
     def evaluate(self, Q: np.ndarray, linear: bool = False, chunk: int = 1 << 22) -> np.ndarray:
         """Nonlinear reduced force g~(q) (eq. 23) for a batch Q (r, P) -> (r, P); with linear=True, K~ q instead.
 
-        Two GEMMs with the cached gradient planes (gradients, projection) around ~60 flops per point and state;
-        states are taken in chunks of about ``chunk`` / n_points to bound the temporaries."""
+        Two GEMMs with the cached gradient planes (gradients, projection) around ~60 flops per point and state, in
+        ``precision``; the result is float64. States are taken in chunks of about ``chunk`` / n_points to bound the
+        temporaries; with few points (the integrator's cubature) the work arrays are kept for the next call."""
         Q = np.asarray(Q, float).reshape(self.r, -1)
         n, P = self.H.shape[0], Q.shape[1]
         planes, weighted = self._planes
@@ -210,8 +212,12 @@ class QuadratureForces:
             for k in range(3):
                 S[k, k] += tr
             return (weighted @ S.reshape(9 * n, P)).astype(float, copy=False)
+        Q = Q.astype(planes.dtype, copy=False)
+        if 27 * n * P * planes.itemsize > _KEEP_BUFFERS:     # e.g. all points of a mesh: temporaries, not kept
+            G = (planes @ Q).reshape(3, 3, n, P)
+            return (weighted @ self._first_pk_nonlinear(G).reshape(9 * n, P)).astype(float, copy=False)
         work = self._buffers(n, P, planes.dtype)
-        G = np.matmul(planes, Q.astype(planes.dtype, copy=False), out=work["G"]).reshape(3, 3, n, P)
+        G = np.matmul(planes, Q, out=work["G"]).reshape(3, 3, n, P)
         return (weighted @ self._first_pk_nonlinear(G, work).reshape(9 * n, P)).astype(float, copy=False)
 
     def point_contributions(self, Q: np.ndarray) -> np.ndarray:

@@ -47,7 +47,10 @@ class SweepSpec:
 
 
 def _key(scheme: CentralDifference, spec: SweepSpec) -> str:
-    info = {"model": scheme.model.key, "h": scheme.h, "nonlinear": scheme.nonlinear, "massless": scheme.massless,
+    # h to 12 digits: the step from omega_max differs in its last bit with the BLAS thread count (mpirun ranks run
+    # one thread each), and those are the same run
+    info = {"model": scheme.model.key, "h": float(f"{scheme.h:.12g}"), "nonlinear": scheme.nonlinear,
+            "massless": scheme.massless,
             "spec": dataclasses.asdict(spec) | {"batch_size": None}}
     if scheme.frequency_cap is not None:                 # absent from older keys: their results stay valid
         info["frequency_cap"] = scheme.frequency_cap
