@@ -124,11 +124,15 @@ class QuadratureForces:
         """The basis gradients as (9 n, r) with rows ordered (i, j, point), so that each component of a batch of
         displacement gradients is a contiguous (n, P) plane, and the weighted transpose (r, 9 n) that projects,
         both in the evaluation precision."""
-        n = self.H.shape[0]
         dtype = _PRECISIONS[self.precision]
-        planes = np.ascontiguousarray(self.H.transpose(2, 3, 0, 1), dtype=dtype).reshape(9 * n, self.r)
-        weighted = (self.H * self.w[:, None, None, None]).transpose(2, 3, 0, 1).reshape(9 * n, self.r)
-        return planes, np.ascontiguousarray(weighted.T, dtype=dtype)
+        weighted = self._gradient_planes(self.H * self.w[:, None, None, None], dtype)
+        return self._gradient_planes(self.H, dtype), np.ascontiguousarray(weighted.T)
+
+    @staticmethod
+    def _gradient_planes(H: np.ndarray, dtype=np.float64) -> np.ndarray:
+        """(n, r, 3, 3) -> (9 n, r), rows ordered (i, j, point)."""
+        n, r = H.shape[:2]
+        return np.ascontiguousarray(H.transpose(2, 3, 0, 1), dtype=dtype).reshape(9 * n, r)
 
     def _buffers(self, n: int, P: int, dtype) -> dict:
         """Work arrays for a batch of P states, kept between calls with the same shape: fresh arrays of this size
@@ -205,27 +209,24 @@ class QuadratureForces:
         step = max(1, chunk // max(n, 1))
         if P > step:
             return np.hstack([self.evaluate(Q[:, k:k + step], linear, chunk) for k in range(0, P, step)])
+        Q = Q.astype(planes.dtype, copy=False)
         if linear:
-            G = (planes @ Q.astype(planes.dtype, copy=False)).reshape(3, 3, n, P)
+            G = (planes @ Q).reshape(3, 3, n, P)
             S = self.mu * (G + G.transpose(1, 0, 2, 3))
             tr = self.lmbda * (G[0, 0] + G[1, 1] + G[2, 2])
             for k in range(3):
                 S[k, k] += tr
             return (weighted @ S.reshape(9 * n, P)).astype(float, copy=False)
-        Q = Q.astype(planes.dtype, copy=False)
-        if 27 * n * P * planes.itemsize > _KEEP_BUFFERS:     # e.g. all points of a mesh: temporaries, not kept
-            G = (planes @ Q).reshape(3, 3, n, P)
-            return (weighted @ self._first_pk_nonlinear(G).reshape(9 * n, P)).astype(float, copy=False)
-        work = self._buffers(n, P, planes.dtype)
-        G = np.matmul(planes, Q, out=work["G"]).reshape(3, 3, n, P)
+        # work arrays kept between calls for few points (the integrator's cubature); temporaries for all of a mesh's
+        work = self._buffers(n, P, planes.dtype) if 27 * n * P * planes.itemsize <= _KEEP_BUFFERS else None
+        G = (planes @ Q if work is None else np.matmul(planes, Q, out=work["G"])).reshape(3, 3, n, P)
         return (weighted @ self._first_pk_nonlinear(G, work).reshape(9 * n, P)).astype(float, copy=False)
 
     def point_contributions(self, Q: np.ndarray) -> np.ndarray:
         """Each point's share of g~ (the summand of eq. 23 before the sum over points): (n, r, P) for Q (r, P)."""
         Q = np.asarray(Q, float).reshape(self.r, -1)
         n, P = self.H.shape[0], Q.shape[1]
-        planes = self._planes[0] if self.precision == "double" else \
-            np.ascontiguousarray(self.H.transpose(2, 3, 0, 1)).reshape(9 * n, self.r)
+        planes = self._planes[0] if self.precision == "double" else self._gradient_planes(self.H)
         P1 = self._first_pk_nonlinear((planes @ Q).reshape(3, 3, n, P))          # (3, 3, n, P)
         Hw = (self.H * self.w[:, None, None, None]).reshape(n, self.r, 9)
         return Hw @ np.ascontiguousarray(P1.reshape(9, n, P).transpose(1, 0, 2))
