@@ -221,12 +221,18 @@ def main(argv=None) -> int:
             print(f"error: {exc}", file=sys.stderr)
             return 2
         cub = gnl and args.cubature
-        label = ("GNL" if gnl else "no GNL") + (f", cubature {args.cubature:g}" if cub else "") \
-            + (", single" if cub and args.precision == "single" else "") \
-            + ("" if cap is None else f", cap {args.frequency_cap:g} kHz")
+        parts = [("GNL", "gnl") if gnl else ("no GNL", "linear")]      # (chart label, file tag) of each setting
+        if cub:
+            parts.append((f"cubature {args.cubature:g}", f"cub{args.cubature:g}"))
+            if args.precision == "single":
+                parts.append(("single", "f32"))
+        if cap is not None:
+            parts.append((f"cap {args.frequency_cap:g} kHz", f"cap{args.frequency_cap:g}k"))
+        label, tag = ", ".join(p[0] for p in parts), "_".join(p[1] for p in parts)
         t0 = time.perf_counter()
         folder = run_sweep(scheme, speeds, spec, out / "sweeps", comm=comm, progress=not args.quiet)
-        results = [r for r in load_sweep(folder) if np.isclose(float(r["omega"]), speeds).any()]
+        # rank 0 reads the records (~1 GB for the 100-speed headline map); rerun_diverged tells the others
+        results = [r for r in load_sweep(folder) if np.isclose(float(r["omega"]), speeds).any()] if rank == 0 else []
         results, retried = rerun_diverged(scheme, results, spec, out / "sweeps", args.retry_diverged, comm=comm,
                                           progress=not args.quiet)
         wall = time.perf_counter() - t0
@@ -235,9 +241,6 @@ def main(argv=None) -> int:
         imap = interaction_map(results)
         from rotor37_rom.charts import plot_interaction_map, plot_nfrc, plot_time_history
 
-        tag = ("gnl" if gnl else "linear") + (f"_cub{args.cubature:g}" if cub else "") \
-            + ("_f32" if cub and args.precision == "single" else "") \
-            + ("" if cap is None else f"_cap{args.frequency_cap:g}k")
         plot_interaction_map(imap, out / f"interaction_map_{tag}.png", eigenfrequencies=omega, linear_resonance=lin_res,
                              title=f"node LE, {label}, r = {model.r}, {args.revolutions:g} rev., h = {scheme.h:.3g} s")
         ok = np.isfinite(imap.nfrc)

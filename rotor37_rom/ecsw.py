@@ -58,9 +58,11 @@ def trajectory_states(runs, r_b: int, n_per_run: int = 25, n_largest: int = 5, n
             continue
         amp = np.abs(q[:r_b]).max(axis=0)
         spread = np.linspace(q.shape[1] // 10, q.shape[1] - 1, n_per_run).astype(int)
-        train.append(q[:, np.unique(np.r_[spread, np.argsort(amp)[::-1][:n_largest]])])
-        if n_held:
-            held.append(q[:, rng.choice(q.shape[1], min(n_held, q.shape[1]), replace=False)])
+        picked = np.unique(np.r_[spread, np.argsort(amp)[::-1][:n_largest]])
+        train.append(q[:, picked])
+        others = np.setdiff1d(np.arange(q.shape[1]), picked)      # held-out instants are never training ones
+        if n_held and others.size:
+            held.append(q[:, rng.choice(others, min(n_held, others.size), replace=False)])
     if not train:
         raise ValueError("trajectory_states: no finite recorded state in the runs")
     r = train[0].shape[0]

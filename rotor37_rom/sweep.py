@@ -151,12 +151,17 @@ def rerun_diverged(scheme: CentralDifference, results: Sequence[dict], spec: Swe
     times; each retry is a sweep of its own under ``out`` (cached, resumable, distributed like ``run_sweep``).
 
     Returns the results with the retried speeds replaced, and {speed: step of its last retry}. A speed still blown up
-    after the last retry stays marked (``diverged_step`` >= 0)."""
+    after the last retry stays marked (``diverged_step`` >= 0). Under MPI only rank 0 needs ``results`` (the records
+    of a 100-speed map take ~1 GB): it tells the others which speeds to rerun, and only it loads the reruns; the
+    other ranks get back their ``results`` unchanged (e.g. [])."""
     if not 0 <= retries <= 8:
         raise ValueError(f"retries must be in 0..8, got {retries}")
     results, retried = list(results), {}
+    root = comm is None or comm.rank == 0
     for k in range(1, retries + 1):
-        bad = np.array([float(r["omega"]) for r in results if int(r["diverged_step"]) >= 0])
+        bad = np.array([float(r["omega"]) for r in results if int(r["diverged_step"]) >= 0]) if root else None
+        if comm is not None:
+            bad = comm.bcast(bad, root=0)
         if bad.size == 0:
             break
         h = scheme.h / 2 ** k
@@ -165,9 +170,10 @@ def rerun_diverged(scheme: CentralDifference, results: Sequence[dict], spec: Swe
         smaller = CentralDifference(scheme.model, h=h, nonlinear=scheme.nonlinear, force=True,
                                     damping=bool(np.any(scheme.C)), massless_boundary=scheme.massless,
                                     frequency_cap=scheme.frequency_cap)
-        again = {float(r["omega"]): r for r in load_sweep(run_sweep(smaller, bad, spec, out, comm=comm,
-                                                                    progress=progress))}
-        results = [again.get(float(r["omega"]), r) if int(r["diverged_step"]) >= 0 else r for r in results]
+        folder = run_sweep(smaller, bad, spec, out, comm=comm, progress=progress)
+        if root:
+            again = {float(r["omega"]): r for r in load_sweep(folder)}
+            results = [again.get(float(r["omega"]), r) if int(r["diverged_step"]) >= 0 else r for r in results]
         retried.update({w: h for w in bad.tolist()})
     return results, retried
 

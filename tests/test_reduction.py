@@ -154,6 +154,28 @@ def test_selection_weights():
     assert np.all(np.diff(vals) <= 0) and vals[0] == W[np.triu_indices(5)].max()
 
 
+def test_trajectory_states_hold_out_other_instants():
+    """Training instants: n_per_run spread after the first tenth plus the n_largest of largest boundary motion;
+    held-out instants are other ones (never a training column); NaN instants (a blow-up) are dropped."""
+    from rotor37_rom.ecsw import trajectory_states
+
+    rng = np.random.default_rng(3)
+    runs = [rng.standard_normal((6, 120)) * np.linspace(0.1, 1.0, 120), rng.standard_normal((6, 40))]
+    runs[1][:, 30:] = np.nan
+    train, held = trajectory_states(runs, r_b=2, n_per_run=10, n_largest=3, n_held=25)
+    cols = lambda Q: {tuple(c) for c in Q.T}                              # noqa: E731
+    assert not cols(train) & cols(held)
+    n1 = trajectory_states([runs[1]], r_b=2, n_per_run=10, n_largest=3)[0].shape[1]
+    assert held.shape[1] == 25 + (30 - n1)                                # run 1 has only 30 - n1 other instants
+    first = runs[0][:, :12]                                               # first tenth: only if among the largest
+    amp = np.abs(runs[0][:2]).max(axis=0)
+    largest = set(np.argsort(amp)[::-1][:3].tolist())
+    assert all((k in largest) == (tuple(first[:, k]) in cols(train)) for k in range(12))
+    assert np.isfinite(train).all() and np.isfinite(held).all()
+    with pytest.raises(ValueError, match="no finite"):
+        trajectory_states([np.full((6, 5), np.nan)], r_b=2)
+
+
 def test_save_load_and_refusals(rom, tmp_path):
     model, _ = rom
     path = save_reduced_model(model, tmp_path / "rom.npz")

@@ -251,3 +251,38 @@ def test_blown_up_speeds_run_again_with_half_the_step(ci_rom, tmp_path):
     assert retried_again == {} and all(a is b for a, b in zip(again, fixed))
     with pytest.raises(ValueError, match="retries"):
         rerun_diverged(fast, results, spec, tmp_path / "sweeps", retries=-1)
+    # under mpirun -n 2 only rank 0 holds the records: it tells rank 1 which speeds to rerun, the ranks share the
+    # rerun, rank 0 gets the serial result, rank 1 its own (empty) list back
+    model_path = save_reduced_model(ci_rom, tmp_path / "rom.npz")
+    script = (
+        "import sys, json, numpy as np\n"
+        "from mpi4py import MPI\n"
+        "from rotor37_rom.casing import Casing\n"
+        "from rotor37_rom.integrator import CentralDifference\n"
+        "from rotor37_rom.reduction import load_reduced_model\n"
+        "from rotor37_rom.sweep import SweepSpec, load_sweep, rerun_diverged, run_sweep\n"
+        "comm, out = MPI.COMM_WORLD, sys.argv[2]\n"
+        "m = load_reduced_model(sys.argv[1])\n"
+        "fast = CentralDifference(m, nonlinear=False, h=1.05 * 2 / CentralDifference(m).omega_max, force=True)\n"
+        "spec = SweepSpec(revolutions=0.3, casing=Casing(mu=0.0))\n"
+        f"folder = run_sweep(fast, {SPEEDS.tolist()}, spec, out, comm=comm, progress=False)\n"
+        "results = load_sweep(folder) if comm.rank == 0 else []\n"
+        "fixed, retried = rerun_diverged(fast, results, spec, out, retries=2, comm=comm, progress=False)\n"
+        "info = {'rank': comm.rank, 'n': len(fixed), 'retried': sorted(retried), 'h': fast.h}\n"
+        "if comm.rank == 0:\n"
+        "    np.savez(out + '/fixed.npz', *[r['u_r'] for r in fixed])\n"
+        "    info['diverged'] = [int(r['diverged_step']) for r in fixed]\n"
+        "print(json.dumps(info))\n")
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1")
+    run = subprocess.run(["mpirun", "-n", "2", sys.executable, "-c", script, str(model_path), str(tmp_path / "mpi")],
+                         env=env, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    infos = sorted((json.loads(line) for line in run.stdout.splitlines() if line.startswith("{")),
+                   key=lambda i: i["rank"])
+    assert [i["n"] for i in infos] == [2, 0] and all(i["retried"] == SPEEDS.tolist() for i in infos)
+    assert infos[0]["diverged"] == [-1, -1]
+    with np.load(tmp_path / "mpi" / "fixed.npz") as data:
+        got = [data[f"arr_{k}"] for k in range(len(fixed))]
+    for a, b in zip(got, fixed):
+        assert np.abs(a - b["u_r"]).max() <= 1e-8 * np.abs(b["u_r"]).max()
