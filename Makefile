@@ -47,6 +47,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_full_order.py
 	$(PY) benchmarks/bench_contact_convergence.py
 	$(PY) benchmarks/bench_contact_rom_size.py
+	$(PY) benchmarks/bench_contact_rom_size.py --gnl --r-c 10 15 25 40
 	$(PY) benchmarks/bench_contact_ecsw.py
 	$(PY) benchmarks/bench_integrator.py
 

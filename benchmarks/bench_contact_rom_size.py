@@ -13,7 +13,7 @@ speeds under any perturbation (bench_contact_ecsw measures that floor for r = 45
 move by less than 1 % at h/2); the error on those robust speeds is reported next to the p90 over all 11.
 
     python benchmarks/bench_contact_rom_size.py [--r-c 5 10 15 25 40]      # linear: ~10 min
-    python benchmarks/bench_contact_rom_size.py --gnl --r-c 10 15 25 40    # GNL: ~30 min (tensors r^4)
+    python benchmarks/bench_contact_rom_size.py --gnl --r-c 10 15 25 40    # GNL: ~75 min, 50 of them r = 70
 """
 from __future__ import annotations
 
