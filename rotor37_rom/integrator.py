@@ -22,6 +22,7 @@ then comes from the tangent limit on representative states (``gnl_time_step``, `
 """
 from __future__ import annotations
 
+import copy
 import dataclasses
 import time
 from typing import Callable, Sequence
@@ -192,6 +193,16 @@ class CentralDifference:
                              f"(omega_max = {self.omega_max:.4g} rad/s); use h <= {self.h_crit:.4g} or force=True")
         self.h = float(h)
         self._build()
+
+    def with_step(self, h: float) -> "CentralDifference":
+        """The same scheme (model, mass, damping, cap or massless variant) at another step, forced like
+        ``force=True``: operators rebuilt, omega_max and the scaled mass reused."""
+        if not (h > 0.0 and np.isfinite(h)):
+            raise ValueError(f"time step h must be > 0, got {h}")
+        other = copy.copy(self)
+        other.h = float(h)
+        other._build()
+        return other
 
     def _build(self):
         h, M, C, K, rb, r = self.h, self.M, self.C, self.K, self.r_b, self.r

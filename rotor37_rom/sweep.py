@@ -165,12 +165,9 @@ def rerun_diverged(scheme: CentralDifference, results: Sequence[dict], spec: Swe
         if bad.size == 0:
             break
         h = scheme.h / 2 ** k
-        if progress and (comm is None or comm.rank == 0):
+        if progress and root:
             LOG.warning("%d speeds blew up: again with h = %.3g s", bad.size, h)
-        smaller = CentralDifference(scheme.model, h=h, nonlinear=scheme.nonlinear, force=True,
-                                    damping=bool(np.any(scheme.C)), massless_boundary=scheme.massless,
-                                    frequency_cap=scheme.frequency_cap)
-        folder = run_sweep(smaller, bad, spec, out, comm=comm, progress=progress)
+        folder = run_sweep(scheme.with_step(h), bad, spec, out, comm=comm, progress=progress)
         if root:
             again = {float(r["omega"]): r for r in load_sweep(folder)}
             results = [again.get(float(r["omega"]), r) if int(r["diverged_step"]) >= 0 else r for r in results]
