@@ -380,6 +380,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         S[np.arange(nc)[:, None], dofs] = slide
         WT = -scheme.W @ S.T                                    # (r, nc)
         DN, DT = N @ WN, N @ WT                                 # (nc, nc)
+        contact = _ContactSolver(DN, DT)
 
     # state
     if state is None:
@@ -433,23 +434,24 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                 # a run already past the blow-up limit gets no contact solve (it is stopped at the next check)
                 sane = np.isfinite(g).all(axis=0) & (np.abs(ur).max(axis=0) <= blowup_limit)
                 hits = np.nonzero((g < 0.0).any(axis=0) & sane)[0]
-                for j in hits:
-                    p = active[j]
-                    D = DN + mu[p] * DT                    # u_r += D lambda (negative definite)
-                    lam = _solve_contact(D, g[:, j])
-                    dq = (WN + mu[p] * WT) @ lam
-                    Qn[:, j] += dq
-                    gap_after = g[:, j] - D @ lam
-                    st["max_pen"][p] = max(st["max_pen"][p], float(-gap_after.min()))
+                if hits.size:
+                    ps, mus = active[hits], mu[active[hits]]
+                    lam = np.empty((nc, hits.size))
+                    for k, j in enumerate(hits):
+                        lam[:, k] = contact.solve(mus[k], g[:, j])
+                    mlam = lam * mus                       # friction multipliers mu lambda
+                    Qn[:, hits] += WN @ lam + WT @ mlam
+                    gap_after = g[:, hits] - DN @ lam - DT @ mlam
+                    st["max_pen"][ps] = np.maximum(st["max_pen"][ps], -gap_after.min(axis=0))
                     on = lam > 0
-                    if on.any():
-                        st["min_lam"][p] = min(st["min_lam"][p], float(lam[on].min()))
-                        st["contact_steps"][p] += 1
-                        # sliding velocity of the node on the casing: rotation + its own tangential velocity
-                        v = (S[on] @ (Qn[:, j] - Qa[:, j])) / h          # own velocity along s_k
-                        power = -mu[p] * lam[on] * (om[j] * radius[on] + v)
-                        st["fric_pow"][p] = max(st["fric_pow"][p], float(power.max()))
-                    lam_now[:, p] = lam
+                    touched = on.any(axis=0)
+                    st["min_lam"][ps] = np.minimum(st["min_lam"][ps], np.where(on, lam, np.inf).min(axis=0))
+                    st["contact_steps"][ps] += touched
+                    # sliding velocity of the node on the casing: rotation + its own tangential velocity along s_k
+                    v = (S @ (Qn[:, hits] - Qa[:, hits])) / h
+                    power = np.where(on, -mlam * (om[hits][None, :] * radius[:, None] + v), -np.inf).max(axis=0)
+                    st["fric_pow"][ps] = np.where(touched, np.maximum(st["fric_pow"][ps], power), st["fric_pow"][ps])
+                    lam_now[:, ps] = lam
             Qp[:, active] = Qa
             Q[:, active] = Qn
             st["n"] = n = n + 1
@@ -513,25 +515,40 @@ def _record(st, p, steps, h, record_every, omega):
             "contact_steps": int(st["contact_steps"][p]), "diverged_step": int(st["diverged"][p])}
 
 
-def _solve_contact(D: np.ndarray, g: np.ndarray, max_iter: int = 64) -> np.ndarray:
-    """Multipliers lambda >= 0 with D_AA lambda_A = g_A on the active set A, no remaining gap < 0 elsewhere.
+class _ContactSolver:
+    """Multipliers lambda >= 0 with D_AA lambda_A = g_A on the active set A and no remaining gap < 0 elsewhere, for
+    D = DN + mu DT (n_c, n_c), which maps multipliers to the change of the normal displacements (u_r += D lambda, so
+    gap -= D lambda); g: predicted gaps. Active-set iteration from the penetrating nodes, with the inverse of each
+    D_AA met kept (per mu and active set: at most 2^n_c of them, in practice a few), since a sweep solves the same
+    few small systems millions of times."""
 
-    D (n_c, n_c) maps multipliers to the change of the normal displacements (u_r += D lambda, so gap -= D lambda);
-    g: predicted gaps. Active-set iteration from the penetrating nodes."""
-    active = g < 0.0
-    lam = np.zeros_like(g)
-    tol = 1e-14 * max(1e-3, float(np.abs(g).max()))
-    for _ in range(max_iter):
-        lam[:] = 0.0
-        if active.any():
+    def __init__(self, DN: np.ndarray, DT: np.ndarray, max_iter: int = 64):
+        self.DN, self.DT, self.max_iter = DN, DT, max_iter
+        self._inverses: dict = {}
+
+    def _inverse(self, mu: float, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        key = (float(mu), active.tobytes())
+        if key not in self._inverses:
             A = np.nonzero(active)[0]
-            lam[A] = np.linalg.solve(D[np.ix_(A, A)], g[A])
-            if (lam[A] < 0).any():
-                active[A[np.argmin(lam[A])]] = False
-                continue
-        gap = g - D @ lam
-        viol = (~active) & (gap < -tol)
-        if not viol.any():
-            return lam
-        active[np.argmin(np.where(viol, gap, np.inf))] = True
-    raise RuntimeError("contact active-set iteration did not converge")
+            self._inverses[key] = (A, np.linalg.inv((self.DN + mu * self.DT)[np.ix_(A, A)]))
+        return self._inverses[key]
+
+    def solve(self, mu: float, g: np.ndarray) -> np.ndarray:
+        active = g < 0.0
+        lam = np.zeros_like(g)
+        tol = 1e-14 * max(1e-3, float(np.abs(g).max()))
+        for _ in range(self.max_iter):
+            lam[:] = 0.0
+            if active.any():
+                A, inv = self._inverse(mu, active)
+                lam_A = inv @ g[A]
+                if (lam_A < 0).any():
+                    active[A[np.argmin(lam_A)]] = False
+                    continue
+                lam[A] = lam_A
+            gap = g - (self.DN + mu * self.DT) @ lam if mu else g - self.DN @ lam
+            viol = (~active) & (gap < -tol)
+            if not viol.any():
+                return lam
+            active[np.argmin(np.where(viol, gap, np.inf))] = True
+        raise RuntimeError("contact active-set iteration did not converge")

@@ -19,6 +19,8 @@ import itertools
 
 import numpy as np
 
+from rotor37_rom.svk_kernel import pk_nonlinear_kernel
+
 __all__ = [
     "quadratic_monomial_indices",
     "cubic_monomial_indices",
@@ -148,8 +150,17 @@ class QuadratureForces:
 
     def _first_pk_nonlinear(self, G: np.ndarray, work: dict | None = None) -> np.ndarray:
         """For displacement gradients G (3, 3, n, P): F S - C eps, the nonlinear part of the first Piola-Kirchhoff
-        stress, component by component on contiguous (n, P) planes into preallocated buffers (numpy's matmul loops
-        over tiny 3 x 3 products), ``work`` (``_buffers``) or fresh ones; the result is work['A'] then:
+        stress, into work['A'] (``_buffers``) or a fresh array: the fused C kernel of ``svk_kernel`` where it
+        builds (~20x faster than the NumPy path), else ``_first_pk_nonlinear_numpy``."""
+        kernel = pk_nonlinear_kernel(G.dtype)
+        if kernel is None or not G.flags.c_contiguous:
+            return self._first_pk_nonlinear_numpy(G, work)
+        return kernel(G, work["A"] if work is not None else np.empty_like(G), self.lmbda, self.mu)
+
+    def _first_pk_nonlinear_numpy(self, G: np.ndarray, work: dict | None = None) -> np.ndarray:
+        """The NumPy reference of ``_first_pk_nonlinear``: component by component on contiguous (n, P) planes into
+        preallocated buffers (numpy's matmul loops over tiny 3 x 3 products), ``work`` or fresh ones; the result is
+        work['A'] then:
 
             F S - C eps = mu A + lambda/2 tr(A) I + G S,  A = G^T G,  S = 2 mu (sym G + A/2) + lambda tr(...) I.
         """

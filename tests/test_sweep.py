@@ -176,7 +176,8 @@ def test_contact_map_frequency_cap_flag(ci_rom, tmp_path):
                          SweepSpec(revolutions=0.1, casing=Casing()), tmp_path / "inproc", progress=False)
     assert uncapped.name != folder.name
     bad = subprocess.run(base + ["--frequency-cap", "-1"], env=env, capture_output=True, text=True, timeout=600)
-    assert bad.returncode == 2 and bad.stderr.strip().splitlines() == ["error: --frequency-cap must be > 0 kHz, got -1.0"]
+    assert bad.returncode == 2
+    assert bad.stderr.strip().splitlines() == ["error: --frequency-cap must be > 0 kHz, got -1.0"]
 
 
 def test_contact_map_cubature_flag(ci_rom, tmp_path):
