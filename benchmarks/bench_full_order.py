@@ -68,7 +68,8 @@ def main() -> None:
             print(f"{row['source']:>10} {preset:>6}: {row['dofs']} DOF, {row['total_s']:.1f} s", file=sys.stderr)
     machine = write_results("bench_full_order", rows)
     print(f"Machine: {machine}\n")
-    print("| blade | preset | DOF | mesh (s) | assembly K,M (s) | 10 modes (s) | total incl. start-up (s) | peak RSS (MB) |")
+    print("| blade | preset | DOF | mesh (s) | assembly K,M (s) | 10 modes (s) | total incl. start-up (s) "
+          "| peak RSS (MB) |")
     print("|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(f"| {r['source']} | {r['preset']} | {r['dofs']:,} | {r['mesh_s']:.1f} | {r['assembly_s']:.2f} | "

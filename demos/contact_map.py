@@ -89,6 +89,31 @@ def cubature_model(args, model, speeds, casing, comm):
     return load_reduced_model(cache), states
 
 
+def continuation_branches(args, scheme, retried, start, stop, casing, out: Path, tag: str, comm) -> dict:
+    """Continuation up and down (§2.3.3) at the step the map's speeds all ran with (the smallest retry step, if any
+    speed was run again), the first run as long as the map's, the next 15 % of it (the paper: 200 then 30).
+    Under MPI the two branches run on ranks 0 and 1 at once; rank 0 gets both. Each branch is written after every
+    accepted speed (``sweep.continuation(out=...)``), so a killed run resumes. Returns {name: (points, h, wall)}."""
+    from rotor37_rom.sweep import continuation
+
+    if args.continuation <= 0:
+        return {}
+    run_scheme = scheme.with_step(min(retried.values())) if retried else scheme
+    legs = {"up": (start, stop), "down": (stop, start)}
+    rank, size = (0, 1) if comm is None else (comm.rank, comm.size)
+    mine = {}
+    for k, (name, (a, b)) in enumerate(legs.items()):
+        if k % size == rank:
+            t0 = time.perf_counter()
+            pts = continuation(run_scheme, a, b, args.continuation, casing, first_revolutions=args.revolutions,
+                               revolutions=max(5.0, args.revolutions * 0.15), out=out / "continuation" / tag)
+            mine[name] = (pts, run_scheme.h, time.perf_counter() - t0)
+    if comm is not None:
+        gathered = comm.gather(mine, root=0)
+        mine = {k: v for part in gathered for k, v in part.items()} if rank == 0 else {}
+    return mine
+
+
 def _train_cubature(args, model, scheme, train, revolutions, casing, cache: Path):
     from mpi4py import MPI
 
@@ -149,7 +174,8 @@ def main(argv=None) -> int:
     parser.add_argument("--direction", choices=["x", "radial"], default="x")
     parser.add_argument("--batch", type=int, default=16)
     parser.add_argument("--continuation", type=float, default=0.0,
-                        help="speed step (rad/s) of a continuation up and down (0: none)")
+                        help="speed step (rad/s) of a continuation up and down over the map's range (0: none); "
+                             "under mpirun the two branches run on ranks 0 and 1; resumable")
     parser.add_argument("--out", default="results/contact_map")
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
@@ -158,7 +184,7 @@ def main(argv=None) -> int:
 
     from rotor37_rom.casing import Casing
     from rotor37_rom.integrator import CentralDifference
-    from rotor37_rom.sweep import SweepSpec, continuation, interaction_map, load_sweep, rerun_diverged, run_sweep
+    from rotor37_rom.sweep import SweepSpec, interaction_map, load_sweep, rerun_diverged, run_sweep
 
     try:
         casing = Casing(c0=args.c0, h_b=args.hb, mu=args.mu, direction=args.direction)
@@ -174,6 +200,8 @@ def main(argv=None) -> int:
             raise ValueError("--precision single needs --cubature (the exact cubic tensors are evaluated in double)")
         if not 0 <= args.retry_diverged <= 4:
             raise ValueError(f"--retry-diverged must be in 0..4, got {args.retry_diverged}")
+        if not args.continuation >= 0:
+            raise ValueError(f"--continuation must be >= 0 rad/s (0: none), got {args.continuation}")
         if not 0 < args.tangent_safety <= 1:
             raise ValueError(f"--tangent-safety must be in (0, 1], got {args.tangent_safety}")
         spec = SweepSpec(revolutions=args.revolutions, casing=casing, batch_size=args.batch)
@@ -236,6 +264,7 @@ def main(argv=None) -> int:
         results, retried = rerun_diverged(scheme, results, spec, out / "sweeps", args.retry_diverged, comm=comm,
                                           progress=not args.quiet)
         wall = time.perf_counter() - t0
+        branches = continuation_branches(args, scheme, retried, start, stop, casing, out, tag, comm)
         if rank != 0:
             continue
         imap = interaction_map(results)
@@ -265,17 +294,19 @@ def main(argv=None) -> int:
               f"{peak:.0f} rad/s ({run['peak_amplitude'] * 1e3:.3f} mm), linear 1B/EO4 {lin_res:.0f} rad/s; "
               f"{len(imap.diverged.nonzero()[0])} diverged ({len(retried)} run again with a smaller step); "
               f"{wall:.0f} s")
-        if args.continuation > 0:
+        if branches:
             curves = {}
-            for a, b, name, style in ((start, stop, "up", "+"), (stop, start, "down", "o")):
-                pts = continuation(scheme, a, b, args.continuation, casing, first_revolutions=args.revolutions,
-                                   revolutions=max(5.0, args.revolutions * 0.15))
-                curves[f"continuation {name}"] = ([p.omega for p in pts], [p.amplitude for p in pts], style)
+            for name, (pts, h_cont, wall_cont) in branches.items():
+                curves[f"continuation {name}"] = ([p.omega for p in pts], [p.amplitude for p in pts],
+                                                  "+" if name == "up" else "o")
                 best = max(pts, key=lambda p: p.amplitude if np.isfinite(p.amplitude) else -1)
                 run[f"continuation_{name}_peak"] = best.omega
                 run[f"continuation_{name}"] = [(p.omega, p.amplitude, p.steady, p.halvings) for p in pts]
-                print(f"         continuation {name}: largest response at {best.omega:.0f} rad/s "
-                      f"({best.amplitude * 1e3:.3f} mm)")
+                run[f"continuation_{name}_h"], run[f"continuation_{name}_wall_s"] = h_cont, wall_cont
+                unsteady = [f"{p.omega:.0f}" for p in pts if not p.steady]
+                print(f"         continuation {name} (h = {h_cont:.3g} s, {wall_cont:.0f} s): largest response at "
+                      f"{best.omega:.0f} rad/s ({best.amplitude * 1e3:.3f} mm); {len(pts)} speeds, not steady at "
+                      f"{', '.join(unsteady) or 'none'}")
             curves["zero IC"] = (imap.speeds, imap.nfrc, "--")
             plot_nfrc(curves, out / f"nfrc_continuation_{tag}.png", lin_res, PAPER)
     if rank == 0:

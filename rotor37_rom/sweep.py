@@ -280,25 +280,52 @@ class ContinuationPoint:
 
 def continuation(scheme: CentralDifference, start: float, stop: float, step: float, casing: Casing = Casing(),
                  first_revolutions: float = 200.0, revolutions: float = 30.0, max_halvings: int = 3,
-                 record_dt: float = 1e-5, tol: float = 0.02, progress: bool = False) -> list[ContinuationPoint]:
+                 record_dt: float = 1e-5, tol: float = 0.02, progress: bool = False,
+                 out: str | Path | None = None) -> list[ContinuationPoint]:
     """Sequential continuation (§2.3.3): each speed starts from the final state of the previous one; the first
     runs ``first_revolutions``, the next ``revolutions``; when a run is not steady the speed step is halved (at
     most ``max_halvings`` times) and the run redone from the last accepted state. Sweeps up if stop > start.
 
     The casing is fully ovalized from the start of every continued run (the ramp only applies to the first). A run
-    that diverges ends the branch (its point has amplitude NaN)."""
+    that diverges ends the branch (its point has amplitude NaN). With ``out`` the branch is written after every
+    accepted point (``<out>/continuation_<key>.npz``: the points, the state and the rotor angle), so a killed
+    continuation resumes from its last accepted speed and a finished one is read back."""
     if step <= 0:
         raise ValueError(f"continuation step must be > 0 rad/s, got {step}")
     sign = 1.0 if stop >= start else -1.0
     record_every = max(1, int(round(record_dt / scheme.h)))
-    res = simulate(scheme, start, casing, revolutions=first_revolutions, record_every=record_every, on_blowup="flag")
-    if res.diverged_step[0] >= 0:
-        return [ContinuationPoint(start, np.nan, False, 0)]
-    points = [ContinuationPoint(start, last_revolution_max(res.t[0], res.u_r[0][LE], start),
-                                is_steady(res.t[0], res.u_r[0][LE], start, tol), 0)]
-    state = (res.q_final[:, 0], res.q_prev[:, 0])
-    phase = casing.rotation_sense * start * res.n_steps[0] * scheme.h    # the casing angle carries over
-    omega = start
+    path = None
+    if out is not None:
+        info = {"sweep": _key(scheme, SweepSpec(revolutions=first_revolutions, casing=casing, record_dt=record_dt)),
+                "branch": [start, stop, step, revolutions, max_halvings, tol]}
+        digest = hashlib.sha256(json.dumps(info, sort_keys=True).encode()).hexdigest()[:16]
+        path = Path(out) / f"continuation_{digest}.npz"
+    saved = _load_result(path) if path is not None and path.exists() else None
+
+    def save(finished: bool) -> None:
+        if path is not None:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            _atomic_savez(path, points=np.array([[p.omega, p.amplitude, p.steady, p.halvings] for p in points]),
+                          q=state[0], q_prev=state[1], phase=phase, omega=omega, finished=finished)
+
+    if saved is not None:
+        points = [ContinuationPoint(float(w), float(a), bool(s), int(k)) for w, a, s, k in saved["points"]]
+        state, phase, omega = (saved["q"], saved["q_prev"]), float(saved["phase"]), float(saved["omega"])
+        if bool(saved["finished"]):
+            return points
+        LOG.info("continuation resumes at %.1f rad/s from %s", omega, path)
+    else:
+        res = simulate(scheme, start, casing, revolutions=first_revolutions, record_every=record_every,
+                       on_blowup="flag")
+        state, omega = (res.q_final[:, 0], res.q_prev[:, 0]), start
+        phase = casing.rotation_sense * start * res.n_steps[0] * scheme.h    # the casing angle carries over
+        if res.diverged_step[0] >= 0:
+            points = [ContinuationPoint(start, np.nan, False, 0)]
+            save(True)
+            return points
+        points = [ContinuationPoint(start, last_revolution_max(res.t[0], res.u_r[0][LE], start),
+                                    is_steady(res.t[0], res.u_r[0][LE], start, tol), 0)]
+        save(False)
     while sign * (stop - omega) > 1e-9:
         halvings, accepted = 0, None
         while True:
@@ -316,6 +343,7 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
         if r.diverged_step[0] >= 0:            # nothing sensible to continue from: the branch ends here
             LOG.warning("continuation stopped at %.1f rad/s: the run diverged at step %d", target,
                         r.diverged_step[0])
+            save(True)
             break
         if progress:
             LOG.warning("continuation %.1f rad/s: %.4g mm (%s, %d halvings)", target, amp * 1e3,
@@ -323,4 +351,5 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
         state = (r.q_final[:, 0], r.q_prev[:, 0])
         phase += casing.rotation_sense * target * r.n_steps[0] * scheme.h
         omega = target
+        save(sign * (stop - omega) <= 1e-9)
     return points

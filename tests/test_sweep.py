@@ -1,5 +1,6 @@
 """Speed sweeps: a killed sweep resumes from its checkpoint with nothing lost; MPI ranks give the serial map;
 interaction-map spectra and the steady-state test recover known signals."""
+import dataclasses
 import json
 import os
 import subprocess
@@ -68,13 +69,17 @@ def test_killed_sweep_resumes(ci_rom, tmp_path, monkeypatch):
 
 
 def test_mpi_sweep_equals_serial(ci_rom, tmp_path):
+    """The demo under mpirun -n 2 gives the serial map, and its continuation branches (up on rank 0, down on rank 1,
+    gathered on rank 0) equal serial ones."""
+    from rotor37_rom.sweep import continuation
+
     model_path = save_reduced_model(ci_rom, tmp_path / "rom.npz")
     speeds = np.linspace(1300.0, 1600.0, 4)
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg")
     cmd = ["mpirun", "-n", "2", sys.executable, str(ROOT / "demos" / "contact_map.py"), "--model", str(model_path),
            "--speeds", "1300", "1600", "4", "--revolutions", "0.3", "--gnl", "off", "--safety", "0.9",
-           "--out", str(tmp_path / "mpi"), "--quiet"]
+           "--out", str(tmp_path / "mpi"), "--quiet", "--continuation", "150"]
     run = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-2000:]
     scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
@@ -90,6 +95,12 @@ def test_mpi_sweep_equals_serial(ci_rom, tmp_path):
         assert np.abs(a["u_r"] - b["u_r"]).max() <= 1e-8 * scale
     ma, mb = interaction_map(got), interaction_map(ref)
     np.testing.assert_allclose(ma.nfrc, mb.nfrc, rtol=1e-8)
+    run_mpi = json.loads((tmp_path / "mpi" / "summary.json").read_text())["runs"]["no GNL"]
+    down = continuation(scheme, 1600.0, 1300.0, 150.0, Casing(), first_revolutions=0.3, revolutions=5.0)
+    got_down = np.array(run_mpi["continuation_down"], float)
+    assert [p[0] for p in run_mpi["continuation_up"]][0] == 1300.0 and got_down.shape == (len(down), 4)
+    np.testing.assert_allclose(got_down, np.array([dataclasses.astuple(p) for p in down], float), rtol=1e-8,
+                               equal_nan=True)
 
 
 def test_interaction_map_spectrum_and_steady_state():
@@ -152,6 +163,38 @@ def test_continuation_carries_state_and_casing_angle(ci_rom):
     speeds = [p.omega for p in points]
     assert speeds[0] == 1200.0 and speeds[-1] == 1250.0 and np.all(np.diff(speeds) > 0)
     assert all(np.isfinite(p.amplitude) and p.amplitude < 5e-3 for p in points)
+
+
+def test_killed_continuation_resumes_where_it_stopped(ci_rom, tmp_path, monkeypatch):
+    """A continuation killed at its third run resumes from the last accepted speed (the first run is not redone) and
+    gives the points of an uninterrupted branch bit for bit; a finished branch is read back without running
+    anything."""
+    sweep = sweep_mod
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
+    kwargs = dict(casing=Casing(mu=0.0), first_revolutions=1.0, revolutions=1.0, max_halvings=1)
+    real, calls = sweep.simulate, []
+
+    def counted(*a, **k):
+        calls.append(a[1])
+        if len(calls) == kill_at:
+            raise _Killed
+        return real(*a, **k)
+
+    monkeypatch.setattr(sweep, "simulate", counted)
+    kill_at = 0
+    whole = sweep.continuation(scheme, 1200.0, 1275.0, 25.0, **kwargs)
+    n_whole, calls[:] = len(calls), []
+    kill_at = 3
+    with pytest.raises(_Killed):
+        sweep.continuation(scheme, 1200.0, 1275.0, 25.0, out=tmp_path, **kwargs)
+    kill_at, calls[:] = 0, []
+    resumed = sweep.continuation(scheme, 1200.0, 1275.0, 25.0, out=tmp_path, **kwargs)
+    # the first, long run is not redone; only the runs since the last accepted speed are (here at most 2)
+    assert calls[0] != 1200.0 and n_whole - 2 <= len(calls) < n_whole
+    assert [dataclasses.astuple(p) for p in resumed] == [dataclasses.astuple(p) for p in whole]
+    calls[:] = []
+    again = sweep.continuation(scheme, 1200.0, 1275.0, 25.0, out=tmp_path, **kwargs)
+    assert not calls and [dataclasses.astuple(p) for p in again] == [dataclasses.astuple(p) for p in whole]
 
 
 def test_contact_map_frequency_cap_flag(ci_rom, tmp_path):
