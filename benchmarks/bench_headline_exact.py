@@ -30,7 +30,8 @@ def main(argv=None) -> int:
     parser.add_argument("--speeds", type=float, nargs="*",
                         help="map speeds to check (the nearest map speeds are used); default: 1200, the peak, "
                              "1440, 1520 rad/s")
-    parser.add_argument("--out", default="results/bench_headline_exact")
+    parser.add_argument("--out", default="results/bench_headline_exact",
+                        help="sweeps under it, the table in results/<its name>.json")
     args = parser.parse_args(argv)
     from rotor37_rom.casing import Casing
     from rotor37_rom.integrator import CentralDifference
@@ -69,7 +70,7 @@ def main(argv=None) -> int:
         rows.append({"omega": float(w), "map_nfrc": m, "exact_nfrc": None if div else float(e),
                      "diff_of_peak": None if div else abs(m - e) / peak})
         print(f"{w:8.1f} {m * 1e3:9.3f} " + ("   blew up" if div else f"{e * 1e3:11.3f} {abs(m - e) / peak:11.1%}"))
-    machine = write_results("bench_headline_exact", rows, headline=str(args.headline), model=args.model,
+    machine = write_results(Path(args.out).name, rows, headline=str(args.headline), model=args.model,
                             h=scheme.h, revolutions=summary["revolutions"], wall_s=wall, map_peak=peak)
     print(f"machine: {machine}")
     return 0

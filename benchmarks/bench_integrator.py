@@ -71,6 +71,58 @@ def time_per_step(fn, min_time: float = 0.5) -> float:
     return (time.perf_counter() - t0) / n
 
 
+def stress_kernel(cubature_model: str, point_counts, P: int = 50, r: int = 45) -> dict:
+    """The cubature force's point stress: the fused C kernel (svk_kernel) against the NumPy path, same arrays, same
+    run (synthetic gradients: timing only), float32 and float64; then the whole integrator step on a trained
+    cubature model with the kernel and with the NumPy path (1 revolution, casing contact, mu = 0)."""
+    from rotor37_rom import nonlinear_forces
+    from rotor37_rom.nonlinear_forces import QuadratureForces
+
+    out = {"P": P, "r": r, "stress": [], "step": None}
+    rng = np.random.default_rng(2)
+    for n in point_counts:
+        forces = QuadratureForces(rng.standard_normal((n, r, 3, 3)) * 1e-2, rng.random(n), 1.0e11, 7.0e10)
+        Q = rng.standard_normal((r, P)) * 0.1
+        for precision, dtype in (("single", np.float32), ("double", np.float64)):
+            f = forces.with_precision(precision)
+            G = (f._planes[0] @ Q.astype(dtype)).reshape(3, 3, n, P)
+            work = f._buffers(n, P, dtype)
+            if nonlinear_forces.pk_nonlinear_kernel(dtype) is None:
+                print("stress kernel: no C kernel on this machine (no compiler or ROTOR37_C_KERNEL=0)")
+                return out
+            t_np = time_per_step(lambda: f._first_pk_nonlinear_numpy(G, work), 0.3)
+            t_c = time_per_step(lambda: f._first_pk_nonlinear(G, work), 0.3)
+            row = {"points": n, "precision": precision, "numpy_us": t_np * 1e6, "c_us": t_c * 1e6,
+                   "speedup": t_np / t_c, "c_ns_per_point_state": t_c / (n * P) * 1e9}
+            out["stress"].append(row)
+            print(f"stress, {n} points x P = {P}, {precision}: numpy {t_np * 1e6:.0f} us, C kernel {t_c * 1e6:.0f} us "
+                  f"({t_np / t_c:.1f}x, {row['c_ns_per_point_state']:.2f} ns per point and state)")
+    if not Path(cubature_model).is_file():
+        print(f"step with/without the kernel: skipped ({cubature_model} missing: run the headline map first)")
+        return out
+    from rotor37_rom.casing import Casing
+    from rotor37_rom.integrator import CentralDifference, simulate
+    from rotor37_rom.reduction import load_reduced_model, with_force_precision
+
+    model = with_force_precision(load_reduced_model(cubature_model), "single")
+    scheme = CentralDifference(model, nonlinear=True, h=6.17e-7, frequency_cap=2 * np.pi * 120e3)
+    speeds = np.linspace(1200.0, 1600.0, P)
+    step = {}
+    original = nonlinear_forces.pk_nonlinear_kernel
+    for key in ("numpy", "C kernel"):
+        nonlinear_forces.pk_nonlinear_kernel = original if key == "C kernel" else (lambda dtype: None)
+        try:
+            res = simulate(scheme, speeds, Casing(mu=0.0), revolutions=1.0, on_blowup="flag")
+        finally:
+            nonlinear_forces.pk_nonlinear_kernel = original
+        step[key] = res.wall / int(res.n_steps.sum()) * 1e6
+    out["step"] = {"model": cubature_model, "points": int(model.forces.w.size), "h": scheme.h,
+                   "us_per_sim_step": step, "speedup": step["numpy"] / step["C kernel"]}
+    print(f"step, {model.forces.w.size} float32 points, P = {P}, contact: numpy {step['numpy']:.1f}, C kernel "
+          f"{step['C kernel']:.1f} us per simulation-step ({step['numpy'] / step['C kernel']:.2f}x)")
+    return out
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser()
     parser.add_argument("--r", type=int, nargs="+", default=[30, 45, 60, 90])
@@ -79,6 +131,10 @@ def main(argv=None) -> int:
     parser.add_argument("--throughput-speeds", type=int, default=16)
     parser.add_argument("--throughput-revolutions", type=float, default=1.0)
     parser.add_argument("--headline-speeds", type=int, default=100)
+    parser.add_argument("--cubature-model", default="results/headline/cache/cubature_aac795018ce4ccdc.npz",
+                        help="a cubature model (the demo's --cubature cache) for the step with and without the C "
+                             "stress kernel; skipped when the file is missing")
+    parser.add_argument("--kernel-points", type=int, nargs="+", default=[376, 3000])
     args = parser.parse_args(argv)
     from rotor37_rom.integrator import CentralDifference
 
@@ -155,10 +211,11 @@ def main(argv=None) -> int:
         cap_khz = best["cheapest_sufficient_cap_khz"]
         scheme = CentralDifference(model, nonlinear=gnl, h=best["h"],
                                    frequency_cap=None if cap_khz is None else 2 * np.pi * cap_khz * 1e3)
-        measure(f"{tag}, " + ("no cap" if cap_khz is None else f"cap {cap_khz:g} kHz"), scheme, args.headline_speeds, cap_khz=cap_khz,
-                p90_nfrc_error=best.get("p90_error"))
+        measure(f"{tag}, " + ("no cap" if cap_khz is None else f"cap {cap_khz:g} kHz"), scheme, args.headline_speeds,
+                cap_khz=cap_khz, p90_nfrc_error=best.get("p90_error"))
+    kernel = stress_kernel(args.cubature_model, args.kernel_points)
     machine = write_results("bench_integrator", rows, dgemm_gflops=gflops, throughput=throughput,
-                            model={"preset": args.preset, "r": model.r})
+                            model={"preset": args.preset, "r": model.r}, stress_kernel=kernel)
     print(f"machine: {machine}")
     return 0
 

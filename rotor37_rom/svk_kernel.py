@@ -1,11 +1,11 @@
 """A fused C kernel for the nonlinear part of the SVK first Piola-Kirchhoff stress at many points and states.
 
-Why C in a NumPy layer: the cubature force of the integrator spends ~40 % of each step in ~125 element-wise NumPy
-calls on (points x states) planes (memory- and call-bound, ~3 GFLOP/s), which one pass that keeps each point's
-3 x 3 tensors in registers does ~20x faster. The source is compiled on first use with the system C compiler (the
-one FFCx already needs for dolfinx's forms) into a per-user cache, keyed by the source, the flags and the CPU; where
-no compiler works, or with ``ROTOR37_C_KERNEL=0``, callers get ``None`` and keep their NumPy path, which stays the
-reference the kernel is tested against.
+Why C in a NumPy layer: the cubature force of the integrator spent ~40 % of each step in ~125 element-wise NumPy
+calls on (points x states) planes (memory- and call-bound, ~3 GFLOP/s); one pass that keeps each point's 3 x 3
+tensors in registers is 8-17x faster (bench_integrator). The source is compiled on first use with the system C
+compiler (the one FFCx already needs for dolfinx's forms) into a per-user cache, keyed by the source, the flags and
+the CPU. Where no compiler works, or with ``ROTOR37_C_KERNEL=0``, callers get ``None`` and keep their NumPy path,
+which stays the reference the kernel is tested against.
 
     out = mu A + lambda/2 tr(A) I + G S,  A = G^T G,  S = 2 mu (sym G + A/2) + lambda tr(sym G + A/2) I,
 
@@ -124,10 +124,8 @@ def _library() -> ctypes.CDLL | None:
         return None
 
 
-def pk_nonlinear_kernel(dtype) -> "callable | None":
-    """The compiled kernel for float32 or float64 as ``kernel(G, out, lmbda, mu)`` on C-contiguous arrays of 9 m
-    values each (G read, out written), or None where it cannot be built (then use the NumPy path)."""
-    dtype = np.dtype(dtype)
+@functools.lru_cache(maxsize=None)
+def _kernel_for(dtype: np.dtype):
     lib = _library()
     if lib is None or dtype not in _CTYPES:
         return None
@@ -145,3 +143,9 @@ def pk_nonlinear_kernel(dtype) -> "callable | None":
         return out
 
     return kernel
+
+
+def pk_nonlinear_kernel(dtype) -> "callable | None":
+    """The compiled kernel for float32 or float64 as ``kernel(G, out, lmbda, mu)`` on C-contiguous arrays of 9 m
+    values each (G read, out written), or None where it cannot be built (then use the NumPy path)."""
+    return _kernel_for(np.dtype(dtype))
