@@ -334,7 +334,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
             batch's share of ``n_steps``.sum()); on_finish(p, record dict) when a
             simulation ends; state/checkpoint: resume from / save the loop state every ``checkpoint_seconds``, or
             every 50 times the last save's duration where that is longer (a 100-speed map's records are ~0.6 GB per
-            batch: at most 2 % of the wall goes to checkpoints).
+            batch: at most 2 % of the wall goes to checkpoints); 0: after every step.
     """
     omega = np.atleast_1d(np.asarray(omega, float)).ravel()
     P = omega.size
@@ -498,7 +498,8 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                 t_save = time.perf_counter()
                 checkpoint(st)
                 last_ckpt = time.perf_counter()
-                ckpt_interval = max(checkpoint_seconds, 50.0 * (last_ckpt - t_save))     # <= 2 % of the wall
+                if checkpoint_seconds > 0:                 # 0: every step (as asked); else <= 2 % of the wall
+                    ckpt_interval = max(checkpoint_seconds, 50.0 * (last_ckpt - t_save))
     wall = time.perf_counter() - t_wall
     recs = [_record(st, p, steps, h, record_every, omega) for p in range(P)]
     return SimulationResult(
