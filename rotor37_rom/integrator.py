@@ -437,13 +437,13 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                 sane = np.isfinite(g).all(axis=0) & (np.abs(ur).max(axis=0) <= blowup_limit)
                 hits = np.nonzero((g < 0.0).any(axis=0) & sane)[0]
                 if hits.size:
-                    ps, mus = active[hits], mu[active[hits]]
-                    lam = np.empty((nc, hits.size))
+                    ps = active[hits]
+                    mus = mu[ps]
+                    lam, gap_after = np.empty((nc, hits.size)), np.empty((nc, hits.size))
                     for k, j in enumerate(hits):
-                        lam[:, k] = contact.solve(mus[k], g[:, j])
+                        lam[:, k], gap_after[:, k] = contact.solve(mus[k], g[:, j])
                     mlam = lam * mus                       # friction multipliers mu lambda
                     Qn[:, hits] += WN @ lam + WT @ mlam
-                    gap_after = g[:, hits] - DN @ lam - DT @ mlam
                     st["max_pen"][ps] = np.maximum(st["max_pen"][ps], -gap_after.min(axis=0))
                     on = lam > 0
                     touched = on.any(axis=0)
@@ -538,7 +538,8 @@ class _ContactSolver:
             self._inverses[key] = (A, np.linalg.inv((self.DN + mu * self.DT)[np.ix_(A, A)]))
         return self._inverses[key]
 
-    def solve(self, mu: float, g: np.ndarray) -> np.ndarray:
+    def solve(self, mu: float, g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(lambda, gaps after the correction) for predicted gaps g (n_c,)."""
         active = g < 0.0
         lam = np.zeros_like(g)
         tol = 1e-14 * max(1e-3, float(np.abs(g).max()))
@@ -554,6 +555,6 @@ class _ContactSolver:
             gap = g - self.DN @ lam - mu * (self.DT @ lam) if mu else g - self.DN @ lam
             viol = (~active) & (gap < -tol)
             if not viol.any():
-                return lam
+                return lam, gap
             active[np.argmin(np.where(viol, gap, np.inf))] = True
         raise RuntimeError("contact active-set iteration did not converge")
