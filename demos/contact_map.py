@@ -176,6 +176,9 @@ def main(argv=None) -> int:
     parser.add_argument("--continuation", type=float, default=0.0,
                         help="speed step (rad/s) of a continuation up and down over the map's range (0: none); "
                              "under mpirun the two branches run on ranks 0 and 1; resumable")
+    parser.add_argument("--continuation-range", type=float, nargs=2, metavar=("LOW", "HIGH"),
+                        help="run the continuation over this speed range (rad/s) instead of the map's: up from LOW, "
+                             "down from HIGH (each first run as long as the map's, 15 %% of it after)")
     parser.add_argument("--out", default="results/contact_map")
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
@@ -202,6 +205,9 @@ def main(argv=None) -> int:
             raise ValueError(f"--retry-diverged must be in 0..4, got {args.retry_diverged}")
         if not args.continuation >= 0:
             raise ValueError(f"--continuation must be >= 0 rad/s (0: none), got {args.continuation}")
+        c_start, c_stop = args.continuation_range or (start, stop)
+        if not 0 < c_start < c_stop:
+            raise ValueError(f"--continuation-range: need 0 < LOW < HIGH rad/s, got {args.continuation_range}")
         if not 0 < args.tangent_safety <= 1:
             raise ValueError(f"--tangent-safety must be in (0, 1], got {args.tangent_safety}")
         spec = SweepSpec(revolutions=args.revolutions, casing=casing, batch_size=args.batch)
@@ -264,7 +270,7 @@ def main(argv=None) -> int:
         results, retried = rerun_diverged(scheme, results, spec, out / "sweeps", args.retry_diverged, comm=comm,
                                           progress=not args.quiet)
         wall = time.perf_counter() - t0
-        branches = continuation_branches(args, scheme, retried, start, stop, casing, out, tag, comm)
+        branches = continuation_branches(args, scheme, retried, c_start, c_stop, casing, out, tag, comm)
         if rank != 0:
             continue
         imap = interaction_map(results)

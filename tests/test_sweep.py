@@ -79,7 +79,7 @@ def test_mpi_sweep_equals_serial(ci_rom, tmp_path):
                OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg")
     cmd = ["mpirun", "-n", "2", sys.executable, str(ROOT / "demos" / "contact_map.py"), "--model", str(model_path),
            "--speeds", "1300", "1600", "4", "--revolutions", "0.3", "--gnl", "off", "--safety", "0.9",
-           "--out", str(tmp_path / "mpi"), "--quiet", "--continuation", "150"]
+           "--out", str(tmp_path / "mpi"), "--quiet", "--continuation", "150", "--continuation-range", "1300", "1450"]
     run = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-2000:]
     scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
@@ -96,9 +96,10 @@ def test_mpi_sweep_equals_serial(ci_rom, tmp_path):
     ma, mb = interaction_map(got), interaction_map(ref)
     np.testing.assert_allclose(ma.nfrc, mb.nfrc, rtol=1e-8)
     run_mpi = json.loads((tmp_path / "mpi" / "summary.json").read_text())["runs"]["no GNL"]
-    down = continuation(scheme, 1600.0, 1300.0, 150.0, Casing(), first_revolutions=0.3, revolutions=5.0)
+    down = continuation(scheme, 1450.0, 1300.0, 150.0, Casing(), first_revolutions=0.3, revolutions=5.0)
     got_down = np.array(run_mpi["continuation_down"], float)
-    assert [p[0] for p in run_mpi["continuation_up"]][0] == 1300.0 and got_down.shape == (len(down), 4)
+    ups = [p[0] for p in run_mpi["continuation_up"]]
+    assert ups[0] == 1300.0 and max(ups) <= 1450.0 and got_down.shape == (len(down), 4)
     np.testing.assert_allclose(got_down, np.array([dataclasses.astuple(p) for p in down], float), rtol=1e-8,
                                equal_nan=True)
 
@@ -269,6 +270,10 @@ def test_contact_map_cubature_flag(ci_rom, tmp_path):
     np.testing.assert_allclose(got_mpi["nfrc"], got["nfrc"], rtol=1e-6)
     bad = subprocess.run(base + ["--cubature", "0"], env=env, capture_output=True, text=True, timeout=600)
     assert bad.returncode == 2 and bad.stderr.strip().splitlines() == ["error: --cubature must be in (0, 1), got 0.0"]
+    bad = subprocess.run(base + ["--continuation", "5", "--continuation-range", "1450", "1400"], env=env,
+                         capture_output=True, text=True, timeout=600)
+    assert bad.returncode == 2 and bad.stderr.strip().splitlines() == [
+        "error: --continuation-range: need 0 < LOW < HIGH rad/s, got [1450.0, 1400.0]"]
     bad = subprocess.run(base + ["--precision", "single"], env=env, capture_output=True, text=True, timeout=600)
     assert bad.returncode == 2 and bad.stderr.strip().splitlines() == [
         "error: --precision single needs --cubature (the exact cubic tensors are evaluated in double)"]
