@@ -122,9 +122,11 @@ def main(argv=None) -> int:
     print(f"training states: {Q_train.shape[1]} from exact runs at {train.round(1).tolist()} x 12 rev "
           f"({t_train:.0f} s)")
 
-    # held-out long-run states: end states of the headline map and of the exact runs (200 revolutions)
-    _, Q_map = _finals(f"{args.headline}/sweeps/*/omega_*.npz")
+    # held-out long-run states: end states of the headline map (but at the training speeds, which the refinement
+    # runs visit) and of the exact runs (200 revolutions)
+    w_map, Q_map = _finals(f"{args.headline}/sweeps/*/omega_*.npz")
     _, Q_ex = _finals(args.exact)
+    Q_map = Q_map[:, ~np.isin(np.round(w_map, 6), np.round(train, 6))] if Q_map.size else Q_map
     Q_held = np.hstack([q for q in (Q_map, Q_ex) if q.size])
     g_ex = model.nonlinear_force(Q_held)
     net = np.linalg.norm(model.K @ Q_held + g_ex, axis=0)
