@@ -170,12 +170,12 @@ def main(argv=None) -> int:
             reduced = load_reduced_model(path)
             t_build = time.perf_counter() - t0
             err = np.linalg.norm(reduced.nonlinear_force(Q_held) - g_ex, axis=0)
-            # the GNL step at 0.5 of the tangent limit: on the training runs' largest states (the demo's choice)
-            # and, where refined, on the long runs' largest states too
-            steps = {"train": gnl_time_step(reduced, _largest(Q_train, model.sizes["r_b"], 24), cap, 0.5)}
+            # the GNL step at 0.5 of the tangent limit over the training states (the demo's rule) and, where
+            # refined, over the long runs' states
+            steps = {"train": gnl_time_step(reduced, Q_train, cap, 0.5)}
             if path.with_suffix(".refine.npz").is_file():
                 with np.load(path.with_suffix(".refine.npz")) as d:
-                    steps["refine"] = gnl_time_step(reduced, d["largest"], cap, 0.5)
+                    steps["refine"] = gnl_time_step(reduced, np.hstack([d["largest"], d["Q_ref"]]), cap, 0.5)
             scheme = CentralDifference(with_force_precision(reduced, "single"), nonlinear=True, h=run["h"],
                                        frequency_cap=cap)
             t0 = time.perf_counter()

@@ -211,7 +211,7 @@ def main(argv=None) -> int:
         if not args.continuation >= 0:
             raise ValueError(f"--continuation must be >= 0 rad/s (0: none), got {args.continuation}")
         c_start, c_stop = args.continuation_range or (start, stop)
-        if not 0 < c_start < c_stop:
+        if args.continuation_range is not None and not 0 < c_start < c_stop:
             raise ValueError(f"--continuation-range: need 0 < LOW < HIGH rad/s, got {args.continuation_range}")
         if not 0 < args.tangent_safety <= 1:
             raise ValueError(f"--tangent-safety must be in (0, 1], got {args.tangent_safety}")
