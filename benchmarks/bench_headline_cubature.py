@@ -89,7 +89,8 @@ def main(argv=None) -> int:
     from rotor37_rom.builder import hyper_reduce
     from rotor37_rom.casing import Casing
     from rotor37_rom.ecsw import trajectory_states
-    from rotor37_rom.integrator import CentralDifference, gnl_time_step, simulate
+    from rotor37_rom.integrator import (CentralDifference, contact_training_states, gnl_time_step, simulate,
+                                        training_speeds)
     from rotor37_rom.reduction import load_reduced_model, save_reduced_model, with_force_precision
     from rotor37_rom.sweep import SweepSpec, interaction_map, load_sweep, run_sweep
 
@@ -108,14 +109,12 @@ def main(argv=None) -> int:
     (out / "cache").mkdir(parents=True, exist_ok=True)
 
     # the demo's training set: exact GNL runs at 6 of the map's speeds, 12 revolutions, unscaled at 0.5 h_crit
-    train = np.unique(map_speeds[np.linspace(0, len(map_speeds) - 1, 6).astype(int)])
+    train = training_speeds(map_speeds)
     train_file = out / "cache" / "train_states.npz"
     t0 = time.perf_counter()
     if not train_file.is_file():
         scheme = CentralDifference(model, nonlinear=True, safety=0.5)
-        res = simulate(scheme, train, casing, revolutions=12.0, record_q=True, on_blowup="flag",
-                       record_every=max(1, int(round(1e-5 / scheme.h))))
-        Q_train, _ = trajectory_states(res.records_q, scheme.r_b)
+        Q_train, _ = contact_training_states(scheme, train, casing, 12.0)
         np.savez(train_file, Q=Q_train, seconds=time.perf_counter() - t0)
     with np.load(train_file) as d:
         Q_train, t_train = d["Q"], float(d["seconds"])

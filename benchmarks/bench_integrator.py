@@ -71,7 +71,17 @@ def time_per_step(fn, min_time: float = 0.5) -> float:
     return (time.perf_counter() - t0) / n
 
 
-def stress_kernel(cubature_model: str, point_counts, P: int = 50, r: int = 45) -> dict:
+def _headline_cubature(headline: str) -> tuple[str | None, float | None]:
+    """The cubature model a headline map trained (``<headline>/cache/cubature_*.npz``) and the step it ran at."""
+    summary = Path(headline) / "summary.json"
+    models = sorted(p for p in (Path(headline) / "cache").glob("cubature_*.npz") if not p.name.endswith(".states.npz"))
+    if not summary.is_file() or len(models) != 1:
+        return None, None
+    run = next((v for k, v in json.loads(summary.read_text())["runs"].items() if k.startswith("GNL")), None)
+    return (str(models[0]), run["h"]) if run else (None, None)
+
+
+def stress_kernel(headline: str, point_counts, P: int = 50, r: int = 45) -> dict:
     """The cubature force's point stress: the fused C kernel (svk_kernel) against the NumPy path, same arrays, same
     run (synthetic gradients: timing only), float32 and float64; then the whole integrator step on a trained
     cubature model with the kernel and with the NumPy path (1 revolution, casing contact, mu = 0)."""
@@ -97,15 +107,16 @@ def stress_kernel(cubature_model: str, point_counts, P: int = 50, r: int = 45) -
             out["stress"].append(row)
             print(f"stress, {n} points x P = {P}, {precision}: numpy {t_np * 1e6:.0f} us, C kernel {t_c * 1e6:.0f} us "
                   f"({t_np / t_c:.1f}x, {row['c_ns_per_point_state']:.2f} ns per point and state)")
-    if not Path(cubature_model).is_file():
-        print(f"step with/without the kernel: skipped ({cubature_model} missing: run the headline map first)")
+    cubature_model, h = _headline_cubature(headline)
+    if cubature_model is None:
+        print(f"step with/without the kernel: skipped (no headline map with one trained cubature in {headline})")
         return out
     from rotor37_rom.casing import Casing
     from rotor37_rom.integrator import CentralDifference, simulate
     from rotor37_rom.reduction import load_reduced_model, with_force_precision
 
     model = with_force_precision(load_reduced_model(cubature_model), "single")
-    scheme = CentralDifference(model, nonlinear=True, h=6.17e-7, frequency_cap=2 * np.pi * 120e3)
+    scheme = CentralDifference(model, nonlinear=True, h=h, frequency_cap=2 * np.pi * 120e3)
     speeds = np.linspace(1200.0, 1600.0, P)
     step = {}
     original = nonlinear_forces.pk_nonlinear_kernel
@@ -131,9 +142,9 @@ def main(argv=None) -> int:
     parser.add_argument("--throughput-speeds", type=int, default=16)
     parser.add_argument("--throughput-revolutions", type=float, default=1.0)
     parser.add_argument("--headline-speeds", type=int, default=100)
-    parser.add_argument("--cubature-model", default="results/headline/cache/cubature_aac795018ce4ccdc.npz",
-                        help="a cubature model (the demo's --cubature cache) for the step with and without the C "
-                             "stress kernel; skipped when the file is missing")
+    parser.add_argument("--headline", default="results/headline",
+                        help="a GNL headline map (the demo's --out with --cubature): its trained cubature and step "
+                             "for the step with and without the C stress kernel; skipped when missing")
     parser.add_argument("--kernel-points", type=int, nargs="+", default=[376, 3000])
     args = parser.parse_args(argv)
     from rotor37_rom.integrator import CentralDifference
@@ -213,7 +224,7 @@ def main(argv=None) -> int:
                                    frequency_cap=None if cap_khz is None else 2 * np.pi * cap_khz * 1e3)
         measure(f"{tag}, " + ("no cap" if cap_khz is None else f"cap {cap_khz:g} kHz"), scheme, args.headline_speeds,
                 cap_khz=cap_khz, p90_nfrc_error=best.get("p90_error"))
-    kernel = stress_kernel(args.cubature_model, args.kernel_points)
+    kernel = stress_kernel(args.headline, args.kernel_points)
     machine = write_results("bench_integrator", rows, dgemm_gflops=gflops, throughput=throughput,
                             model={"preset": args.preset, "r": model.r}, stress_kernel=kernel)
     print(f"machine: {machine}")

@@ -61,10 +61,10 @@ def cubature_model(args, model, speeds, casing, comm):
     import importlib
 
     importlib.import_module("rotor37_rom.fem")    # on every rank: importing dolfinx initializes PETSc (collective)
-    from rotor37_rom.integrator import CentralDifference
+    from rotor37_rom.integrator import CentralDifference, training_speeds
     from rotor37_rom.reduction import load_reduced_model
 
-    train = np.unique(speeds[np.linspace(0, len(speeds) - 1, min(6, len(speeds))).astype(int)])
+    train = training_speeds(speeds)
     revolutions = min(args.revolutions, 12.0)
     scheme = CentralDifference(model, nonlinear=True, safety=args.safety)
     key = hashlib.sha256(json.dumps([model.key, train.tolist(), revolutions, scheme.h, vars(casing), args.cubature,
@@ -121,14 +121,11 @@ def _train_cubature(args, model, scheme, train, revolutions, casing, cache: Path
 
     from rotor37_rom import fem
     from rotor37_rom.builder import hyper_reduce
-    from rotor37_rom.ecsw import trajectory_states
-    from rotor37_rom.integrator import largest_states, simulate
+    from rotor37_rom.integrator import contact_training_states
     from rotor37_rom.reduction import save_reduced_model
 
     t0 = time.perf_counter()
-    res = simulate(scheme, train, casing, revolutions=revolutions, record_q=True, on_blowup="flag",
-                   record_every=max(1, int(round(1e-5 / scheme.h))))
-    Q_train, _ = trajectory_states(res.records_q, scheme.r_b)
+    Q_train, step_states = contact_training_states(scheme, train, casing, revolutions)
     sector = fem.create_blade_sector(MPI.COMM_SELF, preset=args.preset)
     reduced, rep = hyper_reduce(sector, model, Q_train, tol=args.cubature, level="point",
                                 label=f"contact runs {train.tolist()} x {revolutions:g} rev, mu = {casing.mu:g}")
@@ -136,10 +133,7 @@ def _train_cubature(args, model, scheme, train, revolutions, casing, cache: Path
           f"{rep['result'].training_error:.1e}) from {Q_train.shape[1]} states of exact GNL runs at "
           f"{len(train)} speeds x {revolutions:g} rev; {time.perf_counter() - t0:.0f} s")
     cache.parent.mkdir(parents=True, exist_ok=True)
-    # the GNL step comes from the tangent limit over these: the training states too, not only the 24 of largest tip
-    # motion (on the r = 55 headline those gave 7.62e-7 s, the 179 training states 6.21e-7 s: the stiffest tangent
-    # belongs to a deformation shape, not to the largest tip amplitude)
-    np.savez(cache.with_suffix(".states.npz"), states=np.hstack([largest_states(res, scheme.r_b, 24), Q_train]))
+    np.savez(cache.with_suffix(".states.npz"), states=step_states)
     save_reduced_model(reduced, cache)                  # written last: its presence means both are complete
 
 
