@@ -108,7 +108,8 @@ def continuation_branches(args, scheme, retried, start, stop, casing, out: Path,
         if k % size == rank:
             t0 = time.perf_counter()
             pts = continuation(run_scheme, a, b, args.continuation, casing, first_revolutions=args.revolutions,
-                               revolutions=max(5.0, args.revolutions * 0.15), out=out / "continuation" / tag)
+                               revolutions=max(5.0, args.revolutions * 0.15), out=out / "continuation" / tag,
+                               window=args.steady_window, progress=not args.quiet)
             mine[name] = (pts, run_scheme.h, time.perf_counter() - t0)
     if comm is not None:
         gathered = comm.gather(mine, root=0)
@@ -178,6 +179,9 @@ def main(argv=None) -> int:
     parser.add_argument("--continuation-range", type=float, nargs=2, metavar=("LOW", "HIGH"),
                         help="run the continuation over this speed range (rad/s) instead of the map's: up from LOW, "
                              "down from HIGH (each first run as long as the map's, 15 %% of it after)")
+    parser.add_argument("--steady-window", type=int, default=1, metavar="N",
+                        help="a continued run is steady when its max over the last N revolutions and the N before "
+                             "agree to 2 %% (1, the paper's: periodic with the rotor; N: periods up to N T)")
     parser.add_argument("--out", default="results/contact_map")
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
@@ -207,6 +211,10 @@ def main(argv=None) -> int:
         c_start, c_stop = args.continuation_range or (start, stop)
         if args.continuation_range is not None and not 0 < c_start < c_stop:
             raise ValueError(f"--continuation-range: need 0 < LOW < HIGH rad/s, got {args.continuation_range}")
+        cont_revolutions = max(5.0, args.revolutions * 0.15)
+        if not 1 <= args.steady_window <= cont_revolutions / 2:
+            raise ValueError(f"--steady-window must be in 1..{int(cont_revolutions // 2)} revolutions (half of a "
+                             f"continued run), got {args.steady_window}")
         if not 0 < args.tangent_safety <= 1:
             raise ValueError(f"--tangent-safety must be in (0, 1], got {args.tangent_safety}")
         spec = SweepSpec(revolutions=args.revolutions, casing=casing, batch_size=args.batch)
@@ -308,6 +316,7 @@ def main(argv=None) -> int:
                 run[f"continuation_{name}_peak"] = best.omega
                 run[f"continuation_{name}"] = [(p.omega, p.amplitude, p.steady, p.halvings) for p in pts]
                 run[f"continuation_{name}_h"], run[f"continuation_{name}_wall_s"] = h_cont, wall_cont
+                run["continuation_steady_window"] = args.steady_window
                 unsteady = [f"{p.omega:.0f}" for p in pts if not p.steady]
                 print(f"         continuation {name} (h = {h_cont:.3g} s, {wall_cont:.0f} s): largest response at "
                       f"{best.omega:.0f} rad/s ({best.amplitude * 1e3:.3f} mm); {len(pts)} speeds, not steady at "

@@ -121,6 +121,16 @@ def test_interaction_map_spectrum_and_steady_state():
     assert half > 0
     assert is_steady(t, u, omega)
     assert not is_steady(t, u * np.exp(0.05 * t * omega / (2 * np.pi)), omega)   # +5 % per revolution
+    # period 11T/2 (the paper's quasi-periodic branch; |sub| has period 11T/4): wherever the run ends, the max of one
+    # revolution wanders and the max over 3 or more does not (up to the sampling of the peak, (4 omega dt)^2 / 8 =
+    # 4e-4 relative)
+    sub = 2e-4 * np.sin(w1 * t) + 1e-4 * np.sin(2 * omega / 11 * t)
+    ends = np.linspace(20, 40, 23) * 2 * np.pi / omega
+    for window, expected in ((1, False), (3, True), (6, True)):
+        assert all(is_steady(t[t <= e], sub[t <= e], omega, tol=2e-3, window=window) is expected for e in ends)
+    assert not is_steady(t, sub * np.exp(0.05 * t * omega / (2 * np.pi)), omega, window=6)
+    with pytest.raises(ValueError, match="window must be >= 1"):
+        is_steady(t, u, omega, window=0)
 
 
 def test_diverged_runs_are_reported_as_results(ci_rom):
@@ -143,10 +153,8 @@ def test_diverged_runs_are_reported_as_results(ci_rom):
 
 def test_continuation_carries_state_and_casing_angle(ci_rom):
     """A run split in two (final states and rotor angle handed over) equals the run in one piece; without the angle
-    the casing would jump under the blade. Continuation over 1200 -> 1250 rad/s, below the 1B/EO4 resonance, stays
-    bounded (mu = 0, linear)."""
+    the casing would jump under the blade."""
     from rotor37_rom.integrator import simulate
-    from rotor37_rom.sweep import continuation
 
     scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
     casing, om, n1, n2 = Casing(mu=0.15), 1450.0, 6000, 4000
@@ -159,11 +167,33 @@ def test_continuation_carries_state_and_casing_angle(ci_rom):
     assert np.abs(b.u_r[0] - whole.u_r[0][:, n1:]).max() <= 1e-9 * scale
     jumped = simulate(scheme, om, casing, n_steps=n2, duration=1e-12, initial=(a.q_final, a.q_prev))
     assert np.abs(jumped.u_r[0] - whole.u_r[0][:, n1:]).max() > 1e-3 * scale
-    points = continuation(scheme, 1200.0, 1250.0, 25.0, Casing(mu=0.0), first_revolutions=2.0, revolutions=1.0,
-                          max_halvings=1)
-    speeds = [p.omega for p in points]
-    assert speeds[0] == 1200.0 and speeds[-1] == 1250.0 and np.all(np.diff(speeds) > 0)
-    assert all(np.isfinite(p.amplitude) and p.amplitude < 5e-3 for p in points)
+
+
+def test_batched_halvings_accept_the_one_by_one_points(ci_rom, monkeypatch):
+    """The halved candidates run as one batch accept the speeds, halvings and steadiness of the paper's one-by-one
+    procedure, with amplitudes equal to the batch's round-off (1e-8 relative, the batch tolerance of the
+    integrator), in fewer calls. Up to the 1B/EO4 resonance (mu = 0, linear) with 2-revolution runs some steps are
+    halved and some are not; the branch stays bounded by the clearance scale."""
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
+    kwargs = dict(casing=Casing(mu=0.0), first_revolutions=2.0, revolutions=2.0, max_halvings=1)
+    real, calls = sweep_mod.simulate, []
+
+    def counted(*a, **k):
+        calls.append(np.atleast_1d(a[1]).size)
+        return real(*a, **k)
+
+    monkeypatch.setattr(sweep_mod, "simulate", counted)
+    one = sweep_mod.continuation(scheme, 1300.0, 1380.0, 40.0, batch_halvings=False, **kwargs)
+    n_one, calls[:] = len(calls), []
+    batched = sweep_mod.continuation(scheme, 1300.0, 1380.0, 40.0, **kwargs)
+    assert [(p.omega, p.steady, p.halvings) for p in batched] == [(p.omega, p.steady, p.halvings) for p in one]
+    speeds, halved = [p.omega for p in one], [p.halvings for p in one[1:]]
+    assert speeds[0] == 1300.0 and speeds[-1] == 1380.0 and np.all(np.diff(speeds) > 0)
+    assert 0 < sum(halved) < len(halved)                     # the case exercises both paths
+    assert all(np.isfinite(p.amplitude) and p.amplitude < 5e-3 for p in one)
+    a, b = np.array([p.amplitude for p in one]), np.array([p.amplitude for p in batched])
+    assert np.abs(a - b).max() <= 1e-8 * np.abs(a).max()
+    assert len(calls) < n_one and max(calls) > 1
 
 
 def test_killed_continuation_resumes_where_it_stopped(ci_rom, tmp_path, monkeypatch):
@@ -176,7 +206,7 @@ def test_killed_continuation_resumes_where_it_stopped(ci_rom, tmp_path, monkeypa
     real, calls = sweep.simulate, []
 
     def counted(*a, **k):
-        calls.append(a[1])
+        calls.append(float(np.atleast_1d(a[1])[0]))
         if len(calls) == kill_at:
             raise _Killed
         return real(*a, **k)
@@ -274,6 +304,10 @@ def test_contact_map_cubature_flag(ci_rom, tmp_path):
                          capture_output=True, text=True, timeout=600)
     assert bad.returncode == 2 and bad.stderr.strip().splitlines() == [
         "error: --continuation-range: need 0 < LOW < HIGH rad/s, got [1450.0, 1400.0]"]
+    bad = subprocess.run(base + ["--continuation", "5", "--steady-window", "3"], env=env, capture_output=True,
+                         text=True, timeout=600)
+    assert bad.returncode == 2 and bad.stderr.strip().splitlines() == [
+        "error: --steady-window must be in 1..2 revolutions (half of a continued run), got 3"]
     bad = subprocess.run(base + ["--precision", "single"], env=env, capture_output=True, text=True, timeout=600)
     assert bad.returncode == 2 and bad.stderr.strip().splitlines() == [
         "error: --precision single needs --cubature (the exact cubic tensors are evaluated in double)"]
