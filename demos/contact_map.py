@@ -91,6 +91,11 @@ def cubature_model(args, model, speeds, casing, comm):
     return load_reduced_model(cache), states
 
 
+def continued_revolutions(revolutions: float) -> float:
+    """Length of each continued run: 15 % of the first (the paper: 200 then 30), at least 5 revolutions."""
+    return max(5.0, revolutions * 0.15)
+
+
 def continuation_branches(args, scheme, retried, start, stop, casing, out: Path, tag: str, comm) -> dict:
     """Continuation up and down (§2.3.3) at the step the map's speeds all ran with (the smallest retry step, if any
     speed was run again), the first run as long as the map's, the next 15 % of it (the paper: 200 then 30).
@@ -108,7 +113,7 @@ def continuation_branches(args, scheme, retried, start, stop, casing, out: Path,
         if k % size == rank:
             t0 = time.perf_counter()
             pts = continuation(run_scheme, a, b, args.continuation, casing, first_revolutions=args.revolutions,
-                               revolutions=max(5.0, args.revolutions * 0.15), out=out / "continuation" / tag,
+                               revolutions=continued_revolutions(args.revolutions), out=out / "continuation" / tag,
                                window=args.steady_window, progress=not args.quiet)
             mine[name] = (pts, run_scheme.h, time.perf_counter() - t0)
     if comm is not None:
@@ -211,7 +216,7 @@ def main(argv=None) -> int:
         c_start, c_stop = args.continuation_range or (start, stop)
         if args.continuation_range is not None and not 0 < c_start < c_stop:
             raise ValueError(f"--continuation-range: need 0 < LOW < HIGH rad/s, got {args.continuation_range}")
-        cont_revolutions = max(5.0, args.revolutions * 0.15)
+        cont_revolutions = continued_revolutions(args.revolutions)
         if not 1 <= args.steady_window <= cont_revolutions / 2:
             raise ValueError(f"--steady-window must be in 1..{int(cont_revolutions // 2)} revolutions (half of a "
                              f"continued run), got {args.steady_window}")

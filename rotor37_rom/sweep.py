@@ -348,33 +348,25 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
         save(False)
     while sign * (stop - omega) > 1e-9:
         targets = [omega + sign * min(step / 2 ** k, abs(stop - omega)) for k in range(max_halvings + 1)]
-        runs: dict[float, tuple] = {}             # target -> (result, index in its batch)
-
-        def run(ks: list[int]) -> None:
+        runs: dict[float, tuple] = {}             # target -> (result, index in its batch, steady)
+        if not batch_halvings:                    # the paper's order: one candidate at a time
+            rounds = [[k] for k in range(max_halvings + 1)]
+        elif points[-1].halvings > 0 or not points[-1].steady:
+            rounds = [list(range(max_halvings + 1))]
+        else:
+            rounds = [[0], list(range(1, max_halvings + 1))]
+        for ks in rounds:
             todo = sorted({targets[k] for k in ks} - runs.keys())
             if todo:
                 r = simulate(scheme, todo, casing, revolutions=revolutions, record_every=record_every,
                              initial=state, on_blowup="flag", duration=1e-12, phase=phase)
-                runs.update({tg: (r, p) for p, tg in enumerate(todo)})
-
-        def steady_at(k: int) -> bool:
-            r, p = runs[targets[k]]
-            return bool(r.diverged_step[p] < 0) and is_steady(r.t[p], r.u_r[p][LE], targets[k], tol, window)
-
-        if not batch_halvings:
-            for k in range(max_halvings + 1):
-                run([k])
-                if steady_at(k):
-                    break
-        else:
-            at_once = points[-1].halvings > 0 or not points[-1].steady
-            run(list(range(max_halvings + 1)) if at_once else [0])
-            if not steady_at(0):
-                run(list(range(1, max_halvings + 1)))
-            k = next((k for k in range(max_halvings + 1) if steady_at(k)), max_halvings)
-        steady = steady_at(k)
+                runs.update({tg: (r, p, bool(r.diverged_step[p] < 0)
+                                  and is_steady(r.t[p], r.u_r[p][LE], tg, tol, window)) for p, tg in enumerate(todo)})
+            if any(runs[targets[k]][2] for k in ks):
+                break
+        k = next((k for k in range(max_halvings + 1) if targets[k] in runs and runs[targets[k]][2]), max_halvings)
         target = targets[k]
-        r, p = runs[target]
+        r, p, steady = runs[target]
         amp = last_revolution_max(r.t[p], r.u_r[p][LE], target) if r.diverged_step[p] < 0 else np.nan
         points.append(ContinuationPoint(target, amp, steady, k))
         if r.diverged_step[p] >= 0:            # nothing sensible to continue from: the branch ends here
