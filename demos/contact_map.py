@@ -143,6 +143,20 @@ def _train_cubature(args, model, scheme, train, revolutions, casing, cache: Path
     save_reduced_model(reduced, cache)                  # written last: its presence means both are complete
 
 
+def sprag_slip_onsets(model, casing) -> dict:
+    """Friction coefficients at which sustained sliding on the casing diverges (rotor37_rom.friction)."""
+    from rotor37_rom.casing import contact_matrices
+    from rotor37_rom.friction import sprag_slip_friction
+
+    N, S, _, _ = contact_matrices(model.boundary_nodes, model.r, casing)
+    single = [sprag_slip_friction(model.K, N, S, [k]) for k in range(N.shape[0])]
+    return {"weakest_node": min(single), "per_node": single, "all_nodes": sprag_slip_friction(model.K, N, S)}
+
+
+def _finite(x):
+    return x if np.isfinite(x) else None            # JSON has no inf: null = friction never wedges these nodes
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description="interaction maps of the reduced blade with casing contact")
     parser.add_argument("--preset", default="ci")
@@ -240,7 +254,15 @@ def main(argv=None) -> int:
     omega = np.sqrt(lam[:3])
     lin_res = omega[0] / 4
     summary = {"r": model.r, "sizes": model.sizes, "omega_1_3": omega.tolist(), "linear_resonance": lin_res,
-               "speeds": [start, stop, int(n)], "revolutions": args.revolutions, "casing": vars(casing), "runs": {}}
+               "speeds": [start, stop, int(n)], "revolutions": args.revolutions, "casing": vars(casing), "runs": {},
+               "sprag_slip": {}}
+    onset = sprag_slip_onsets(model, casing)
+    summary["sprag_slip"] = {k: ([_finite(x) for x in v] if isinstance(v, list) else _finite(v))
+                             for k, v in onset.items()}
+    if rank == 0 and not args.quiet:
+        print(f"sustained sliding diverges (sprag-slip) from mu = {onset['weakest_node']:.3f} on one contact node, "
+              f"{onset['all_nodes']:.3f} on all of them; this run: mu = {casing.mu:g} (growth can start below: "
+              f"README, 'Why mu = 0.15 grows')")
     modes = {"off": [False], "on": [True], "both": [False, True]}[args.gnl]
     for gnl in modes:
         try:
@@ -296,6 +318,7 @@ def main(argv=None) -> int:
         plot_time_history(worst["t"], {"LE": worst["u_r"][0], "TE": worst["u_r"][-1]},
                           out / f"time_history_{tag}.png", title=f"{label}, Omega = {float(worst['omega']):.0f} rad/s")
         revs = args.revolutions * len(results)
+        works = np.array([np.asarray(r.get("work", np.full(4, np.nan)), float)[:2] for r in results])
         run = {"h": scheme.h, "h_crit": scheme.h_crit, "frequency_cap_khz": args.frequency_cap,
                "cubature": run_model.metadata.get("hyper_reduction"),
                "force_precision": getattr(run_model.forces, "precision", "double"), "peak_speed": peak,
@@ -303,6 +326,7 @@ def main(argv=None) -> int:
                "diverged": imap.speeds[imap.diverged].tolist(), "wall_s": wall,
                "retried": {f"{w:g}": hk for w, hk in retried.items()},
                "rev_per_s": revs / wall if wall > 1 else None, "nfrc": imap.nfrc.tolist(),
+               "work_normal_J": works[:, 0].tolist(), "work_friction_J": works[:, 1].tolist(),
                "speeds": imap.speeds.tolist(), "contact_checks": {
                    "max_penetration": max(float(r["max_penetration"]) for r in results),
                    "min_multiplier": min(float(r["min_multiplier"]) for r in results),

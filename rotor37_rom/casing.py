@@ -10,7 +10,7 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["Casing", "casing_profile", "casing_clearance", "contact_frames", "ramp_rate"]
+__all__ = ["Casing", "casing_profile", "casing_clearance", "contact_frames", "contact_matrices", "ramp_rate"]
 
 
 def casing_profile(theta: np.ndarray, c0: float, p0: float, width: float = 0.15) -> np.ndarray:
@@ -49,6 +49,29 @@ def contact_frames(nodes: np.ndarray, direction: str = "x", rotation_sense: int 
     else:
         raise ValueError(f"direction must be 'x' or 'radial', got {direction!r}")
     return normals, slide, theta0
+
+
+def contact_matrices(boundary_nodes: np.ndarray, r: int, casing: "Casing | None"):
+    """Normal and sliding directions of the contact nodes as rows over the reduced coordinates, whose first
+    3 x n_b entries are the boundary nodes' displacements (Craig-Bampton): u_n = N q, u_s = S q.
+
+    Returns (N (n_c, r), S (n_c, r), theta0 (n_c,), node indices (n_c,)). Without a casing every boundary node
+    is listed with the e_x normal (what a run without contact records) and S = 0.
+    """
+    nodes = np.asarray(boundary_nodes, float).reshape(-1, 3)
+    if casing is not None:
+        idx = casing.node_indices(len(nodes))
+        normals, slide, theta0 = contact_frames(nodes[idx], casing.direction, casing.rotation_sense)
+    else:
+        idx = np.arange(len(nodes))
+        normals, slide = np.tile([1.0, 0.0, 0.0], (len(nodes), 1)), np.zeros((len(nodes), 3))
+        theta0 = np.arctan2(nodes[:, 1], nodes[:, 0])
+    rows = np.arange(len(idx))[:, None]
+    dofs = 3 * idx[:, None] + np.arange(3)[None, :]
+    N, S = np.zeros((len(idx), r)), np.zeros((len(idx), r))
+    N[rows, dofs] = normals
+    S[rows, dofs] = slide
+    return N, S, theta0, idx
 
 
 @dataclasses.dataclass(frozen=True)

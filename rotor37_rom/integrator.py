@@ -14,11 +14,16 @@ Step n -> n+1 (t_n = n h):
 
 n_k is the contact normal (e_x or radial), s_k the direction in which node k slides on the casing (the rotation
 direction); sliding friction mu lambda_k acts along -s_k. Contact forces, penetrations and the power of friction
-are outputs. The massless-boundary variant (Monjaraz Tec, Gross & Krack 2022) drops the inertia of the boundary
-DOFs: they follow the interior quasi-statically, which removes the stiff single-node constraint modes from the
-stability limit (linear models only). The frequency cap (spectral mass scaling, ``capped_mass``) keeps all inertia
-and every mode below the cap exact and slows the stiff modes above it, for linear and GNL models; with GNL the step
-then comes from the tangent limit on representative states (``gnl_time_step``, ``probe_states``).
+are outputs, and so is the work each force does on the blade in the scheme's own energy balance: with the discrete
+energy E_{n+1/2} = 1/2 v M v + 1/2 q_{n+1} K q_n (v = (q_{n+1} - q_n)/h, ``discrete_energy``) a force f_n of step n
+does the work f_n . (q_{n+1} - q_{n-1})/2 and the damping takes (q_{n+1} - q_{n-1}) C (q_{n+1} - q_{n-1})/4h, so for
+the linear scheme E_{n+1/2} - E_{-1/2} = W_normal + W_friction + W_forcing - D_damping to round-off (eq. 27's
+correction is a force of step n). This tells which contact force feeds a growing response.
+The massless-boundary variant (Monjaraz Tec, Gross & Krack 2022) drops the inertia of the boundary DOFs: they
+follow the interior quasi-statically, which removes the stiff single-node constraint modes from the stability limit
+(linear models only). The frequency cap (spectral mass scaling, ``capped_mass``) keeps all inertia and every mode
+below the cap exact and slows the stiff modes above it, for linear and GNL models; with GNL the step then comes
+from the tangent limit on representative states (``gnl_time_step``, ``probe_states``).
 """
 from __future__ import annotations
 
@@ -30,12 +35,12 @@ from typing import Callable, Sequence
 import numpy as np
 import scipy.linalg
 
-from rotor37_rom.casing import Casing, casing_clearance, contact_frames, ramp_rate
+from rotor37_rom.casing import Casing, casing_clearance, contact_matrices, ramp_rate
 from rotor37_rom.nonlinear_forces import PolynomialForces, cubic_monomial_indices, quadratic_monomial_indices
 
 __all__ = ["CentralDifference", "SimulationResult", "SimulationDiverged", "capped_mass", "gnl_time_step",
            "highest_frequency", "largest_states", "probe_states", "simulate", "tangent_highest_frequency",
-           "discrete_energy", "polynomial_potential"]
+           "discrete_energy", "polynomial_potential", "WORK_TERMS"]
 
 
 class SimulationDiverged(RuntimeError):
@@ -290,6 +295,11 @@ class SimulationResult:
             (W; <= 0 when friction opposes sliding); contact_steps: (P,) steps with at least one contact.
         diverged_step: (P,) step at which a simulation blew up, -1 if not; wall: seconds.
         records_q: list of (r, n_rec_p) full states when asked for, else None.
+        work: (P, 4) work done on the blade over the run (J), in the order of ``WORK_TERMS``: normal contact,
+            friction, external forcing (NaN without forcing or energy=True), and the energy the damping took (NaN
+            unless energy=True); see the module docstring.
+        work_history: with energy=True, list of (4, n_rec_p) running totals at the record instants (so that
+            energy[i] - energy[0] = work[0] + work[1] + work[2] - work[3] for the linear scheme), else None.
     """
 
     omega: np.ndarray
@@ -308,6 +318,11 @@ class SimulationResult:
     diverged_step: np.ndarray
     wall: float
     records_q: list | None = None
+    work: np.ndarray | None = None
+    work_history: list | None = None
+
+
+WORK_TERMS = ("normal", "friction", "forcing", "damping")
 
 
 def _per_sim(casings, P):
@@ -346,7 +361,8 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         duration: the run length (s) that sets the ovalization ramp (eq. 38); default: each simulation's own.
         forcing: f(t) -> (r,) or (r, P) reduced external force (N).
         initial: (Q_0, Q_-1), each (r,) or (r, P); default: rest.
-        record_every: record every this many steps; record_q: also keep full states; energy: discrete energy.
+        record_every: record every this many steps; record_q: also keep full states; energy: discrete energy
+            (record 0 holds that of (Q_0, Q_-1)), the damping's share of the balance and the running works.
         phase: angle (rad) the rotor has turned through before t = 0 (continuation: the casing must not jump).
         on_blowup: 'raise' (SimulationDiverged naming the step) or 'flag' (stop that simulation, mark it).
         blowup_limit: largest admissible boundary displacement (m) before a run counts as blown up.
@@ -379,16 +395,9 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
     casings = _per_sim(casing, P)
     phase = np.broadcast_to(np.asarray(phase, float), (P,)).copy()
     nodes = np.asarray(scheme.model.boundary_nodes, float).reshape(-1, 3)
-    if casings is not None:
-        cidx = casings[0].node_indices(len(nodes))
-        normals, slide, theta0 = contact_frames(nodes[cidx], casings[0].direction, casings[0].rotation_sense)
-    else:                                      # no contact: record the e_x displacements of all tip nodes
-        cidx = np.arange(len(nodes))
-        normals = np.tile([1.0, 0.0, 0.0], (len(nodes), 1))
+    # u_r = N q at the contact nodes (without contact: e_x at every tip node, recorded), S q along the sliding
+    N, S, theta0, cidx = contact_matrices(nodes, r, None if casings is None else casings[0])
     nc = len(cidx)
-    dofs = 3 * cidx[:, None] + np.arange(3)[None, :]           # (nc, 3) positions in q
-    N = np.zeros((nc, r))                                       # u_r = N q
-    N[np.arange(nc)[:, None], dofs] = normals
     if casings is not None:
         c0 = np.array([c.c0 for c in casings])
         mu = np.array([c.mu for c in casings])
@@ -398,8 +407,6 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         radius = np.hypot(nodes[cidx, 0], nodes[cidx, 1])
         # response to unit multipliers: normal force -n_k, friction force -s_k (times mu)
         WN = -scheme.W @ N.T                                    # (r, nc)
-        S = np.zeros((nc, r))                                   # sliding directions at the DOFs
-        S[np.arange(nc)[:, None], dofs] = slide
         WT = -scheme.W @ S.T                                    # (r, nc)
         DN, DT = N @ WN, N @ WT                                 # (nc, nc)
         contact = _ContactSolver(DN, DT)
@@ -429,6 +436,19 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
     energy_forces = scheme.model.forces if (energy and scheme.nonlinear) else None
     if energy and scheme.nonlinear and not isinstance(energy_forces, PolynomialForces):
         raise ValueError("energy=True with nonlinear forces needs the polynomial (intrusive) tensors")
+    if "work" not in st:                       # also a checkpoint written before the works were kept: from its step on
+        st["work"] = np.zeros((4, P))
+        st["work"][3] = 0.0 if energy else np.nan
+        st["work"][2] = 0.0 if (energy or forcing is not None) else np.nan
+        if energy:
+            st["work_rec"] = [np.full((4, n), np.nan) for n in steps // record_every + 1]
+            i0 = st["n"] // record_every
+            E0 = discrete_energy(scheme.M, scheme.K, energy_forces, Q, Qp, h)
+            for p in range(P):
+                st["work_rec"][p][:, i0] = st["work"][:, p]
+                if st["n"] == 0:
+                    st["energy"][p][0] = E0[p]
+    work = st["work"]
 
     with np.errstate(over="ignore", invalid="ignore"):     # a blow-up is detected and reported below
         t_wall = time.perf_counter()
@@ -464,6 +484,9 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                         lam[:, k], gap_after[:, k] = contact.solve(mus[k], g[:, j])
                     mlam = lam * mus                       # friction multipliers mu lambda
                     Qn[:, hits] += WN @ lam + WT @ mlam
+                    dq = Qn[:, hits] - Qpa[:, hits]        # q_n+1 - q_n-1: the force of step n works over dq / 2
+                    work[0, ps] -= 0.5 * np.sum(lam * (N @ dq), axis=0)
+                    work[1, ps] -= 0.5 * np.sum(mlam * (S @ dq), axis=0)
                     st["max_pen"][ps] = np.maximum(st["max_pen"][ps], -gap_after.min(axis=0))
                     on = lam > 0
                     touched = on.any(axis=0)
@@ -474,6 +497,12 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                     power = np.where(on, -mlam * (om[hits][None, :] * radius[:, None] + v), -np.inf).max(axis=0)
                     st["fric_pow"][ps] = np.where(touched, np.maximum(st["fric_pow"][ps], power), st["fric_pow"][ps])
                     lam_now[:, ps] = lam
+            if F is not None or energy:
+                dq = Qn - Qpa
+                if F is not None:
+                    work[2, active] += 0.5 * np.sum((F if F.ndim == 2 else F[:, None]) * dq, axis=0)
+                if energy:
+                    work[3, active] += np.sum(dq * (scheme.C @ dq), axis=0) / (4.0 * h)
             Qp[:, active] = Qa
             Q[:, active] = Qn
             st["n"] = n = n + 1
@@ -489,6 +518,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                         st["lam"][p][:, i] = lam_now[:, p]
                         if energy:
                             st["energy"][p][i] = E[j]
+                            st["work_rec"][p][:, i] = work[:, p]
                         if record_q:
                             st["q_rec"][p][:, i] = Qn[:, j]
             if n % check_every == 0 or n in ends:
@@ -528,7 +558,8 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         energy=[x["energy"] for x in recs] if energy else None,
         max_penetration=np.maximum(st["max_pen"], 0.0), min_multiplier=st["min_lam"], friction_power=st["fric_pow"],
         contact_steps=st["contact_steps"], diverged_step=st["diverged"], wall=wall,
-        records_q=[st["q_rec"][p] for p in range(P)] if record_q else None)
+        records_q=[st["q_rec"][p] for p in range(P)] if record_q else None, work=work.T.copy(),
+        work_history=[st["work_rec"][p] for p in range(P)] if energy else None)
 
 
 def _record(st, p, steps, h, record_every, omega):
@@ -537,7 +568,8 @@ def _record(st, p, steps, h, record_every, omega):
             "energy": None if st["energy"] is None else st["energy"][p], "q_final": st["Q"][:, p].copy(),
             "q_prev": st["Qp"][:, p].copy(), "omega": float(omega[p]), "max_penetration": float(st["max_pen"][p]),
             "min_multiplier": float(st["min_lam"][p]), "friction_power": float(st["fric_pow"][p]),
-            "contact_steps": int(st["contact_steps"][p]), "diverged_step": int(st["diverged"][p])}
+            "contact_steps": int(st["contact_steps"][p]), "diverged_step": int(st["diverged"][p]),
+            "work": st["work"][:, p].copy()}
 
 
 class _ContactSolver:

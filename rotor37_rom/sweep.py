@@ -126,7 +126,7 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
                           lam=rec["lam"], q_final=rec["q_final"], q_prev=rec["q_prev"],
                           max_penetration=rec["max_penetration"], min_multiplier=rec["min_multiplier"],
                           friction_power=rec["friction_power"], diverged_step=rec["diverged_step"],
-                          revolutions=spec.revolutions)
+                          work=rec["work"], revolutions=spec.revolutions)
 
         state = _load_state(ckpt, batch.size)
 
@@ -179,7 +179,7 @@ def _save_state(path: Path, st: dict, speeds: np.ndarray) -> None:
     arrays = {"speeds": speeds, "n": st["n"], "Q": st["Q"], "Qp": st["Qp"], "done": st["done"],
               "max_pen": st["max_pen"],
               "min_lam": st["min_lam"], "fric_pow": st["fric_pow"], "contact_steps": st["contact_steps"],
-              "diverged": st["diverged"]}
+              "diverged": st["diverged"], "work": st["work"]}
     for p in range(len(st["u_r"])):
         arrays[f"u_r{p}"] = st["u_r"][p]
         arrays[f"lam{p}"] = st["lam"][p]
@@ -192,6 +192,8 @@ def _load_state(path: Path, P: int) -> dict | None:
         return None
     st = {k: data[k] for k in ("Q", "Qp", "done", "max_pen", "min_lam", "fric_pow", "contact_steps", "diverged")}
     st["n"] = int(data["n"])
+    if "work" in data:                         # older checkpoints: the works count from the resumed step
+        st["work"] = data["work"]
     st["u_r"] = [data[f"u_r{p}"] for p in range(P)]
     st["lam"] = [data[f"lam{p}"] for p in range(P)]
     st["energy"] = st["q_rec"] = None

@@ -8,8 +8,8 @@ import pytest
 PURE = ["rotor37_rom", "rotor37_rom.geometry.tables", "rotor37_rom.geometry.parametric", "rotor37_rom.geometry.blade",
         "rotor37_rom.forms", "rotor37_rom.modes", "rotor37_rom.reduction", "rotor37_rom.nonlinear_forces",
         "rotor37_rom.step", "rotor37_rom.ecsw", "rotor37_rom.clearance", "rotor37_rom.charts", "rotor37_rom.casing",
-        "rotor37_rom.integrator", "rotor37_rom.sweep", "rotor37_rom.stress", "rotor37_rom.report",
-        "rotor37_rom.blas_check", "rotor37_rom.svk_kernel"]
+        "rotor37_rom.friction", "rotor37_rom.integrator", "rotor37_rom.sweep", "rotor37_rom.stress",
+        "rotor37_rom.report", "rotor37_rom.blas_check", "rotor37_rom.svk_kernel"]
 
 
 def test_pure_modules_do_not_import_dolfinx():

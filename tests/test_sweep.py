@@ -246,6 +246,10 @@ def test_contact_map_frequency_cap_flag(ci_rom, tmp_path):
     folder = run_sweep(scheme, [1400.0, 1450.0], SweepSpec(revolutions=2, casing=Casing()), tmp_path / "inproc",
                        progress=False)
     np.testing.assert_allclose(got["nfrc"], interaction_map(load_sweep(folder)).nfrc, rtol=1e-10)
+    # the contact works of each speed and the sprag-slip onsets of the model's tip (rotor37_rom.friction)
+    works = [r["work"][:2] for r in load_sweep(folder)]
+    np.testing.assert_allclose(np.column_stack([got["work_normal_J"], got["work_friction_J"]]), works, rtol=1e-10)
+    assert 0.15 < summary["sprag_slip"]["weakest_node"] < 0.18 and summary["sprag_slip"]["per_node"][7] is None
     uncapped = run_sweep(CentralDifference(ci_rom, nonlinear=False, safety=0.5), [1400.0],
                          SweepSpec(revolutions=0.1, casing=Casing()), tmp_path / "inproc", progress=False)
     assert uncapped.name != folder.name

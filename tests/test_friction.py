@@ -1,0 +1,84 @@
+"""Friction-induced instability of sliding tip contact (rotor37_rom.friction) against theory and the integrator.
+Model: the ci blade, r = 45 (the contact tests' model), linear operators."""
+import numpy as np
+import pytest
+import scipy.linalg
+
+from rotor37_rom.casing import Casing, contact_matrices
+from rotor37_rom.friction import critical_friction, sliding_contact_eigenvalues, sprag_slip_friction
+from rotor37_rom.integrator import CentralDifference, simulate
+
+
+def _largest_real_root(ev):
+    real = ev[np.abs(ev.imag) < 1e-9 * np.abs(ev).max()].real
+    return real.max() if real.size else -np.inf
+
+
+def test_sprag_slip_onset_is_where_a_real_eigenvalue_crosses_zero(ci_rom):
+    """Divergence of persistent sliding: the static criterion det(N K^-1 (N + mu S)^T) = 0 is where a real eigenvalue
+    of the constrained dynamics crosses zero (damping does not move a static instability), to 1e-4 in mu, for every
+    node and node set that friction can wedge, in both rotation senses. Without friction and damping the constrained
+    eigenvalues are +-i omega of (T^T K T, T^T M T), the clamped-node modes."""
+    M, C, K = ci_rom.M, ci_rom.C, ci_rom.K
+    checked = 0
+    for sense in (-1, 1):
+        N, S, _, _ = contact_matrices(ci_rom.boundary_nodes, ci_rom.r, Casing(rotation_sense=sense))
+        for nodes in [[k] for k in range(8)] + [[0, 1, 2, 3], [4, 5, 6, 7], None]:
+            mu = sprag_slip_friction(K, N, S, nodes)
+            if not np.isfinite(mu):
+                continue
+            below = sliding_contact_eigenvalues(M, C, K, N, S, mu * (1 - 1e-4), nodes)
+            above = sliding_contact_eigenvalues(M, C, K, N, S, mu * (1 + 1e-4), nodes)
+            assert _largest_real_root(below) < 0.0 < _largest_real_root(above), (sense, nodes, mu)
+            checked += 1
+    assert checked >= 8                     # LE nodes wedge for rotation sense -1, TE nodes for +1
+    N, S, _, _ = contact_matrices(ci_rom.boundary_nodes, ci_rom.r, Casing())
+    assert 0.15 < sprag_slip_friction(K, N, S, [2]) < 0.18                        # measured 0.1633 (README)
+    ev = sliding_contact_eigenvalues(M, 0 * C, K, N, S, 0.0, [0, 3])
+    T = scipy.linalg.null_space(N[[0, 3]])
+    w = np.sqrt(scipy.linalg.eigh(T.T @ K @ T, T.T @ M @ T, eigvals_only=True))
+    np.testing.assert_allclose(np.sort(np.abs(ev.imag))[::2], w, rtol=1e-8)
+    assert np.abs(ev.real).max() < 1e-8 * w.max()
+    with pytest.raises(ValueError, match="mu must be >= 0"):
+        sliding_contact_eigenvalues(M, C, K, N, S, -0.1)
+    with pytest.raises(ValueError, match="nodes must be distinct"):
+        sprag_slip_friction(K, N, S, [8])
+    mu_c, lead = critical_friction(M, C, K, N, S, [2], mu_max=0.3)
+    assert mu_c == pytest.approx(sprag_slip_friction(K, N, S, [2]), rel=1e-5) and lead.imag == 0.0
+
+
+def test_integrator_follows_the_sliding_stability(ci_rom):
+    """Node 2 alone, pressed on a round casing (c0 = 0.5 mm) by a constant outward force (1.1 c0 of free static
+    deflection). Below the sprag-slip coefficient (0.95 mu*) the static pressed state is a fixed point of the scheme
+    with contact: the multiplier stays at its static value to round-off over 4e4 steps (measured 1e-9). Above it
+    (1.2 mu*) no pressed equilibrium exists: the multiplier grows as exp(s t) with s the real eigenvalue of the
+    sliding dynamics until the run is stopped (rate fitted over the last quarter: measured 0.2 % off; the other
+    modes' transient, damped at Re = -3 1/s, is what is left)."""
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.5)
+    c0, k = 0.5e-3, 2
+    N, S, _, _ = contact_matrices(ci_rom.boundary_nodes, ci_rom.r, Casing(contact_nodes=(k,)))
+    mu_star = sprag_slip_friction(ci_rom.K, N, S)
+    G = np.linalg.inv(ci_rom.K)
+    F = N[0] * (1.1 * c0 / (N @ G @ N.T)[0, 0])
+    mu = 0.95 * mu_star
+    B = (N + mu * S).T
+    lam_s = ((N @ G @ F)[0] - c0) / (N @ G @ B)[0, 0]
+    q_s = G @ (F - B[:, 0] * lam_s)
+    res = simulate(scheme, [1400.0], Casing(c0=c0, h_b=0.0, mu=mu, contact_nodes=(k,)), n_steps=40000,
+                   forcing=lambda t: F, initial=(q_s, q_s), record_every=10, on_blowup="flag", blowup_limit=1.0)
+    assert res.diverged_step[0] < 0 and res.contact_steps[0] == 40000
+    assert np.abs(res.lam[0][0][1:] / lam_s - 1.0).max() < 1e-7
+    mu = 1.2 * mu_star
+    s = _largest_real_root(sliding_contact_eigenvalues(ci_rom.M, ci_rom.C, ci_rom.K, N, S, mu))
+    assert s > 1000.0
+    res = simulate(scheme, [1400.0], Casing(c0=c0, h_b=0.0, mu=mu, contact_nodes=(k,)), n_steps=40000,
+                   forcing=lambda t: F, initial=(q_s, q_s), record_every=10, on_blowup="flag", blowup_limit=1.0)
+    assert 0 < res.diverged_step[0] < 40000
+    lam, t = res.lam[0][0], res.t[0]
+    grew = lam > 0
+    t, lam = t[grew], lam[grew]
+    tail = slice(3 * len(t) // 4, len(t))
+    rate = np.polyfit(t[tail], np.log(lam[tail]), 1)[0]
+    print(f"mu* = {mu_star:.4f}; at 1.2 mu*: fitted rate {rate:.1f} 1/s, eigenvalue {s:.1f} 1/s")
+    assert rate == pytest.approx(s, rel=0.02)
+    assert res.work[0][1] > 0.0                  # friction feeds the blade
