@@ -253,12 +253,11 @@ def main(argv=None) -> int:
     lam = scipy.linalg.eigh(model.K, model.M, eigvals_only=True)
     omega = np.sqrt(lam[:3])
     lin_res = omega[0] / 4
+    onset = sprag_slip_onsets(model, casing)
     summary = {"r": model.r, "sizes": model.sizes, "omega_1_3": omega.tolist(), "linear_resonance": lin_res,
                "speeds": [start, stop, int(n)], "revolutions": args.revolutions, "casing": vars(casing), "runs": {},
-               "sprag_slip": {}}
-    onset = sprag_slip_onsets(model, casing)
-    summary["sprag_slip"] = {k: ([_finite(x) for x in v] if isinstance(v, list) else _finite(v))
-                             for k, v in onset.items()}
+               "sprag_slip": {k: ([_finite(x) for x in v] if isinstance(v, list) else _finite(v))
+                              for k, v in onset.items()}}
     if rank == 0 and not args.quiet:
         print(f"sustained sliding diverges (sprag-slip) from mu = {onset['weakest_node']:.3f} on one contact node, "
               f"{onset['all_nodes']:.3f} on all of them; this run: mu = {casing.mu:g} (growth can start below: "
