@@ -83,6 +83,7 @@ def main(argv=None) -> int:
     from rotor37_rom.builder import ReductionConfig, build_reduced_model
     from rotor37_rom.casing import Casing
     from rotor37_rom.integrator import CentralDifference, gnl_time_step, probe_states, simulate
+    from rotor37_rom.sweep import last_revolution_max
 
     sector = fem.create_blade_sector(preset="ci")
     ops = fem.create_svk_operators(sector)
@@ -117,18 +118,16 @@ def main(argv=None) -> int:
         for p, (w, m) in enumerate(grid):
             t, E, W = res.t[p], res.energy[p], res.work_history[p]
             stopped = int(res.diverged_step[p])
-            valid = np.isfinite(res.u_r[p][0])
-            T = 2 * np.pi / w
-            last = valid & (t >= t[valid][-1] - T)
-            amp = float(np.abs(res.u_r[p][0][last]).max())
+            valid = np.isfinite(res.u_r[p][0])              # a stopped run: its last revolution before the stop
+            amp = last_revolution_max(t[valid], res.u_r[p][0][valid], w)
             rates = _tail_rates(t, W, E, w)
-            e_end = float(E[np.isfinite(E)][-1])
+            end = np.flatnonzero(np.isfinite(E))[-1]        # last record: energy and works at the same instant
+            e_end = float(E[end])
             row = {"omega": w, "mu": m, "sense": sense, "le_last_rev_m": amp,
                    "stopped_s": stopped * scheme.h if stopped >= 0 else None, "energy_end_J": e_end,
-                   "work_normal_J": float(W[0][np.isfinite(W[0])][-1]),
-                   "work_friction_J": float(W[1][np.isfinite(W[1])][-1]),
-                   "damping_J": float(W[3][np.isfinite(W[3])][-1]), **rates, "wall_s": wall, "h": scheme.h,
-                   "r": model.r, "gnl": args.gnl}
+                   "work_normal_J": float(W[0, end]), "work_friction_J": float(W[1, end]),
+                   "damping_J": float(W[3, end]), **rates, "wall_s": wall, "h": scheme.h, "r": model.r,
+                   "gnl": args.gnl}
             rows.append(row)
             print(f"{w:>6.0f} {m:>5.2f} {amp * 1e3:>7.3f} "
                   f"{'-' if stopped < 0 else f'{stopped * scheme.h * 1e3:.1f} ms':>9} {e_end:>9.3g} "
