@@ -11,7 +11,7 @@ export OMPI_MCA_rmaps_base_oversubscribe := 1
 export MPLBACKEND := Agg
 export PYVISTA_OFF_SCREEN := true
 
-.PHONY: setup demo test test-fast bench contact-map clean
+.PHONY: setup demo test test-fast test-fe test-mpi test-slow test-kernels bench contact-map clean
 
 setup: $(STAMP)
 
@@ -42,6 +42,28 @@ contact-map: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest -q -ra tests
+
+# the suite in parts: fast (no slow, no MPI: <= 3 min), FE, MPI, slow
+test-fast: $(STAMP)
+	$(PY) -m pytest -q -ra -m "not slow and not mpi" tests
+
+test-fe: $(STAMP)
+	$(PY) -m pytest -q -ra -m "fe" tests
+
+test-mpi: $(STAMP)
+	$(PY) -m pytest -q -ra -m "mpi" tests
+
+test-slow: $(STAMP)
+	$(PY) -m pytest -q -ra -m "slow" tests
+
+# portability: the numerically sensitive tests under the native OpenBLAS kernels with 2 and 1 threads, and with
+# the AMD Zen and Intel Haswell kernels forced (each run prints its kernels in the header); ~20 min
+KERNEL_TESTS := -m "kernels or (not slow and not mpi)" tests
+test-kernels: $(STAMP)
+	OPENBLAS_NUM_THREADS=2 $(PY) -m pytest -q -ra $(KERNEL_TESTS)
+	OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -q -ra $(KERNEL_TESTS)
+	OPENBLAS_CORETYPE=Zen OPENBLAS_NUM_THREADS=2 $(PY) -m pytest -q -ra $(KERNEL_TESTS)
+	OPENBLAS_CORETYPE=Haswell OPENBLAS_NUM_THREADS=2 $(PY) -m pytest -q -ra $(KERNEL_TESTS)
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_full_order.py

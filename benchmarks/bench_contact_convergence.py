@@ -45,13 +45,13 @@ def nfrc_run(model, gnl, speeds, casing, revolutions, safety, cap, h=None, state
     rec = max(1, int(round(1e-5 / scheme.h)))
     res = simulate(scheme, speeds, casing, revolutions=revolutions, on_blowup="flag", record_every=rec,
                    record_q=states > 0)
-    amp = [last_revolution_max(res.t[p], res.u_r[p][0], speeds[p]) if res.diverged_step[p] < 0 else float("nan")
+    amp = [last_revolution_max(res.t[p], res.u_r[p][res.row("0:LE")], speeds[p]) if res.diverged_step[p] < 0 else float("nan")
            for p in range(len(speeds))]
     out = {"cap_hz": None if cap is None else cap / 2 / np.pi, "h": scheme.h, "h_crit": scheme.h_crit,
            "wall_s": res.wall, "rev_per_s": revolutions * len(speeds) / res.wall, "nfrc": amp,
            "max_penetration": float(res.max_penetration.max()), "diverged": int((res.diverged_step >= 0).sum())}
     if states:
-        out["states"] = largest_states(res, scheme.r_b, states).T.tolist()
+        out["states"] = largest_states(res, scheme.boundary_rows, states).T.tolist()
     return out
 
 

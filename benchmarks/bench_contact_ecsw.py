@@ -160,9 +160,9 @@ def main(argv=None) -> int:
     key = f"{model.key}_{'_'.join(f'{w:g}' for w in args.train_speeds)}_{args.revolutions:g}"
     runs, store["training_runs_s"] = training_runs(model, np.array(args.train_speeds), casing, args.revolutions, h,
                                                    Path(f"results/cache/ecsw_training_{key}.npz"))
-    Q_train, Q_held = trajectory_states(runs, int(model.sizes["r_b"]), args.states, n_held=20)
+    Q_train, Q_held = trajectory_states(runs, model.nodes.boundary_rows, args.states, n_held=20)
     print(f"training: {Q_train.shape[1]} states from {len(runs)} GNL contact runs; held-out {Q_held.shape[1]} + the "
-          f"reference's {Q_ref.shape[1]} largest (tip DOFs up to {np.abs(Q_ref[:24]).max() * 1e3:.1f} mm)")
+          f"reference's {Q_ref.shape[1]} largest (tip DOFs up to {np.abs(Q_ref[model.nodes.boundary_rows]).max() * 1e3:.1f} mm)")
 
     models = {}
     for level, tol in [("point", t) for t in args.tols] + [("cell", args.tols[0])]:

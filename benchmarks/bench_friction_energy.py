@@ -53,7 +53,7 @@ def sliding_stability(model, min_rate: float) -> list:
     print(f"sliding stability, r = {model.r}: divergence mu* (static compliance) | first instability growing "
           f"faster than {min_rate:g} 1/s (mu, rate 1/s, frequency rad/s)")
     for sense in (-1, 1):
-        N, S, _, _ = contact_matrices(model.boundary_nodes, model.r, Casing(rotation_sense=sense))
+        N, S, _, _ = contact_matrices(model.nodes, model.r, Casing(rotation_sense=sense))
         print(f"rotation sense {sense:+d}")
         for name, nodes in sets.items():
             mu_d = sprag_slip_friction(model.K, N, S, nodes)
@@ -118,8 +118,8 @@ def main(argv=None) -> int:
         for p, (w, m) in enumerate(grid):
             t, E, W = res.t[p], res.energy[p], res.work_history[p]
             stopped = int(res.diverged_step[p])
-            valid = np.isfinite(res.u_r[p][0])              # a stopped run: its last revolution before the stop
-            amp = last_revolution_max(t[valid], res.u_r[p][0][valid], w)
+            valid = np.isfinite(res.u_r[p][res.row("0:LE")])              # a stopped run: its last revolution before the stop
+            amp = last_revolution_max(t[valid], res.u_r[p][res.row("0:LE")][valid], w)
             rates = _tail_rates(t, W, E, w)
             end = np.flatnonzero(np.isfinite(E))[-1]        # last record: energy and works at the same instant
             e_end = float(E[end])

@@ -46,9 +46,9 @@ def _finals(patterns) -> tuple[np.ndarray, np.ndarray]:
     return np.array(speeds), (np.array(states).T if states else np.zeros((0, 0)))
 
 
-def _largest(Q: np.ndarray, r_b: int, n: int) -> np.ndarray:
+def _largest(Q: np.ndarray, boundary_rows: np.ndarray, n: int) -> np.ndarray:
     """The n states (columns) of largest boundary-DOF motion (as ``integrator.largest_states``)."""
-    return Q[:, np.argsort(-np.abs(Q[:r_b]).max(axis=0))[:n]]
+    return Q[:, np.argsort(-np.abs(Q[boundary_rows]).max(axis=0))[:n]]
 
 
 def _nfrc_by_speed(patterns) -> dict:
@@ -160,9 +160,9 @@ def main(argv=None) -> int:
                     # a run that blew up grows within a few hundred steps: drop its last 2 ms of records
                     runs = [q[:, t < (np.inf if k < 0 else k * scheme.h - 2e-3)]
                             for q, t, k in zip(res.records_q, res.t, res.diverged_step)]
-                    Q_ref, _ = trajectory_states(runs, scheme.r_b)
+                    Q_ref, _ = trajectory_states(runs, scheme.boundary_rows)
                     np.savez(path.with_suffix(".refine.npz"), Q_ref=Q_ref, diverged=res.diverged_step,
-                             largest=_largest(np.hstack(runs), scheme.r_b, 24))
+                             largest=_largest(np.hstack(runs), scheme.boundary_rows, 24))
                     reduced, _ = hyper_reduce(sector, model, np.hstack([Q_train, Q_ref]), tol=tol, level="point",
                                               label=f"headline training + {refine:g}-rev refinement, tol {tol:g}")
                 save_reduced_model(reduced, path)

@@ -34,7 +34,7 @@ def gemm_rate(n: int = 2000) -> float:
 
 def synthetic_model(r: int, seed: int = 0):
     from rotor37_rom.nonlinear_forces import PolynomialForces
-    from rotor37_rom.reduction import ReducedModel
+    from rotor37_rom.reduction import NodeMap, ReducedModel
 
     rng = np.random.default_rng(seed)
     X = rng.standard_normal((r, r))
@@ -44,7 +44,8 @@ def synthetic_model(r: int, seed: int = 0):
     B = rng.standard_normal((r, r * (r + 1) * (r + 2) // 6))
     nodes = np.column_stack([np.full(8, 0.25), np.linspace(-0.025, 0.023, 8), np.linspace(0.006, 0.034, 8)])
     return ReducedModel(M=M, C=np.zeros_like(M), K=K, forces=PolynomialForces(A, B), boundary_dofs=np.arange(24),
-                        boundary_nodes=nodes, sizes={"r_b": 24, "r_c": r - 24, "r_md": 0}, md_pairs=np.zeros((0, 2)),
+                        nodes=NodeMap.for_nodes(nodes, np.arange(24).reshape(8, 3)),
+                        sizes={"r_b": 24, "r_c": r - 24, "r_md": 0}, md_pairs=np.zeros((0, 2)),
                         Phi=None, metadata={"synthetic": r})
 
 

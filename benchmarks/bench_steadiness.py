@@ -30,7 +30,7 @@ def main(argv=None) -> int:
                         help="also list the verdicts of the speeds in this band (rad/s)")
     parser.add_argument("--name", default="bench_steadiness")
     args = parser.parse_args(argv)
-    from rotor37_rom.sweep import LE, is_steady, load_sweep
+    from rotor37_rom.sweep import LE, is_steady, load_sweep, record_row
 
     bad = [f for f in args.folders if not Path(f).is_dir()]
     if bad or min(args.windows) < 1 or not 0 < args.tol < 1:
@@ -42,7 +42,7 @@ def main(argv=None) -> int:
             if int(np.asarray(rec["diverged_step"]).ravel()[0]) < 0:
                 runs[float(rec["omega"])] = rec
     speeds = sorted(runs)
-    verdict = {w: [is_steady(runs[om]["t"], runs[om]["u_r"][LE], om, args.tol, w) for om in speeds]
+    verdict = {w: [is_steady(runs[om]["t"], runs[om]["u_r"][record_row(runs[om], LE)], om, args.tol, w) for om in speeds]
                for w in args.windows}
     rows = [{"window": w, "steady": int(sum(v)), "of": len(v)} for w, v in verdict.items()]
     print(f"{len(speeds)} finished speeds, tol {args.tol:g}")

@@ -148,7 +148,7 @@ def sprag_slip_onsets(model, casing) -> dict:
     from rotor37_rom.casing import contact_matrices
     from rotor37_rom.friction import sprag_slip_friction
 
-    N, S, _, _ = contact_matrices(model.boundary_nodes, model.r, casing)
+    N, S, _, _ = contact_matrices(model.nodes, model.r, casing)
     single = [sprag_slip_friction(model.K, N, S, [k]) for k in range(N.shape[0])]
     return {"weakest_node": min(single), "per_node": single, "all_nodes": sprag_slip_friction(model.K, N, S)}
 
@@ -209,7 +209,7 @@ def main(argv=None) -> int:
 
     from rotor37_rom.casing import Casing
     from rotor37_rom.integrator import CentralDifference
-    from rotor37_rom.sweep import SweepSpec, interaction_map, load_sweep, rerun_diverged, run_sweep
+    from rotor37_rom.sweep import SweepSpec, interaction_map, load_sweep, record_row, rerun_diverged, run_sweep
 
     try:
         casing = Casing(c0=args.c0, h_b=args.hb, mu=args.mu, direction=args.direction)
@@ -314,7 +314,8 @@ def main(argv=None) -> int:
         ok = np.isfinite(imap.nfrc)
         peak = float(imap.speeds[ok][np.argmax(imap.nfrc[ok])]) if ok.any() else float("nan")
         worst = results[int(np.nanargmax(np.where(ok, imap.nfrc, -1)))] if ok.any() else results[0]
-        plot_time_history(worst["t"], {"LE": worst["u_r"][0], "TE": worst["u_r"][-1]},
+        plot_time_history(worst["t"], {"LE": worst["u_r"][record_row(worst, "0:LE")],
+                                         "TE": worst["u_r"][record_row(worst, "0:TE")]},
                           out / f"time_history_{tag}.png", title=f"{label}, Omega = {float(worst['omega']):.0f} rad/s")
         revs = args.revolutions * len(results)
         works = np.array([np.asarray(r.get("work", np.full(4, np.nan)), float)[:2] for r in results])

@@ -111,7 +111,7 @@ def main(argv=None) -> int:
                       clim=peak["clim"])
         render_stress(sector, u, peak["cell_max"], out / f"stress_disk_{tag}.png", title + ", 36 blades in phase",
                       n_sectors=36, factor=factor, clim=peak["clim"])
-        plot_time_history(res.t[0], {"LE": res.u_r[0][0], "TE": res.u_r[0][-1]}, out / f"time_history_{tag}.png",
+        plot_time_history(res.t[0], {"LE": res.u_r[0][res.row("0:LE")], "TE": res.u_r[0][res.row("0:TE")]}, out / f"time_history_{tag}.png",
                           title=f"{label}, Omega = {args.speed:.0f} rad/s, h = {scheme.h:.3g} s")
         print(f"{label:>7}: t_max = {peak['t_max'] * 1e3:.3f} ms, u_LE = {peak['u_le'] * 1e3:.3f} mm, max von Mises "
               f"{peak['vm_max'] / 1e6:.1f} MPa = {100 * peak['ratio_yield']:.1f} % of sigma_Y at "

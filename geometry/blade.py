@@ -31,6 +31,7 @@ __all__ = [
     "law_sections",
     "create_blade_model",
     "import_blade_model",
+    "embed_tip_nodes",
     "N_TIP_NODES",
 ]
 
@@ -253,6 +254,25 @@ def _tip_camber_points(tip_face: int, le: np.ndarray, te: np.ndarray, sections, 
     return np.vstack([le, projected, te])
 
 
+def embed_tip_nodes(tip_face: int, tip_points: np.ndarray) -> list[int]:
+    """Point entities at the contact nodes, embedded in the tip face so that they become mesh vertices; LE and TE,
+    vertices of the tip face already, are reused. Returns their tags in the order of ``tip_points``."""
+    import gmsh
+
+    vertices = [t for d, t in gmsh.model.getBoundary([(2, tip_face)], recursive=True) if d == 0]
+    vcoords = np.array([gmsh.model.getValue(0, v, []) for v in vertices])
+    tags = []
+    for k, p in enumerate(tip_points):            # a handful of contact nodes
+        dist = np.linalg.norm(vcoords - p, axis=1)
+        if k in (0, len(tip_points) - 1) and dist.min() < 1e-9:
+            tags.append(vertices[int(np.argmin(dist))])
+        else:
+            tags.append(gmsh.model.occ.addPoint(*p))
+    gmsh.model.occ.synchronize()
+    gmsh.model.mesh.embed(0, [t for t in tags if t not in vertices], 2, tip_face)
+    return tags
+
+
 def _apply_mesh_preset(preset: MeshPreset, edge_curves: Sequence[int] = ()) -> None:
     """Global size options; with edge_curves (the thin LE/TE), a distance field grades the size from min_size there
     to size at a distance of 4*size, so that the two sides of a thin edge never see overlapping triangles."""
@@ -303,18 +323,7 @@ def _tag_and_mesh(volume: int, groups: dict[BladeGroup, list[int]], tip_points: 
             gmsh.model.setPhysicalName(2, group, group.name.lower())
     point_tags = []
     if tip_points is not None:
-        # LE and TE are already geometry vertices; the inner points are embedded in the tip face
-        vertices = [tag for dim, tag in gmsh.model.getBoundary([(2, tip_face)], recursive=True) if dim == 0]
-        vcoords = np.array([gmsh.model.getValue(0, v, []) for v in vertices])
-        for k, p in enumerate(tip_points):
-            dist = np.linalg.norm(vcoords - p, axis=1)
-            if k in (0, len(tip_points) - 1) and dist.min() < 1e-9:
-                point_tags.append(vertices[int(np.argmin(dist))])
-            else:
-                point_tags.append(gmsh.model.occ.addPoint(*p))
-        gmsh.model.occ.synchronize()
-        inner = [t for t in point_tags if t not in vertices]
-        gmsh.model.mesh.embed(0, inner, 2, tip_face)
+        point_tags = embed_tip_nodes(tip_face, tip_points)
         gmsh.model.addPhysicalGroup(0, point_tags, BladeGroup.TIP_NODES)
         gmsh.model.setPhysicalName(0, BladeGroup.TIP_NODES, BladeGroup.TIP_NODES.name.lower())
     _apply_mesh_preset(preset, _edge_curves(groups))

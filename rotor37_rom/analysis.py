@@ -19,16 +19,16 @@ def stress_at_peak(sector, model, recovery, result, nonlinear: bool, sim: int = 
         raise ValueError("no simulation with recorded states yet: run the contact simulation first (record_q=True)")
     if not 0 <= sim < len(result.t):
         raise ValueError(f"sim must be in [0, {len(result.t) - 1}], got {sim}")
-    t, u_le = result.t[sim], result.u_r[sim][0]
+    t, u_le = result.t[sim], result.u_r[sim][result.row("0:LE")]
     if not np.isfinite(u_le).any():
         raise ValueError("the simulation has no finite record of node LE (diverged?)")
     k = int(np.nanargmax(u_le))
     q = result.records_q[sim][:, k]
     cell_max = recovery.cell_max(q, nonlinear)
-    singular = fem.cells_touching_points(sector, model.boundary_nodes)
+    nodes = model.nodes.coordinates[model.nodes.sector == 0]        # the contact nodes on this sector's mesh
+    singular = fem.cells_touching_points(sector, nodes)
     mid = fem.cell_midpoints(sector)
     span = np.ptp(np.hypot(mid[:, 0], mid[:, 1]))
-    nodes = np.asarray(model.boundary_nodes, float).reshape(-1, 3)
     distance = np.min(np.linalg.norm(mid[:, None, :] - nodes[None, :, :], axis=2), axis=1)
     band = distance < TIP_BAND * span                               # contact-impulse zone around the tip nodes
     regular = cell_max.copy()

@@ -15,13 +15,16 @@ import numpy as np
 
 from rotor37_rom import __version__, fem
 from rotor37_rom.ecsw import train_ecsw
+from rotor37_rom.modes import normalise_signs
 from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces
-from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, ReducedModel, fixed_interface_correction, lift_states,
-                                   load_reduced_model, modal_damping, reduced_model_key, save_reduced_model,
-                                   select_pairs, selection_weights, simulate_linear_newmark)
+from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, NodeMap, ReducedModel, craig_bampton,
+                                   fixed_interface_correction, lift_states, load_reduced_model, modal_damping,
+                                   reduced_model_key, save_reduced_model, select_pairs, selection_weights,
+                                   simulate_linear_newmark)
 from rotor37_rom.step import identify_step
 
 __all__ = ["ReductionConfig", "build_reduced_model", "hyper_reduce", "mesh_signature", "compute_modal_derivatives",
+           "boundary_node_map",
            "training_states", "clearance_consumption_study"]
 
 LOG = logging.getLogger(__name__)
@@ -102,11 +105,12 @@ def _check_operators(K: np.ndarray, M: np.ndarray) -> None:
 
 
 def compute_modal_derivatives(sector, ops, basis: CraigBamptonBasis, pairs: np.ndarray, method: str = "exact",
-                              fd_step: float = 1e-6) -> np.ndarray:
+                              fd_step: float = 1e-6, solve=None) -> np.ndarray:
     """Fixed-interface modal derivatives zeta_jk (eqs. 17, 19, 20) for the given (j, k) pairs, M-normalised later.
 
     exact: K xi = -D^2 f_int(0)[phi_j, phi_k] from the UFL second derivative (no step).
     fd:    K xi = -(K_T(eps phi_k) - K) phi_j / eps, eps = fd_step / max|phi_k| (eq. 19).
+    solve: a factorisation of K on the free DOFs (``fem.mumps_solver``), reused between calls; built if None.
     """
     lin = basis.linear
     if len(pairs) == 0:
@@ -122,30 +126,53 @@ def compute_modal_derivatives(sector, ops, basis: CraigBamptonBasis, pairs: np.n
             dK = (fem.assemble_tangent_scipy(sector, ops, eps * lin[:, k]) - K0) / eps
             for n in np.flatnonzero(pairs[:, 1] == k):
                 rhs[n] = -(dK @ lin[:, pairs[n, 0]])
-    xi = fem.solve_clamped_static(sector, rhs, ops).T
+    free = fem.free_dofs(sector)
+    if solve is None:
+        solve = fem.mumps_solver(fem.assemble_free_operators(sector, ops)[0])
+    xi = np.zeros((lin.shape[0], len(pairs)))
+    xi[free] = solve(rhs[:, free].T)
     return fixed_interface_correction(xi, basis.Psi, basis.boundary_dofs)
 
 
-def _m_normalise(Z: np.ndarray, M) -> tuple[np.ndarray, np.ndarray]:
-    norms = np.sqrt(np.einsum("ij,ij->j", Z, M @ Z))
+def boundary_node_map(sector, boundary_dofs: np.ndarray):
+    """The NodeMap of a Craig-Bampton model whose q starts with ``boundary_dofs``: every node with its three DOFs
+    among them, named as the sector's tip nodes where it is one ('LE', ..., 'TE') and 'node<k>' otherwise, its q
+    entries the DOFs' positions in ``boundary_dofs`` (whatever their order)."""
+    boundary_dofs = np.asarray(boundary_dofs, dtype=np.int64).ravel()
+    bs = 3
+    blocks, comps = boundary_dofs // bs, boundary_dofs % bs
+    position = {int(d): k for k, d in enumerate(boundary_dofs)}
+    complete = [b for b in dict.fromkeys(blocks.tolist()) if set(comps[blocks == b].tolist()) == {0, 1, 2}]
+    coords = sector.V.tabulate_dof_coordinates()
+    tip_blocks = {int(d) // bs: name for d, name in zip(np.asarray(sector.tip_dofs)[:, 0], sector.tip_names)
+                  if d >= 0}
+    names = [tip_blocks.get(b, f"node{b}") for b in complete]
+    q_index = np.array([[position[b * bs + c] for c in range(bs)] for b in complete], dtype=np.int64).reshape(-1, 3)
+    return NodeMap.for_nodes(coords[complete].reshape(-1, 3), q_index, names)
+
+
+def _m_normalise(Z: np.ndarray, M, free: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    norms = np.sqrt(np.einsum("ij,ij->j", Z[free], M @ Z[free]))
     return Z / norms, norms
 
 
-def training_states(K_lin: np.ndarray, M_lin: np.ndarray, pairs: np.ndarray, md_scale: np.ndarray, r_b: int,
-                    n_states: int, amplitudes=(1e-3, 3e-3), n_modes: int = 12, seed: int = 7) -> np.ndarray:
+def training_states(K_lin: np.ndarray, M_lin: np.ndarray, pairs: np.ndarray, md_scale: np.ndarray,
+                    boundary_rows: np.ndarray, n_states: int, amplitudes=(1e-3, 3e-3), n_modes: int = 12,
+                    seed: int = 7) -> np.ndarray:
     """Smooth reduced states for training and checking hyper-reduction: the first n_modes eigenvectors of the linear
     Craig-Bampton model and random combinations of them (seeded), each scaled so that its largest boundary
-    displacement is one of ``amplitudes`` (m), lifted with the modal derivatives (reduction.lift_states).
+    displacement (entries ``boundary_rows`` of the linear coordinates) is one of ``amplitudes`` (m), lifted with the
+    modal derivatives (reduction.lift_states).
     A different seed gives held-out states."""
     import scipy.linalg
 
     _, V = scipy.linalg.eigh(K_lin, M_lin)
-    V = V[:, :n_modes]
+    V = normalise_signs(V[:, :n_modes])           # the same states on every machine (eigh's signs are arbitrary)
     rng = np.random.default_rng(seed)
     n_random = max(0, n_states // len(amplitudes) - n_modes)
     base = np.hstack([V, V @ rng.standard_normal((n_modes, n_random))]) if seed == 7 else \
         V @ rng.standard_normal((n_modes, max(1, n_states // len(amplitudes))))
-    base = base / np.abs(base[:r_b]).max(axis=0)
+    base = base / np.abs(base[np.asarray(boundary_rows)]).max(axis=0)
     return np.hstack([lift_states(a * base, pairs, md_scale) for a in amplitudes])
 
 
@@ -170,10 +197,20 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
         report["timings"][name] = now - clock
         clock = now
 
-    Kfull = fem.petsc_to_scipy(fem.assemble_stiffness(sector, ops, clamped=False))
-    Mfull = fem.petsc_to_scipy(fem.assemble_mass(sector, ops, clamped=False))
-    Psi, Theta, omega_c = fem.solve_constraint_and_interface_modes(sector, boundary_dofs, config.r_c, ops)
+    K_f, M_f, free = fem.assemble_free_operators(sector, ops)
+    n_full = sector.V.dofmap.index_map.size_local * sector.V.dofmap.index_map_bs
+    position = np.searchsorted(free, boundary_dofs)
+    if boundary_dofs.size == 0 or boundary_dofs.min() < 0 or boundary_dofs.max() >= n_full \
+            or not np.array_equal(free[np.minimum(position, free.size - 1)], boundary_dofs):
+        raise ValueError(f"boundary DOFs must be indices in [0, {n_full}) of DOFs on the mesh that are not clamped")
+    Psi_f, Theta_f, omega_c = craig_bampton(K_f, M_f, position, config.r_c, solve=fem.mumps_solver,
+                                            eigensolve=fem.slepc_eigenpairs)
+    Psi, Theta = np.zeros((n_full, Psi_f.shape[1])), np.zeros((n_full, Theta_f.shape[1]))
+    Psi[free], Theta[free] = Psi_f, Theta_f
     basis = CraigBamptonBasis(Psi=Psi, Theta=Theta, omega_c=omega_c, boundary_dofs=boundary_dofs)
+    nodes = boundary_node_map(sector, boundary_dofs)
+    if "LE" not in nodes.names:
+        raise ValueError("the boundary DOFs must hold the three DOFs of node LE (the training force acts there)")
     lin = basis.linear
     n_lin = lin.shape[1]
     max_md = n_lin * (n_lin + 1) // 2
@@ -181,9 +218,9 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
         raise ValueError(f"r_md must be in [0, {max_md}] for r_b + r_c = {n_lin}, got {config.r_md}")
     lap("craig_bampton")
     # linear training response in the Craig-Bampton space (harmonic force at node LE along e_z, one period)
-    K_lin, M_lin = lin.T @ (Kfull @ lin), lin.T @ (Mfull @ lin)
+    K_lin, M_lin = lin[free].T @ (K_f @ lin[free]), lin[free].T @ (M_f @ lin[free])
     C_lin, _ = modal_damping(K_lin, M_lin)
-    le_z = sector.tip_dofs[0, 2]
+    le_z = boundary_dofs[nodes.q_index[nodes.row("LE"), 2]]
     f_shape = config.training_force * lin[le_z]
     period = 2 * np.pi / config.training_omega
     t, q_train = simulate_linear_newmark(M_lin, C_lin, K_lin,
@@ -196,22 +233,24 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
     pairs = select_pairs(W, config.r_md)
     report["weights"], report["pairs"] = W, pairs
     lap("selection")
-    Z = compute_modal_derivatives(sector, ops, basis, pairs, config.md_method, config.fd_step)
+    solve_free = fem.mumps_solver(K_f)
+    Z = compute_modal_derivatives(sector, ops, basis, pairs, config.md_method, config.fd_step, solve_free)
     if config.global_md_modes:
         n_g = config.global_md_modes
         normal = np.column_stack([m.x.array for m in fem.compute_clamped_modes(sector, n_g, ops).modes])
         gpairs = np.column_stack(np.triu_indices(n_g))
         global_basis = dataclasses.replace(basis, Psi=np.zeros((normal.shape[0], 0)), Theta=normal,
                                            boundary_dofs=np.zeros(0, dtype=np.int64))
-        xi = compute_modal_derivatives(sector, ops, global_basis, gpairs, config.md_method, config.fd_step)
+        xi = compute_modal_derivatives(sector, ops, global_basis, gpairs, config.md_method, config.fd_step,
+                                       solve_free)
         # the derivatives are of the free blade; remove their boundary part with the constraint modes (eq. 20)
         Z = np.hstack([Z, fixed_interface_correction(xi, basis.Psi, boundary_dofs)])
         pairs = np.vstack([pairs, -1 - gpairs])  # negative: pairs of clamped normal modes
-    Z, md_scale = _m_normalise(Z, Mfull) if Z.shape[1] else (Z, np.zeros(0))
+    Z, md_scale = _m_normalise(Z, M_f, free) if Z.shape[1] else (Z, np.zeros(0))
     basis = dataclasses.replace(basis, Z=Z, md_pairs=pairs)
     lap("modal_derivatives")
     Phi = basis.Phi
-    K, M = Phi.T @ (Kfull @ Phi), Phi.T @ (Mfull @ Phi)
+    K, M = Phi[free].T @ (K_f @ Phi[free]), Phi[free].T @ (M_f @ Phi[free])
     K, M = 0.5 * (K + K.T), 0.5 * (M + M.T)
     _check_operators(K, M)
     C, omega = modal_damping(K, M)
@@ -232,14 +271,14 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
             scales = config.step_amplitude / np.abs(Phi).max(axis=0)
             forces = identify_step(lambda Q: Phi.T @ fem.evaluate_forces(sector, ops, (Phi @ Q).T).T, scales)
         elif config.forces == "ecsw":
-            Q_train = training_states(K_lin, M_lin, pairs, md_scale, len(boundary_dofs), config.ecsw_states)
+            Q_train = training_states(K_lin, M_lin, pairs, md_scale, nodes.boundary_rows, config.ecsw_states)
             result = train_ecsw(exact, cells, Q_train, tol=config.ecsw_tol)
             report["ecsw_exact"] = exact
             forces = result.forces
             report["ecsw_cells"], report["ecsw_training_error"] = result.cells.size, result.training_error
         lap("forces")
     model = ReducedModel(M=M, C=C, K=K, forces=forces, boundary_dofs=boundary_dofs,
-                         boundary_nodes=sector.tip_nodes, sizes=basis.sizes, md_pairs=pairs,
+                         nodes=nodes, sizes=basis.sizes, md_pairs=pairs,
                          Phi=Phi if config.keep_basis else None, metadata=metadata)
     if cache is not None:
         save_reduced_model(model, cache)
@@ -283,7 +322,7 @@ def clearance_consumption_study(sector, mode: str = "1B", zeta: float = 1e-3, n_
             ``direction``: 'x' (e_x, the paper's "radial" direction for this blade, §2.3) or 'radial' (true radial;
             1B and 1T move the tip LE mostly tangentially, so this gives much larger amplitudes).
         n_levels: load levels on each side of 0 (delta = +-k/n_levels).
-        roms: {name: ReducedModel} to compare (their first boundary DOFs are node LE's).
+        roms: {name: ReducedModel} to compare (node LE located through each model's node map).
     Returns:
         ClearanceCurves with 'FOM linear', 'FOM nonlinear' and one curve per ROM (nonlinear), and their costs.
     """
@@ -301,26 +340,28 @@ def clearance_consumption_study(sector, mode: str = "1B", zeta: float = 1e-3, n_
     modal = fem.compute_clamped_modes(sector, 6, ops)
     labels = classify_blade_modes(modal.tip_displacements, sector.tip_nodes)
     phi = modal.modes[labels.index(mode)].x.array.copy()
-    le = sector.tip_nodes[0]
+    i_le, i_te = sector.tip_names.index("LE"), sector.tip_names.index("TE")
+    le, le_dofs = sector.tip_nodes[i_le], sector.tip_dofs[i_le]
     if direction not in ("x", "radial"):
         raise ValueError(f"direction must be 'x' or 'radial', got {direction!r}")
     e_n = np.array([1.0, 0.0, 0.0]) if direction == "x" else np.array([le[0], le[1], 0.0]) / np.hypot(*le[:2])
-    phi *= zeta / (phi[sector.tip_dofs[0]] @ e_n)
+    phi *= zeta / (phi[le_dofs] @ e_n)
     K = fem.assemble_stiffness(sector, ops)
     x, f = K.createVecs()
     x.array[:] = phi
     K.mult(x, f)
-    slope = (np.hypot(*sector.tip_nodes[-1, :2]) - np.hypot(*le[:2])) / (sector.tip_nodes[-1, 2] - le[2])
+    te = sector.tip_nodes[i_te]
+    slope = (np.hypot(*te[:2]) - np.hypot(*le[:2])) / (te[2] - le[2])
     deltas = np.concatenate([-np.arange(n_levels, 0, -1), [0], np.arange(1, n_levels + 1)]) / n_levels
     curves, costs = {}, {}
-    curves["FOM linear"] = clearance_change(le, deltas[:, None] * phi[sector.tip_dofs[0]][None, :], slope)
+    curves["FOM linear"] = clearance_change(le, deltas[:, None] * phi[le_dofs][None, :], slope)
     t0 = time.perf_counter()
     tips = {}
     for sign in (1.0, -1.0):
         f_signed = f.copy()
         f_signed.scale(sign)
         res = fem.solve_static(sector, force=f_signed, n_steps=n_levels, ops=ops)
-        tips[sign] = res.tip_displacements[:, 0, :]
+        tips[sign] = res.tip_displacements[:, i_le, :]
     u_le = np.vstack([tips[-1.0][::-1], np.zeros((1, 3)), tips[1.0]])
     curves["FOM nonlinear"] = clearance_change(le, u_le, slope)
     costs["FOM nonlinear"] = time.perf_counter() - t0
@@ -337,6 +378,6 @@ def clearance_consumption_study(sector, mode: str = "1B", zeta: float = 1e-3, n_
             costs[name] = time.perf_counter() - t0
             continue
         q = np.vstack([q_neg[::-1], np.zeros((1, model.r)), q_pos])
-        curves[name] = clearance_change(le, q[:, :3], slope)
+        curves[name] = clearance_change(le, q[:, model.nodes.q_index[model.nodes.row("LE")]], slope)
         costs[name] = time.perf_counter() - t0
     return ClearanceCurves(mode=mode, zeta=zeta, deltas=deltas, curves=curves, costs=costs)

@@ -32,11 +32,12 @@ def ramp_rate(duration: np.ndarray, fraction: float = 0.2, level: float = 0.99) 
 
 
 def contact_frames(nodes: np.ndarray, direction: str = "x", rotation_sense: int = -1):
-    """Unit normal (outward 'radial') and sliding direction of each tip node at rest.
+    """Unit normal (outward 'radial') and sliding direction of each tip node at rest, in the frame of its blade.
 
-    direction 'x': e_x for every node, as the paper does (§2.3); 'radial': (x, y, 0)/|(x, y)|.
+    direction 'x': the blade frame's e_x for every node, as the paper does (§2.3); 'radial': (x, y, 0)/|(x, y)|.
     Returns (normals (n, 3), slide (n, 3), theta0 (n,)): ``slide`` is the direction in which the node moves
-    relative to the casing (rotation_sense * e_theta); friction on the blade acts along -slide.
+    relative to the casing (rotation_sense * e_theta); friction on the blade acts along -slide; theta0 is the
+    node's angle in the blade frame.
     """
     nodes = np.asarray(nodes, float).reshape(-1, 3)
     theta0 = np.arctan2(nodes[:, 1], nodes[:, 0])
@@ -51,27 +52,33 @@ def contact_frames(nodes: np.ndarray, direction: str = "x", rotation_sense: int 
     return normals, slide, theta0
 
 
-def contact_matrices(boundary_nodes: np.ndarray, r: int, casing: "Casing | None"):
-    """Normal and sliding directions of the contact nodes as rows over the reduced coordinates, whose first
-    3 x n_b entries are the boundary nodes' displacements (Craig-Bampton): u_n = N q, u_s = S q.
+def contact_matrices(nodes, r: int, casing: "Casing | None", rows=None):
+    """Normal and sliding directions of contact nodes as rows over the reduced coordinates: u_n = N q, u_s = S q.
 
-    Returns (N (n_c, r), S (n_c, r), theta0 (n_c,), node indices (n_c,)). Without a casing every boundary node
-    is listed with the e_x normal (what a run without contact records) and S = 0.
+    Args:
+        nodes: the model's ``reduction.NodeMap`` (which entries of q are which node, in which sector frame).
+        r: size of q.
+        casing: sets the normal direction and the rotation sense; None: e_x normals, S = 0 (what a run without
+            contact records).
+        rows: node-map rows to build (default: the casing's contact nodes, all nodes without a casing).
+    Returns (N (n_c, r), S (n_c, r), theta0 (n_c,), rows (n_c,)): theta0 is each node's angle about e_z at rest,
+    its sector's frame angle included (where the casing sits over it at t = 0).
     """
-    nodes = np.asarray(boundary_nodes, float).reshape(-1, 3)
-    if casing is not None:
-        idx = casing.node_indices(len(nodes))
-        normals, slide, theta0 = contact_frames(nodes[idx], casing.direction, casing.rotation_sense)
-    else:
-        idx = np.arange(len(nodes))
-        normals, slide = np.tile([1.0, 0.0, 0.0], (len(nodes), 1)), np.zeros((len(nodes), 3))
-        theta0 = np.arctan2(nodes[:, 1], nodes[:, 0])
-    rows = np.arange(len(idx))[:, None]
-    dofs = 3 * idx[:, None] + np.arange(3)[None, :]
-    N, S = np.zeros((len(idx), r)), np.zeros((len(idx), r))
-    N[rows, dofs] = normals
-    S[rows, dofs] = slide
-    return N, S, theta0, idx
+    if rows is None:
+        rows = casing.node_indices(len(nodes)) if casing is not None else np.arange(len(nodes))
+    rows = np.asarray(rows, dtype=np.int64).ravel()
+    if rows.size and (rows.min() < 0 or rows.max() >= len(nodes)):
+        raise ValueError(f"node rows must be in [0, {len(nodes) - 1}], got {rows.tolist()}")
+    direction, sense = ("x", -1) if casing is None else (casing.direction, casing.rotation_sense)
+    normals, slide, theta_local = contact_frames(nodes.coordinates[rows], direction, sense)
+    if casing is None:
+        slide = np.zeros_like(slide)
+    theta0 = theta_local + nodes.angles[rows]
+    N, S = np.zeros((len(rows), r)), np.zeros((len(rows), r))
+    line = np.arange(len(rows))[:, None]
+    N[line, nodes.q_index[rows]] = normals
+    S[line, nodes.q_index[rows]] = slide
+    return N, S, theta0, rows
 
 
 @dataclasses.dataclass(frozen=True)
@@ -85,7 +92,7 @@ class Casing:
         ramp_fraction, ramp_level: the ovalization reaches ``ramp_level`` at ``ramp_fraction`` of the run (eq. 38).
         direction: 'x' (paper: e_x at every tip node) or 'radial'.
         rotation_sense: -1 (rotor 37 turns towards -theta) or +1.
-        contact_nodes: indices of the tip nodes (rows of the model's boundary nodes) that can touch; None = all.
+        contact_nodes: rows of the model's node map (``ReducedModel.nodes``) that can touch; None = all.
         width: angular half-width parameter of the bumps (rad), eq. 37: 0.15.
     """
 
@@ -119,11 +126,12 @@ class Casing:
     def p0(self) -> float:
         return self.h_b - self.c0
 
-    def node_indices(self, n_boundary_nodes: int) -> np.ndarray:
+    def node_indices(self, n_nodes: int) -> np.ndarray:
+        """The node-map rows that can touch, checked against the map's size."""
         if self.contact_nodes is None:
-            return np.arange(n_boundary_nodes)
+            return np.arange(n_nodes)
         idx = np.asarray(self.contact_nodes, dtype=np.int64).ravel()
-        if idx.size == 0 or idx.min() < 0 or idx.max() >= n_boundary_nodes or len(set(idx.tolist())) != idx.size:
-            raise ValueError(f"contact_nodes must be distinct boundary-node indices in [0, {n_boundary_nodes - 1}] "
+        if idx.size == 0 or idx.min() < 0 or idx.max() >= n_nodes or len(set(idx.tolist())) != idx.size:
+            raise ValueError(f"contact_nodes must be distinct node-map rows in [0, {n_nodes - 1}] "
                              f"(the nodes whose DOFs are kept in q), got {list(idx)}")
         return idx

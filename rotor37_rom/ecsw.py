@@ -44,11 +44,13 @@ def state_errors(exact: QuadratureForces, hyper: QuadratureForces, Q: np.ndarray
     return np.linalg.norm(hyper.evaluate(Q) - g, axis=0) / np.maximum(np.linalg.norm(g, axis=0), 1e-300)
 
 
-def trajectory_states(runs, r_b: int, n_per_run: int = 25, n_largest: int = 5, n_held: int = 0,
+def trajectory_states(runs, boundary_rows, n_per_run: int = 25, n_largest: int = 5, n_held: int = 0,
                       seed: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """Training states from recorded runs (each (r, n_rec), e.g. ``SimulationResult.records_q``): per run,
     n_per_run finite instants spread over it after its first tenth (the ramp) plus its n_largest states of largest
-    boundary motion; and n_held random other instants of each run for checking. Returns (train, held)."""
+    motion of the entries ``boundary_rows`` of q (``NodeMap.boundary_rows``); and n_held random other instants of
+    each run for checking. Returns (train, held)."""
+    boundary_rows = np.asarray(boundary_rows, dtype=np.int64)
     rng = np.random.default_rng(seed)
     train, held = [], []
     for q in runs:
@@ -56,7 +58,7 @@ def trajectory_states(runs, r_b: int, n_per_run: int = 25, n_largest: int = 5, n
         q = q[:, np.isfinite(q).all(axis=0)]
         if q.shape[1] == 0:
             continue
-        amp = np.abs(q[:r_b]).max(axis=0)
+        amp = np.abs(q[boundary_rows]).max(axis=0)
         spread = np.linspace(q.shape[1] // 10, q.shape[1] - 1, n_per_run).astype(int)
         picked = np.unique(np.r_[spread, np.argsort(amp)[::-1][:n_largest]])
         train.append(q[:, picked])

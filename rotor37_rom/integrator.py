@@ -111,7 +111,7 @@ def probe_states(model, speeds, casing, revolutions: float = 4.0, n: int = 24, s
                                                                    "duration": duration}
     res = simulate(scheme, speeds, casing, record_every=max(1, int(2e-5 / scheme.h)), record_q=True,
                    on_blowup="flag", **length)
-    return largest_states(res, scheme.r_b, n)
+    return largest_states(res, scheme.boundary_rows, n)
 
 
 def training_speeds(speeds: Sequence[float], n: int = 6) -> np.ndarray:
@@ -130,15 +130,16 @@ def contact_training_states(scheme: "CentralDifference", speeds, casing, revolut
 
     res = simulate(scheme, speeds, casing, revolutions=revolutions, record_q=True, on_blowup="flag",
                    record_every=max(1, int(round(1e-5 / scheme.h))))
-    Q_train, _ = trajectory_states(res.records_q, scheme.r_b)
-    return Q_train, np.hstack([largest_states(res, scheme.r_b, n_largest), Q_train])
+    Q_train, _ = trajectory_states(res.records_q, scheme.boundary_rows)
+    return Q_train, np.hstack([largest_states(res, scheme.boundary_rows, n_largest), Q_train])
 
 
-def largest_states(result: "SimulationResult", r_b: int, n: int) -> np.ndarray:
-    """The n finite recorded states (r, n) of a run (``record_q=True``) with the largest boundary-DOF motion."""
+def largest_states(result: "SimulationResult", boundary_rows: np.ndarray, n: int) -> np.ndarray:
+    """The n finite recorded states (r, n) of a run (``record_q=True``) with the largest motion of the entries
+    ``boundary_rows`` of q (the node displacements: ``NodeMap.boundary_rows``)."""
     Q = np.hstack(result.records_q)
     Q = Q[:, np.isfinite(Q).all(axis=0)]
-    return Q[:, np.argsort(-np.abs(Q[:r_b]).max(axis=0))[:n]]
+    return Q[:, np.argsort(-np.abs(Q[np.asarray(boundary_rows)]).max(axis=0))[:n]]
 
 
 def polynomial_potential(forces: PolynomialForces, Q: np.ndarray) -> np.ndarray:
@@ -166,7 +167,7 @@ class CentralDifference:
     """The precomputed operators X0..X4 of eqs. 28-33 for one reduced model and time step.
 
     Args:
-        model: ReducedModel (q[:r_b] are the boundary DOFs at ``model.boundary_nodes``).
+        model: ReducedModel (``model.nodes`` says which entries of q are the contact nodes' displacements).
         h: time step (s); None = ``safety`` * 2 / omega_max.
         nonlinear: include the reduced cubic forces (GNL); False = linear model.
         safety: fraction of the stability limit used when h is None, in (0, 1].
@@ -185,7 +186,7 @@ class CentralDifference:
             raise ValueError(f"safety factor must be in (0, 1], got {safety}")
         self.model = model
         self.r = model.r
-        self.r_b = int(model.sizes["r_b"])
+        self.boundary_rows = np.asarray(model.nodes.boundary_rows, dtype=np.int64)   # node displacements in q
         self.nonlinear = bool(nonlinear and model.forces is not None)
         self.massless = bool(massless_boundary)
         if self.massless and self.nonlinear:
@@ -199,13 +200,13 @@ class CentralDifference:
             M = capped_mass(M, K, frequency_cap)
             self.frequency_cap = float(frequency_cap)
         self.M, self.C, self.K = M, C, K
-        rb = self.r_b
         if self.massless:
-            Kbb, Kbi = K[:rb, :rb], K[:rb, rb:]
+            b, i = self._boundary_interior()
+            Kbb, Kbi = K[np.ix_(b, b)], K[np.ix_(b, i)]
             self.Kbb_inv = np.linalg.inv(Kbb)
             self.condense = -self.Kbb_inv @ Kbi                   # u_b = condense @ eta (+ Kbb^-1 f_b)
-            Kc = K[rb:, rb:] + Kbi.T @ self.condense
-            self.omega_max = highest_frequency(M[rb:, rb:], Kc)
+            Kc = K[np.ix_(i, i)] + Kbi.T @ self.condense
+            self.omega_max = highest_frequency(M[np.ix_(i, i)], Kc)
         else:
             self.omega_max = highest_frequency(M, K)
         self.h_crit = 2.0 / self.omega_max
@@ -229,8 +230,13 @@ class CentralDifference:
         other._build()
         return other
 
+    def _boundary_interior(self) -> tuple[np.ndarray, np.ndarray]:
+        """The node-displacement entries of q and the others (the massless variant's boundary and interior)."""
+        b = self.boundary_rows
+        return b, np.setdiff1d(np.arange(self.r), b)
+
     def _build(self):
-        h, M, C, K, rb, r = self.h, self.M, self.C, self.K, self.r_b, self.r
+        h, M, C, K, r = self.h, self.M, self.C, self.K, self.r
         if not self.massless:
             # S^-1 (4M - 2h^2 K) = 2I - S^-1 (2hC + 2h^2 K) and S^-1 (hC - 2M) = -I + 2h S^-1 C: the identity parts
             # stay exact (undamped: X2 = -I), which keeps the discrete energy to ~1e-11 over 1e5 steps even though
@@ -249,23 +255,25 @@ class CentralDifference:
                     self.Xg = forces
             return
         # massless boundary: eta from the explicit scheme, u_b from K_bb u_b + K_bi eta = f_b + f_c
-        Mi, Ci, Ki = M[rb:, rb:], C[rb:, rb:], K[rb:, rb:]
-        Kib = K[rb:, :rb]
+        b, i = self._boundary_interior()
+        Mi, Ci, Ki = M[np.ix_(i, i)], C[np.ix_(i, i)], K[np.ix_(i, i)]
+        Kib = K[np.ix_(i, b)]
         S = scipy.linalg.cho_factor(2.0 * Mi + h * Ci)
-        ni = r - rb
+        ni = i.size
         E1 = np.zeros((ni, r))
-        E1[:, rb:] = scipy.linalg.cho_solve(S, 4.0 * Mi - 2.0 * h * h * Ki)
-        E1[:, :rb] = scipy.linalg.cho_solve(S, -2.0 * h * h * Kib)
+        E1[:, i] = scipy.linalg.cho_solve(S, 4.0 * Mi - 2.0 * h * h * Ki)
+        E1[:, b] = scipy.linalg.cho_solve(S, -2.0 * h * h * Kib)
         E2 = np.zeros((ni, r))
-        E2[:, rb:] = scipy.linalg.cho_solve(S, h * Ci - 2.0 * Mi)
+        E2[:, i] = scipy.linalg.cho_solve(S, h * Ci - 2.0 * Mi)
         E0 = np.zeros((ni, r))
-        E0[:, rb:] = 2.0 * h * h * scipy.linalg.cho_solve(S, np.eye(ni))
-        lift = np.vstack([self.condense, np.eye(ni)])                 # (r, ni)
+        E0[:, i] = 2.0 * h * h * scipy.linalg.cho_solve(S, np.eye(ni))
+        lift = np.zeros((r, ni))                                        # q = lift eta (+ Kbb^-1 f_b at b)
+        lift[b], lift[i] = self.condense, np.eye(ni)
         self.X1, self.X2 = lift @ E1, lift @ E2
         self.X0 = lift @ E0
-        self.X0[:rb, :rb] += self.Kbb_inv                               # f_b taken at t_n
+        self.X0[np.ix_(b, b)] += self.Kbb_inv                           # f_b taken at t_n
         self.W = np.zeros((r, r))
-        self.W[:rb, :rb] = self.Kbb_inv                                 # contact moves the massless boundary only
+        self.W[np.ix_(b, b)] = self.Kbb_inv                             # contact moves the massless boundary only
         self.Xg = None
 
     def predict(self, Q: np.ndarray, Qp: np.ndarray, F: np.ndarray | None) -> np.ndarray:
@@ -287,8 +295,9 @@ class SimulationResult:
 
     Attributes:
         omega: (P,) angular speeds (rad/s); h: time step (s); n_steps: (P,) steps run by each simulation.
-        t: list of (n_rec_p,) record times; u_r: list of (n_c, n_rec_p) normal ('radial') displacements of the
-            contact nodes; lam: list of (n_c, n_rec_p) normal contact forces (N) at the same instants.
+        t: list of (n_rec_p,) record times; u_r: list of (n_m, n_rec_p) normal ('radial') displacements of the
+            monitored nodes (rows ``monitor`` of the model's node map, labels ``labels``); lam: list of
+            (n_c, n_rec_p) normal contact forces (N) of the contact nodes (rows ``contact_rows``) at the same instants.
         q_final, q_prev: (r, P) last two states (for continuation); energy: list of (n_rec_p,) or None.
         max_penetration: (P,) largest penetration left after a correction (m, >= 0 means none left beyond it).
         min_multiplier: (P,) smallest normal multiplier applied (N); friction_power: (P,) largest f_t . v_slide
@@ -320,6 +329,15 @@ class SimulationResult:
     records_q: list | None = None
     work: np.ndarray | None = None
     work_history: list | None = None
+    monitor: np.ndarray | None = None
+    labels: tuple = ()
+    contact_rows: np.ndarray | None = None
+
+    def row(self, label: str = "0:LE") -> int:
+        """Row of ``u_r`` holding the node ``label`` ('<sector>:<name>', see ``NodeMap.labels``)."""
+        if label not in self.labels:
+            raise ValueError(f"node {label!r} is not monitored in this run; monitored: {list(self.labels)}")
+        return self.labels.index(label)
 
 
 WORK_TERMS = ("normal", "friction", "forcing", "damping")
@@ -349,7 +367,8 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
              blowup_limit: float = 0.02, check_every: int = 200, duration: float | Sequence[float] | None = None,
              progress: Callable[[int], None] | None = None, on_finish: Callable[[int, dict], None] | None = None,
              state: dict | None = None, checkpoint: Callable[[dict], None] | None = None,
-             checkpoint_seconds: float = 60.0, phase: float | Sequence[float] = 0.0) -> SimulationResult:
+             checkpoint_seconds: float = 60.0, phase: float | Sequence[float] = 0.0,
+             monitor: Sequence[int] | None = None) -> SimulationResult:
     """Run P simulations of the reduced model together with central differences and casing contact.
 
     Args:
@@ -364,6 +383,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         record_every: record every this many steps; record_q: also keep full states; energy: discrete energy
             (record 0 holds that of (Q_0, Q_-1)), the damping's share of the balance and the running works.
         phase: angle (rad) the rotor has turned through before t = 0 (continuation: the casing must not jump).
+        monitor: rows of the model's node map whose normal displacement is recorded in ``u_r`` (default: all).
         on_blowup: 'raise' (SimulationDiverged naming the step) or 'flag' (stop that simulation, mark it).
         blowup_limit: largest admissible boundary displacement (m) before a run counts as blown up.
         progress: called with the simulation-steps done since the last call (steps x running simulations: the
@@ -380,7 +400,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         raise ValueError(f"on_blowup must be 'raise' or 'flag', got {on_blowup!r}")
     if record_every < 1:
         raise ValueError(f"record_every must be >= 1, got {record_every}")
-    h, r, rb = scheme.h, scheme.r, scheme.r_b
+    h, r, brows = scheme.h, scheme.r, scheme.boundary_rows
     if revolutions is not None:
         if not revolutions > 0:
             raise ValueError(f"revolutions must be > 0, got {revolutions}")
@@ -394,17 +414,21 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
     run_length = steps * h if duration is None else np.broadcast_to(np.asarray(duration, float), (P,))
     casings = _per_sim(casing, P)
     phase = np.broadcast_to(np.asarray(phase, float), (P,)).copy()
-    nodes = np.asarray(scheme.model.boundary_nodes, float).reshape(-1, 3)
-    # u_r = N q at the contact nodes (without contact: e_x at every tip node, recorded), S q along the sliding
+    nodes = scheme.model.nodes
+    # u_n = N q at the contact nodes, S q along the sliding; the monitored nodes' normal displacements Nm q
     N, S, theta0, cidx = contact_matrices(nodes, r, None if casings is None else casings[0])
     nc = len(cidx)
+    monitor = np.arange(len(nodes)) if monitor is None else np.asarray(monitor, dtype=np.int64).ravel()
+    Nm = contact_matrices(nodes, r, None if casings is None else casings[0], rows=monitor)[0]
+    nm = len(monitor)
+    labels = tuple(nodes.labels[k] for k in monitor)
     if casings is not None:
         c0 = np.array([c.c0 for c in casings])
         mu = np.array([c.mu for c in casings])
         p0 = np.array([c.p0 for c in casings])
         alpha = ramp_rate(run_length, casings[0].ramp_fraction, casings[0].ramp_level)
         sense = casings[0].rotation_sense
-        radius = np.hypot(nodes[cidx, 0], nodes[cidx, 1])
+        radius = np.hypot(nodes.coordinates[cidx, 0], nodes.coordinates[cidx, 1])
         # response to unit multipliers: normal force -n_k, friction force -s_k (times mu)
         WN = -scheme.W @ N.T                                    # (r, nc)
         WT = -scheme.W @ S.T                                    # (r, nc)
@@ -420,14 +444,14 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
             Qp[:] = np.asarray(initial[1], float).reshape(r, -1)
         n_rec = steps // record_every + 1
         st = {"n": 0, "Q": Q, "Qp": Qp, "done": np.zeros(P, bool),
-              "u_r": [np.full((nc, n_rec[p]), np.nan) for p in range(P)],
+              "u_r": [np.full((nm, n_rec[p]), np.nan) for p in range(P)],
               "lam": [np.zeros((nc, n_rec[p])) for p in range(P)],
               "energy": [np.full(n_rec[p], np.nan) for p in range(P)] if energy else None,
               "q_rec": [np.full((r, n_rec[p]), np.nan) for p in range(P)] if record_q else None,
               "max_pen": np.full(P, -np.inf), "min_lam": np.full(P, np.inf), "fric_pow": np.full(P, -np.inf),
               "contact_steps": np.zeros(P, np.int64), "diverged": np.full(P, -1, np.int64)}
         for p in range(P):
-            st["u_r"][p][:, 0] = N @ Q[:, p]
+            st["u_r"][p][:, 0] = Nm @ Q[:, p]
             if record_q:
                 st["q_rec"][p][:, 0] = Q[:, p]
     else:
@@ -510,7 +534,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
             # records
             if n % record_every == 0:
                 i = n // record_every
-                ur_all = N @ Qn
+                ur_all = Nm @ Qn
                 E = discrete_energy(scheme.M, scheme.K, energy_forces, Qn, Qa, h) if energy else None
                 for j, p in enumerate(active):
                     if n <= steps[p]:
@@ -522,7 +546,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                         if record_q:
                             st["q_rec"][p][:, i] = Qn[:, j]
             if n % check_every == 0 or n in ends:
-                bad = ~np.isfinite(Qn[:rb]).all(axis=0) | (np.abs(Qn[:rb]).max(axis=0) > blowup_limit)
+                bad = ~np.isfinite(Qn[brows]).all(axis=0) | (np.abs(Qn[brows]).max(axis=0) > blowup_limit)
                 for j in np.nonzero(bad)[0]:
                     p = active[j]
                     st["diverged"][p] = n
@@ -533,12 +557,12 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                             f"stability limit 2/omega_max = {scheme.h_crit:.4g} s")
                     st["done"][p] = True
                     if on_finish is not None:          # a diverged run is a result too (marked, kept)
-                        on_finish(p, _record(st, p, steps, h, record_every, omega))
+                        on_finish(p, _record(st, p, steps, h, record_every, omega, labels))
                 finished = [p for p in active if n >= steps[p] and not st["done"][p]]
                 for p in finished:
                     st["done"][p] = True
                     if on_finish is not None:
-                        on_finish(p, _record(st, p, steps, h, record_every, omega))
+                        on_finish(p, _record(st, p, steps, h, record_every, omega, labels))
                 if finished or bad.any():
                     active = np.nonzero(~st["done"])[0]
             if progress is not None and (n % check_every == 0 or not active.size):
@@ -551,7 +575,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                 if checkpoint_seconds > 0:                 # 0: every step (as asked); else <= 2 % of the wall
                     ckpt_interval = max(checkpoint_seconds, 50.0 * (last_ckpt - t_save))
     wall = time.perf_counter() - t_wall
-    recs = [_record(st, p, steps, h, record_every, omega) for p in range(P)]
+    recs = [_record(st, p, steps, h, record_every, omega, labels) for p in range(P)]
     return SimulationResult(
         omega=omega, h=h, n_steps=np.minimum(steps, st["n"]), t=[x["t"] for x in recs], u_r=[x["u_r"] for x in recs],
         lam=[x["lam"] for x in recs], q_final=Q.copy(), q_prev=Qp.copy(),
@@ -559,12 +583,14 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         max_penetration=np.maximum(st["max_pen"], 0.0), min_multiplier=st["min_lam"], friction_power=st["fric_pow"],
         contact_steps=st["contact_steps"], diverged_step=st["diverged"], wall=wall,
         records_q=[st["q_rec"][p] for p in range(P)] if record_q else None, work=work.T.copy(),
-        work_history=[st["work_rec"][p] for p in range(P)] if energy else None)
+        work_history=[st["work_rec"][p] for p in range(P)] if energy else None, monitor=monitor, labels=labels,
+        contact_rows=cidx)
 
 
-def _record(st, p, steps, h, record_every, omega):
+def _record(st, p, steps, h, record_every, omega, labels):
     n_rec = steps[p] // record_every + 1
     return {"t": np.arange(n_rec) * record_every * h, "u_r": st["u_r"][p], "lam": st["lam"][p],
+            "labels": np.array(labels, dtype=str),
             "energy": None if st["energy"] is None else st["energy"][p], "q_final": st["Q"][:, p].copy(),
             "q_prev": st["Qp"][:, p].copy(), "omega": float(omega[p]), "max_penetration": float(st["max_pen"][p]),
             "min_multiplier": float(st["min_lam"][p]), "friction_power": float(st["fric_pow"][p]),

@@ -3,10 +3,25 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["classify_blade_modes", "PAPER_CLAMPED_OMEGA"]
+__all__ = ["classify_blade_modes", "normalise_signs", "PAPER_CLAMPED_OMEGA"]
 
 #: Clamped-blade eigenfrequencies of the paper (§2.2.1), rad/s.
 PAPER_CLAMPED_OMEGA = {"1B": 5272.0, "1T": 15760.0, "2B": 19071.0}
+
+
+def normalise_signs(V: np.ndarray) -> np.ndarray:
+    """The columns of V, each multiplied by +-1 so that its entry of largest magnitude is positive.
+
+    An eigen-solver returns each eigenvector up to its sign, and which sign depends on the LAPACK/BLAS kernels and
+    the thread count (seen: the same 1B vector of scipy.linalg.eigh came out with opposite signs on an Intel and an
+    AMD machine). Anything built from a single eigenvector (a deflected start, training states, a scaled mode)
+    must first fix the sign so that it is the same on every machine. The entry of largest magnitude is chosen
+    because round-off (~1e-15 relative) cannot move it unless two entries tie to that accuracy.
+    Returns a new (n,) or (n, m) array."""
+    V = np.asarray(V, float)
+    flat = V.reshape(V.shape[0], -1)
+    pick = flat[np.argmax(np.abs(flat), axis=0), np.arange(flat.shape[1])]
+    return (flat * np.where(pick < 0, -1.0, 1.0)).reshape(V.shape)
 
 
 def classify_blade_modes(tip_displacements: np.ndarray, tip_nodes: np.ndarray) -> list[str]:

@@ -18,7 +18,9 @@ import scipy.linalg
 from rotor37_rom.nonlinear_forces import PolynomialForces, QuadratureForces
 
 __all__ = [
+    "NodeMap",
     "CraigBamptonBasis",
+    "craig_bampton",
     "modal_derivative_pairs",
     "fixed_interface_correction",
     "selection_weights",
@@ -35,6 +37,119 @@ __all__ = [
 ]
 
 CRITERIA = ("MMI", "MI2a", "MI2b", "SMVW", "random")
+
+
+def _rotation_z(angle: np.ndarray) -> np.ndarray:
+    """(..., 3, 3) rotations about e_z by ``angle`` (rad)."""
+    c, s = np.cos(angle), np.sin(angle)
+    R = np.zeros(np.shape(angle) + (3, 3))
+    R[..., 0, 0], R[..., 0, 1], R[..., 1, 0], R[..., 1, 1], R[..., 2, 2] = c, -s, s, c, 1.0
+    return R
+
+
+@dataclasses.dataclass(frozen=True)
+class NodeMap:
+    """Which entries of the reduced state q are which physical node's displacement: the nodes a reduced model keeps
+    (blade-tip contact nodes, one set per sector of a disk).
+
+    Each node's displacement is q[q_index[k]] in its sector's frame; sector s's frame is the first sector's turned
+    by s * sector_angle about e_z (a single blade: one sector, angle 0). Nothing else may assume where a node sits
+    in q.
+
+    Attributes:
+        names: node names, unique within a sector; a blade's tip nodes are 'LE', 'tip1', ..., 'TE' from LE to TE.
+        sector: (n,) sector of each node.
+        coordinates: (n, 3) rest position in the node's sector frame (m).
+        q_index: (n, 3) entries of q with the node's x, y, z displacement (sector frame).
+        sector_angle: angle between consecutive sector frames (rad); 0 for a single blade.
+    """
+
+    names: tuple
+    sector: np.ndarray
+    coordinates: np.ndarray
+    q_index: np.ndarray
+    sector_angle: float = 0.0
+
+    def __post_init__(self):
+        n = len(self.names)
+        sector = np.asarray(self.sector, dtype=np.int64).reshape(-1)
+        coordinates = np.asarray(self.coordinates, float).reshape(-1, 3)
+        q_index = np.asarray(self.q_index, dtype=np.int64).reshape(-1, 3)
+        if not (sector.size == len(coordinates) == len(q_index) == n):
+            raise ValueError(f"node map: {n} names, {sector.size} sectors, {len(coordinates)} coordinates and "
+                             f"{len(q_index)} index rows must agree")
+        if len(set(zip(self.names, sector.tolist()))) != n:
+            raise ValueError("node map: node names must be unique within a sector")
+        if q_index.size and (q_index.min() < 0 or len(np.unique(q_index)) != q_index.size):
+            raise ValueError("node map: q indices must be distinct and >= 0")
+        object.__setattr__(self, "names", tuple(str(x) for x in self.names))
+        object.__setattr__(self, "sector", sector)
+        object.__setattr__(self, "coordinates", coordinates)
+        object.__setattr__(self, "q_index", q_index)
+
+    @classmethod
+    def for_nodes(cls, coordinates: np.ndarray, q_index: np.ndarray, names: Sequence[str] | None = None
+                  ) -> "NodeMap":
+        """One sector's nodes; default names 'LE', 'tip1', ..., 'TE' (the nodes must then be ordered LE -> TE)."""
+        coordinates = np.asarray(coordinates, float).reshape(-1, 3)
+        n = len(coordinates)
+        if names is None:
+            names = ["LE"] + [f"tip{k}" for k in range(1, n - 1)] + (["TE"] if n > 1 else [])
+        return cls(tuple(names), np.zeros(n, np.int64), coordinates, q_index)
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    @property
+    def n_sectors(self) -> int:
+        return int(self.sector.max()) + 1 if len(self) else 0
+
+    @property
+    def labels(self) -> tuple:
+        """'<sector>:<name>' of every node, e.g. '0:LE'."""
+        return tuple(f"{s}:{n}" for s, n in zip(self.sector.tolist(), self.names))
+
+    @property
+    def boundary_rows(self) -> np.ndarray:
+        """All entries of q that hold node displacements (n * 3,), node by node."""
+        return self.q_index.ravel()
+
+    @property
+    def angles(self) -> np.ndarray:
+        """(n,) angle of each node's sector frame (rad)."""
+        return self.sector * self.sector_angle
+
+    def global_coordinates(self) -> np.ndarray:
+        """(n, 3) rest positions in the frame of sector 0."""
+        return np.einsum("nij,nj->ni", _rotation_z(self.angles), self.coordinates)
+
+    def row(self, name: str = "LE", sector: int = 0) -> int:
+        """Row of the node ``name`` of ``sector``; ValueError naming the nodes there if absent."""
+        for k, (n, s) in enumerate(zip(self.names, self.sector.tolist())):
+            if n == name and s == sector:
+                return k
+        if not 0 <= sector < max(self.n_sectors, 1):
+            raise ValueError(f"sector must be in [0, {self.n_sectors - 1}], got {sector}")
+        raise ValueError(f"no node {name!r} in sector {sector}; it has "
+                         f"{[n for n, s in zip(self.names, self.sector.tolist()) if s == sector]}")
+
+    def label_row(self, label: str) -> int:
+        """Row of a node given as '<sector>:<name>' (see ``labels``)."""
+        sector, _, name = str(label).partition(":")
+        if not name or not sector.isdigit():
+            raise ValueError(f"node label must read '<sector>:<name>', e.g. '0:LE', got {label!r}")
+        return self.row(name, int(sector))
+
+    def arrays(self, prefix: str = "nodes_") -> dict:
+        """The map as named arrays (for .npz files); ``from_arrays`` reads them back."""
+        return {prefix + "names": np.array(self.names, dtype=str), prefix + "sector": self.sector,
+                prefix + "coordinates": self.coordinates, prefix + "q_index": self.q_index,
+                prefix + "sector_angle": np.float64(self.sector_angle)}
+
+    @classmethod
+    def from_arrays(cls, arrays: dict, prefix: str = "nodes_") -> "NodeMap":
+        return cls(tuple(str(x) for x in arrays[prefix + "names"]), arrays[prefix + "sector"],
+                   arrays[prefix + "coordinates"], arrays[prefix + "q_index"], float(arrays[prefix + "sector_angle"]))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -69,6 +184,69 @@ class CraigBamptonBasis:
     def sizes(self) -> dict:
         return {"r_b": self.Psi.shape[1], "r_c": self.Theta.shape[1],
                 "r_md": 0 if self.Z is None else self.Z.shape[1]}
+
+
+def _scipy_factorization(A) -> Callable[[np.ndarray], np.ndarray]:
+    import scipy.sparse.linalg
+
+    lu = scipy.sparse.linalg.splu(scipy.sparse.csc_matrix(A))
+    return lambda B: lu.solve(np.asarray(B, float))
+
+
+def _scipy_eigenpairs(K, M, n_modes: int) -> tuple[np.ndarray, np.ndarray]:
+    import scipy.sparse.linalg
+
+    lam, V = scipy.sparse.linalg.eigsh(scipy.sparse.csc_matrix(K), n_modes, scipy.sparse.csc_matrix(M), sigma=0.0,
+                                       which="LM")
+    order = np.argsort(lam)
+    return np.sqrt(lam[order]), V[:, order]
+
+
+def craig_bampton(K, M, boundary: np.ndarray, n_interface: int,
+                  solve: Callable | None = None, eigensolve: Callable | None = None
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Craig-Bampton modes (eqs. 8-11) of a structure: the one reduction that blade, disk sector and disk share.
+
+    Args:
+        K, M: (n, n) stiffness and mass (SciPy sparse or dense) on the DOFs that are not clamped.
+        boundary: (n_b,) indices in [0, n) of the boundary DOFs kept physical (tip nodes, cyclic faces).
+        n_interface: r_c, the number of fixed-interface modes, 1 <= r_c < n - n_b.
+        solve: factorize(A) -> (B -> A^-1 B), e.g. ``fem.mumps_solver``; default SciPy's SuperLU.
+        eigensolve: (K, M, m) -> (omega (m,), V (., m)) lowest modes, e.g. ``fem.slepc_eigenpairs``; default SciPy's
+            ARPACK in shift-invert.
+    Returns:
+        (Psi, Theta, omega_c): Psi (n, n_b) the constraint modes, the static responses to a unit displacement of one
+        boundary DOF with the others held (identity on the boundary, K Psi = 0 on the interior, eq. 9); Theta
+        (n, r_c) the lowest modes of the structure with its boundary fixed, zero there, Theta^T M Theta = I, each
+        column's largest entry positive (eq. 11; the sign is thus machine-independent); omega_c (r_c,) rad/s.
+    """
+    import scipy.sparse
+
+    K, M = scipy.sparse.csr_matrix(K), scipy.sparse.csr_matrix(M)
+    n = K.shape[0]
+    boundary = np.asarray(boundary, dtype=np.int64).ravel()
+    if boundary.size == 0 or boundary.min() < 0 or boundary.max() >= n:
+        raise ValueError(f"boundary DOFs must be indices in [0, {n}) of DOFs that are not clamped")
+    if len(np.unique(boundary)) != boundary.size:
+        raise ValueError("boundary DOFs contain duplicates")
+    interior = np.setdiff1d(np.arange(n), boundary)
+    if not (1 <= n_interface < interior.size):
+        raise ValueError(f"r_c (fixed-interface modes) must be in [1, {interior.size - 1}], got {n_interface}")
+    solve = solve or _scipy_factorization
+    eigensolve = eigensolve or _scipy_eigenpairs
+    K_ii = K[interior][:, interior]
+    M_ii = M[interior][:, interior]
+    Psi = np.zeros((n, boundary.size))
+    Psi[boundary, np.arange(boundary.size)] = 1.0
+    Psi[interior] = -solve(K_ii)(K[interior][:, boundary].toarray())
+    omega, V = eigensolve(K_ii, M_ii, n_interface)
+    V = np.asarray(V, float)
+    V = V / np.sqrt(np.einsum("ij,ij->j", V, M_ii @ V))
+    from rotor37_rom.modes import normalise_signs
+
+    Theta = np.zeros((n, n_interface))
+    Theta[interior] = normalise_signs(V)
+    return Psi, Theta, np.asarray(omega, float)
 
 
 def modal_derivative_pairs(n_linear: int) -> np.ndarray:
@@ -182,9 +360,9 @@ class ReducedModel:
     Attributes:
         M, C, K: (r, r) reduced matrices.
         forces: PolynomialForces (exact tensors) or QuadratureForces (exact or ECSW), or None (linear).
-        boundary_dofs: (r_b,) full-DOF indices kept in q (q[:r_b] are their physical displacements, m).
-        boundary_nodes: (r_b // 3, 3) coordinates of the boundary nodes (m).
-        sizes: {'r_b', 'r_c', 'r_md'}; md_pairs: (r_md, 2).
+        boundary_dofs: (r_b,) full-DOF indices (of one sector's mesh) kept physical in q.
+        nodes: NodeMap: which entries of q are which node's displacement (the contact nodes).
+        sizes: {'r_b', 'r_c', 'r_md'} per sector; md_pairs: (r_md, 2).
         Phi: (n, r) basis to rebuild fields (optional).
         metadata: parameters, mesh signature, version; ``key`` hashes them.
     """
@@ -194,7 +372,7 @@ class ReducedModel:
     K: np.ndarray
     forces: object
     boundary_dofs: np.ndarray
-    boundary_nodes: np.ndarray
+    nodes: NodeMap
     sizes: dict
     md_pairs: np.ndarray
     Phi: np.ndarray | None
@@ -237,7 +415,7 @@ def save_reduced_model(model: ReducedModel, path: str | Path) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     arrays = {"M": model.M, "C": model.C, "K": model.K, "boundary_dofs": model.boundary_dofs,
-              "boundary_nodes": model.boundary_nodes, "md_pairs": model.md_pairs,
+              **model.nodes.arrays(), "md_pairs": model.md_pairs,
               "meta": np.array(json.dumps({"metadata": model.metadata, "sizes": model.sizes, "key": model.key},
                                           sort_keys=True, default=str))}
     if model.Phi is not None:
@@ -264,6 +442,7 @@ def load_reduced_model(path: str | Path, expected_key: str | None = None) -> Red
         with np.load(path, allow_pickle=False) as data:
             arrays = {k: data[k] for k in data.files}
         info = json.loads(str(arrays["meta"]))
+        nodes = NodeMap.from_arrays(arrays)
     except Exception as exc:
         raise ValueError(f"reduced model file {path} is corrupted or not a reduced model ({exc.__class__.__name__})"
                          ) from None
@@ -281,7 +460,7 @@ def load_reduced_model(path: str | Path, expected_key: str | None = None) -> Red
         forces = QuadratureForces(arrays["H"], arrays["w"], *arrays["lame"],
                                   precision=str(arrays.get("precision", "double")))
     return ReducedModel(M=arrays["M"], C=arrays["C"], K=arrays["K"], forces=forces,
-                        boundary_dofs=arrays["boundary_dofs"], boundary_nodes=arrays["boundary_nodes"],
+                        boundary_dofs=arrays["boundary_dofs"], nodes=nodes,
                         sizes=info["sizes"], md_pairs=arrays["md_pairs"], Phi=arrays.get("Phi"),
                         metadata=info["metadata"])
 

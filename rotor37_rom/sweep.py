@@ -20,22 +20,24 @@ import numpy as np
 from rotor37_rom.casing import Casing
 from rotor37_rom.integrator import CentralDifference, simulate
 
-__all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "interaction_map", "InteractionMap",
+__all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "interaction_map", "InteractionMap", "record_row",
            "last_revolution_max",
            "continuation", "ContinuationPoint", "is_steady"]
 
 LOG = logging.getLogger(__name__)
-LE = 0          # contact-node rows: node LE first, TE last (boundary nodes ordered LE -> TE)
+LE = "0:LE"     # the node whose response makes the maps and NFRC: node LE of sector 0 (a NodeMap label)
 
 
 @dataclasses.dataclass(frozen=True)
 class SweepSpec:
-    """A contact scenario at several speeds. revolutions: per speed (paper 200); record_dt: sampling (s)."""
+    """A contact scenario at several speeds. revolutions: per speed (paper 200); record_dt: sampling (s);
+    monitor: node-map rows whose normal displacement is recorded (None: all nodes of the model)."""
 
     revolutions: float = 200.0
     casing: Casing = Casing()
     record_dt: float = 1e-5
     batch_size: int = 16
+    monitor: tuple | None = None
 
     def __post_init__(self):
         if not self.revolutions > 0:
@@ -126,7 +128,7 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
                           lam=rec["lam"], q_final=rec["q_final"], q_prev=rec["q_prev"],
                           max_penetration=rec["max_penetration"], min_multiplier=rec["min_multiplier"],
                           friction_power=rec["friction_power"], diverged_step=rec["diverged_step"],
-                          work=rec["work"], revolutions=spec.revolutions)
+                          work=rec["work"], revolutions=spec.revolutions, labels=rec["labels"])
 
         state = _load_state(ckpt, batch.size)
 
@@ -134,7 +136,7 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
             _save_state(ckpt, st, batch)
 
         simulate(scheme, batch, spec.casing, revolutions=spec.revolutions, record_every=record_every,
-                 on_blowup="flag", on_finish=on_finish, state=state, checkpoint=save_state,
+                 monitor=spec.monitor, on_blowup="flag", on_finish=on_finish, state=state, checkpoint=save_state,
                  checkpoint_seconds=checkpoint_seconds,
                  progress=(None if bar is None else lambda k: bar.update(k * size)))
         ckpt.unlink(missing_ok=True)
@@ -237,13 +239,23 @@ class InteractionMap:
     diverged: np.ndarray
 
 
-def interaction_map(results: Sequence[dict], node: int = LE, f_max: float = 30000.0, n_freq: int = 600
+def record_row(result: dict, node: str = LE) -> int:
+    """Row of ``result['u_r']`` (a per-speed record of ``run_sweep`` / ``simulate``) holding node ``node``
+    ('<sector>:<name>')."""
+    labels = [str(x) for x in result.get("labels", ())]
+    if node not in labels:
+        raise ValueError(f"node {node!r} is not recorded in this result; recorded: {labels}")
+    return labels.index(node)
+
+
+def interaction_map(results: Sequence[dict], node: str = LE, f_max: float = 30000.0, n_freq: int = 600
                     ) -> InteractionMap:
-    """Spectrum of the second half of node ``node``'s normal displacement at each speed (paper §2.3.1)."""
+    """Spectrum of the second half of node ``node``'s normal displacement at each speed (paper §2.3.1); ``node``
+    is a node-map label, '<sector>:<name>' (default node LE of sector 0)."""
     freqs = np.linspace(0.0, f_max, n_freq)
     speeds, amp, nfrc, div = [], [], [], []
     for res in results:
-        t, u = res["t"], res["u_r"][node]
+        t, u = res["t"], res["u_r"][record_row(res, node)]
         om = float(res["omega"])
         speeds.append(om)
         diverged = int(res["diverged_step"]) >= 0 or not np.all(np.isfinite(u))
@@ -287,12 +299,12 @@ class ContinuationPoint:
 def continuation(scheme: CentralDifference, start: float, stop: float, step: float, casing: Casing = Casing(),
                  first_revolutions: float = 200.0, revolutions: float = 30.0, max_halvings: int = 3,
                  record_dt: float = 1e-5, tol: float = 0.02, progress: bool = False,
-                 out: str | Path | None = None, window: int = 1, batch_halvings: bool = True
-                 ) -> list[ContinuationPoint]:
+                 out: str | Path | None = None, window: int = 1, batch_halvings: bool = True,
+                 node: str = LE) -> list[ContinuationPoint]:
     """Sequential continuation (§2.3.3): each speed starts from the final state of the previous one; the first
     runs ``first_revolutions``, the next ``revolutions``; when a run is not steady (``is_steady`` with ``tol`` and
     ``window``) the speed step is halved (at most ``max_halvings`` times) and the run redone from the last accepted
-    state. Sweeps up if stop > start.
+    state. Sweeps up if stop > start. The amplitude is node ``node``'s ('<sector>:<name>', default LE of sector 0).
 
     The halved candidates all start from the same state, so with ``batch_halvings`` they run as one batch: after a
     point that needed a halving all candidates (step, step/2, ...) at once, otherwise the full step alone and, if it
@@ -314,7 +326,8 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
     record_every = max(1, int(round(record_dt / scheme.h)))
     path = None
     if out is not None:
-        branch = [start, stop, step, revolutions, max_halvings, tol] + ([window] if window != 1 else [])
+        branch = [start, stop, step, revolutions, max_halvings, tol] + ([window] if window != 1 else []) \
+            + ([node] if node != LE else [])
         info = {"sweep": _key(scheme, SweepSpec(revolutions=first_revolutions, casing=casing, record_dt=record_dt)),
                 "branch": branch}
         digest = hashlib.sha256(json.dumps(info, sort_keys=True).encode()).hexdigest()[:16]
@@ -342,8 +355,9 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
             points = [ContinuationPoint(start, np.nan, False, 0)]
             save(True)
             return points
-        points = [ContinuationPoint(start, last_revolution_max(res.t[0], res.u_r[0][LE], start),
-                                    is_steady(res.t[0], res.u_r[0][LE], start, tol, window), 0)]
+        row = res.row(node)
+        points = [ContinuationPoint(start, last_revolution_max(res.t[0], res.u_r[0][row], start),
+                                    is_steady(res.t[0], res.u_r[0][row], start, tol, window), 0)]
         if progress:
             LOG.warning("continuation starts at %.1f rad/s: %.4g mm (%s)", start, points[0].amplitude * 1e3,
                         "steady" if points[0].steady else "not steady")
@@ -363,13 +377,14 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
                 r = simulate(scheme, todo, casing, revolutions=revolutions, record_every=record_every,
                              initial=state, on_blowup="flag", duration=1e-12, phase=phase)
                 runs.update({tg: (r, p, bool(r.diverged_step[p] < 0)
-                                  and is_steady(r.t[p], r.u_r[p][LE], tg, tol, window)) for p, tg in enumerate(todo)})
+                                  and is_steady(r.t[p], r.u_r[p][r.row(node)], tg, tol, window))
+                             for p, tg in enumerate(todo)})
             if any(runs[targets[k]][2] for k in ks):
                 break
         k = next((k for k in range(max_halvings + 1) if targets[k] in runs and runs[targets[k]][2]), max_halvings)
         target = targets[k]
         r, p, steady = runs[target]
-        amp = last_revolution_max(r.t[p], r.u_r[p][LE], target) if r.diverged_step[p] < 0 else np.nan
+        amp = last_revolution_max(r.t[p], r.u_r[p][r.row(node)], target) if r.diverged_step[p] < 0 else np.nan
         points.append(ContinuationPoint(target, amp, steady, k))
         if r.diverged_step[p] >= 0:            # nothing sensible to continue from: the branch ends here
             LOG.warning("continuation stopped at %.1f rad/s: the run diverged at step %d", target,

@@ -5,12 +5,66 @@ import pytest
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
+FE_FIXTURES = {"ci_blade", "ci_ops", "ci_rom", "table_path", "ci_disk", "ci_disk_ops"}
+
+
+def pytest_collection_modifyitems(config, items):
+    """Every test that uses an FE fixture is marked 'fe' (so make test-fe and -m 'not fe' select by what a test
+    needs, not by a hand-kept list)."""
+    for item in items:
+        if FE_FIXTURES & set(getattr(item, "fixturenames", ())):
+            item.add_marker(pytest.mark.fe)
+
+
+def pytest_report_header(config):
+    """Which BLAS kernels and how many threads this run uses (make test-kernels runs the suite under several)."""
+    from rotor37_rom.blas_check import openblas_core
+
+    import numpy  # noqa: F401  (loads the BLAS with this environment)
+
+    return (f"OpenBLAS kernels: {openblas_core() or 'not OpenBLAS'}, OPENBLAS_NUM_THREADS="
+            f"{os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}, OPENBLAS_CORETYPE="
+            f"{os.environ.get('OPENBLAS_CORETYPE', 'unset')}")
+
+
+@pytest.fixture
+def serial_and_mpi(tmp_path):
+    """run(code) -> (serial, mpi): the array a script body saves (``np.save(sys.argv[1], ...)`` on rank 0), from a
+    serial run and from mpirun -n 2."""
+    import subprocess
+    import sys
+    import textwrap
+
+    import numpy as np
+
+    def run(code: str):
+        script = tmp_path / "script.py"
+        script.write_text(textwrap.dedent(code))
+        serial, parallel = tmp_path / "serial.npy", tmp_path / "mpi.npy"
+        subprocess.run([sys.executable, str(script), str(serial)], check=True, capture_output=True)
+        env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+                   OMPI_MCA_rmaps_base_oversubscribe="1")
+        proc = subprocess.run(["mpirun", "-n", "2", sys.executable, str(script), str(parallel)],
+                              capture_output=True, text=True, env=env)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        return np.load(serial), np.load(parallel)
+
+    return run
+
 
 @pytest.fixture(scope="session")
 def ci_blade():
     from rotor37_rom import fem
 
     return fem.create_blade_sector(preset="ci")
+
+
+@pytest.fixture(scope="session")
+def ci_disk():
+    """The rotor 37 bladed-disk sector at the ci preset (36 sectors, blade 4 mm shorter, parametric blade)."""
+    from rotor37_rom import fem
+
+    return fem.create_disk_sector(preset="ci")
 
 
 @pytest.fixture(scope="session")

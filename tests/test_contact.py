@@ -9,7 +9,23 @@ import scipy.linalg
 from rotor37_rom.casing import Casing, casing_profile, contact_frames, ramp_rate
 from rotor37_rom.integrator import CentralDifference, SimulationDiverged, simulate, tangent_highest_frequency
 from rotor37_rom.nonlinear_forces import PolynomialForces
+from rotor37_rom.modes import normalise_signs
 from rotor37_rom.reduction import load_reduced_model, save_reduced_model, with_force_precision
+
+
+def _le_x(model):
+    """Entry of q holding node LE's e_x displacement (from the model's node map)."""
+    return int(model.nodes.q_index[model.nodes.row("LE"), 0])
+
+
+def _boundary_rows(model):
+    """Entries of q holding the contact nodes' displacements."""
+    return model.nodes.boundary_rows
+
+
+def _le(res, p=0):
+    """Node LE's recorded normal displacement in simulation p."""
+    return res.u_r[p][res.row("0:LE")]
 
 
 def test_casing_profile_and_ramp():
@@ -26,7 +42,8 @@ def test_casing_profile_and_ramp():
     assert abs(n @ s.T) < 1e-15 and s[0, 1] < 0                       # sliding towards -theta
 
 
-@pytest.mark.parametrize("nonlinear", [False, True])
+@pytest.mark.kernels
+@pytest.mark.parametrize("nonlinear", [False, pytest.param(True, marks=pytest.mark.slow)])
 def test_contact_constraints(ci_rom, nonlinear):
     """After each correction no node penetrates, multipliers are >= 0 and friction opposes sliding; the recorded
     gaps, recomputed independently from eq. 38, are >= -1e-12 m."""
@@ -34,11 +51,13 @@ def test_contact_constraints(ci_rom, nonlinear):
     speeds = np.array([1300.0, 1450.0, 1550.0])
     casing = Casing(mu=0.15)
     res = simulate(scheme, speeds, casing, n_steps=30000, record_every=1)
+    # the bumps (h_b > c0) sweep the tip: one pass over a bump's half-width (0.15 rad) lasts 0.15 / (Omega h) ~ 500
+    # steps at these speeds; 100 contact steps ask for a fifth of one pass, whatever the trajectory's round-off
     assert (res.contact_steps > 100).all(), res.contact_steps
     assert res.max_penetration.max() <= 1e-12, res.max_penetration
     assert res.min_multiplier.min() >= 0.0
     assert res.friction_power.max() < 0.0                              # f_t . v_slide < 0 at every contact
-    nodes = ci_rom.boundary_nodes.reshape(-1, 3)
+    nodes = ci_rom.nodes.coordinates
     _, _, theta0 = contact_frames(nodes, "x", -1)
     alpha = ramp_rate(30000 * scheme.h)
     for p, om in enumerate(speeds):
@@ -51,12 +70,14 @@ def test_contact_constraints(ci_rom, nonlinear):
 
 
 def _free_vibration_start(model, amplitude=3e-4, seed=0, noise=1e-3):
-    """1B-dominated initial displacement (node LE's e_x displacement = amplitude; the tip moves ~7x more along
-    e_y, e_z) plus ``noise`` of every mode."""
+    """1B-dominated initial displacement (node LE's e_x displacement = +amplitude; the tip moves ~7x more along
+    e_y, e_z) plus ``noise`` of every mode. The eigenvectors' signs are fixed first (modes.normalise_signs) and the
+    scale is signed, so the start is the same on every machine."""
     lam, V = scipy.linalg.eigh(model.K, model.M)
+    V = normalise_signs(V)
     rng = np.random.default_rng(seed)
     q = V[:, 0] + noise * V @ rng.standard_normal(model.r) * np.abs(V[:, 0]).max() / np.abs(V).max(axis=0)
-    return q * amplitude / abs(q[0])
+    return q * amplitude / q[_le_x(model)]
 
 
 def test_discrete_energy_linear_conserved(ci_rom):
@@ -78,7 +99,7 @@ def test_energy_balance_with_contact_friction_forcing(ci_rom):
     With mu = 0.15 friction does more work on the blade than the normal forces: it feeds the growth of the README."""
     scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.5)
     f = np.zeros(ci_rom.r)
-    f[0] = 20.0                                                         # 20 N at node LE along e_x
+    f[_le_x(ci_rom)] = 20.0                                             # 20 N at node LE along e_x
     res = simulate(scheme, [1400.0, 1500.0, 1400.0], [Casing(mu=0.15), Casing(mu=0.15), Casing(mu=0.0)],
                    n_steps=30000, record_every=100, energy=True, forcing=lambda t: f * np.sin(5000.0 * t))
     assert (res.contact_steps > 100).all(), res.contact_steps
@@ -99,23 +120,33 @@ def test_energy_balance_with_contact_friction_forcing(ci_rom):
 
 def _static_start(model, amplitude):
     """Rest state of the GNL model under the force that gives the linear model a 1B deflection with node LE's e_x
-    displacement = amplitude (the modal-derivative coordinates take their static values: a physical start)."""
+    displacement = +amplitude (towards the casing; the modal-derivative coordinates take their static values: a
+    physical start). The scale is signed: eigh returns the 1B vector with either sign depending on the LAPACK
+    kernels, and the GNL state under +F is not minus the state under -F (scaling by |V[LE_x, 0]| deflected the
+    blade the other way on an AMD machine, where the 0.5 mm tangent ratio was 1.0287 instead of 1.0551)."""
     from rotor37_rom.reduction import solve_reduced_static
 
     lam, V = scipy.linalg.eigh(model.K, model.M)
-    q_lin = V[:, 0] * amplitude / abs(V[0, 0])
+    q_lin = V[:, 0] * amplitude / V[_le_x(model), 0]
     return solve_reduced_static(model, model.K @ q_lin, [0.5, 1.0])[-1]
 
 
+@pytest.mark.slow
+@pytest.mark.kernels
 def test_discrete_energy_nonlinear_bounded(ci_rom):
-    """GNL, undamped, released from a static 1B deflection (0.3 mm at node LE along e_x, ~2 mm tip motion): stress
-    stiffening raises omega_max by ~2.6 %, so the step is 0.98 of the limit of the tangent at +-q0; the energy error
-    stays bounded over 1e5 steps. At 0.5 mm the tangent limit is 5 % below the linear one, and 0.98 of the linear
-    limit blows up: for GNL the linear limit is not enough."""
+    """GNL, undamped, released from a static 1B deflection (+0.3 mm at node LE along e_x, ~2 mm tip motion).
+
+    Stress stiffening moves the highest tangent frequency: along +-q0 its first-order change is odd in q, so the
+    larger of the two is above the linear omega_max, and the step is 0.98 of the tangent limit at +-q0. The scheme
+    is symplectic, so its energy error stays bounded (no secular drift over 1e5 steps: a drift would make the error
+    of the last tenth ~10x that of the first, bounded oscillation keeps the ratio ~1; 1.5 separates the two) and is
+    an O(h^2) defect of the cubic forces (halving h divides it by 4; 3-5 allows the next-order term). At +0.5 mm
+    the tangent frequency exceeds the linear one by more than 1/0.98, so 0.98 of the linear limit is beyond the
+    tangent limit and that run must blow up: for GNL the linear limit is not enough."""
     q0 = _static_start(ci_rom, 3e-4)
     w_t = tangent_highest_frequency(ci_rom, np.column_stack([q0, -q0]))
     lin_limit = CentralDifference(ci_rom, nonlinear=False).h_crit
-    assert 1.01 < w_t * lin_limit / 2 < 1.05
+    assert w_t * lin_limit / 2 > 1.0
     scheme = CentralDifference(ci_rom, nonlinear=True, damping=False, h=0.98 * 2 / w_t)
     res = simulate(scheme, 1.0, n_steps=100_000, initial=(q0, q0), record_every=50, energy=True)
     E = res.energy[0][1:]
@@ -124,13 +155,21 @@ def test_discrete_energy_nonlinear_bounded(ci_rom):
     first, last = err[:tenth].max(), err[-tenth:].max()
     print("GNL energy error, first and last tenth:", first, last)
     assert last <= 1.5 * first                                          # bounded, no secular growth
-    assert last < 1e-4
-    # the GNL run differs from the linear one (the cubic forces act)
+    # O(h^2): the same 2.2 ms at h and h/2 (the start (q0, q0) is the rest state, exact at any step)
+    errors = []
+    for h in (scheme.h, scheme.h / 2):
+        run = simulate(CentralDifference(ci_rom, nonlinear=True, damping=False, h=h), 1.0,
+                       n_steps=int(round(10_000 * scheme.h / h)), initial=(q0, q0), record_every=10, energy=True)
+        errors.append(np.abs(run.energy[0][1:] / run.energy[0][1] - 1.0).max())
+    print("GNL energy error at h and h/2:", errors, "ratio", errors[0] / errors[1])
+    assert 3.0 <= errors[0] / errors[1] <= 5.0
+    # the GNL run differs from the linear one: the cubic forces change the 1B frequency by an amount of the order of
+    # the stiffening measured above, which over 2000 steps moves node LE by more than 1 % of its amplitude
     lin = simulate(CentralDifference(ci_rom, nonlinear=False, damping=False, h=scheme.h), 1.0, n_steps=2000,
                    initial=(q0, q0), record_every=50)
-    assert np.abs(lin.u_r[0][0] - res.u_r[0][0][:41]).max() > 1e-2 * abs(q0[0])
+    assert np.abs(_le(lin) - _le(res)[:41]).max() > 1e-2 * abs(q0[_le_x(ci_rom)])
     big = _static_start(ci_rom, 5e-4)
-    assert tangent_highest_frequency(ci_rom, np.column_stack([big, -big])) * lin_limit / 2 > 1.03
+    assert tangent_highest_frequency(ci_rom, np.column_stack([big, -big])) * lin_limit / 2 > 1 / 0.98
     with pytest.raises(SimulationDiverged):
         simulate(CentralDifference(ci_rom, nonlinear=True, damping=False, safety=0.98), 1.0, n_steps=100_000,
                  initial=(big, big), check_every=50)
@@ -147,7 +186,15 @@ def test_time_step_limit(ci_rom):
     with pytest.raises(SimulationDiverged, match=r"diverged at step \d+"):
         simulate(scheme, 1.0, n_steps=100_000, initial=(q0, q0), check_every=50)
     res = simulate(scheme, 1.0, n_steps=100_000, initial=(q0, q0), check_every=50, on_blowup="flag")
-    assert 0 < res.diverged_step[0] < 5000
+    # at h = 1.02 h_crit the top mode grows by |z| per step, z the larger root of z^2 - (2 - (h w)^2) z + 1 = 0;
+    # from its share of q0 it reaches the 0.02 m blow-up limit within log(0.02 / a) / log|z| steps (+ the check)
+    lam, V = scipy.linalg.eigh(ci_rom.K, ci_rom.M)
+    hw2 = scheme.h ** 2 * lam[-1]
+    z = abs((2 - hw2 - np.sqrt((2 - hw2) ** 2 - 4)) / 2)
+    share = abs(V[:, -1] @ ci_rom.M @ q0) * np.abs(V[_boundary_rows(ci_rom), -1]).max()
+    n_bound = np.log(0.02 / share) / np.log(z) + 2 * 50
+    print(f"diverged at step {res.diverged_step[0]}; growth {z:.3f} per step, bound {n_bound:.0f}")
+    assert 0 < res.diverged_step[0] <= n_bound
 
 
 def test_massless_boundary_variant(ci_rom):
@@ -161,39 +208,54 @@ def test_massless_boundary_variant(ci_rom):
     std = CentralDifference(ci_rom, nonlinear=False, damping=False)
     ml = CentralDifference(ci_rom, nonlinear=False, damping=False, massless_boundary=True)
     print("h_crit standard / massless:", std.h_crit, ml.h_crit)
-    assert ml.h_crit > 2.0 * std.h_crit
+    K, M = ci_rom.K, ci_rom.M
+    b_ = _boundary_rows(ci_rom)
+    i_ = np.setdiff1d(np.arange(ci_rom.r), b_)
+    Kbb_inv = np.linalg.inv(K[np.ix_(b_, b_)])
+    Kc = K[np.ix_(i_, i_)] - K[np.ix_(i_, b_)] @ Kbb_inv @ K[np.ix_(b_, i_)]
+    w_c = np.sqrt(scipy.linalg.eigh(Kc, M[np.ix_(i_, i_)], eigvals_only=True)[-1])
+    np.testing.assert_allclose(ml.h_crit, 2 / w_c, rtol=1e-9)      # the condensed spectrum, computed apart
+    assert ml.h_crit > 2.0 * std.h_crit            # a property of the two spectra (eigh round-off ~1e-12)
     with pytest.raises(ValueError, match="linear model only"):
         CentralDifference(ci_rom, nonlinear=True, massless_boundary=True)
-    w, T, rb = 3000.0, 2e-3, 24
+    w, T = 3000.0, 2e-3
     f = np.zeros(ci_rom.r)
-    f[0] = 50.0
+    f[_le_x(ci_rom)] = 50.0
     law = lambda t: np.sin(w * t)  # noqa: E731
     b = simulate(ml, 1.0, n_steps=int(T / ml.h), forcing=lambda t: f * law(t), record_every=1)
-    K, M = ci_rom.K, ci_rom.M
-    Kbb_inv = np.linalg.inv(K[:rb, :rb])
-    Kc = K[rb:, rb:] - K[rb:, :rb] @ Kbb_inv @ K[:rb, rb:]
-    fc = f[rb:] - K[rb:, :rb] @ Kbb_inv @ f[:rb]
+    fc = f[i_] - K[np.ix_(i_, b_)] @ Kbb_inv @ f[b_]
     dt = 2e-6
-    t, eta = simulate_linear_newmark(M[rb:, rb:], np.zeros_like(Kc), Kc, lambda t: fc * law(t), dt, int(T / dt))
-    ub = Kbb_inv @ (f[:rb, None] * law(t)[None, :] - K[:rb, rb:] @ eta)
-    ref = ub[0]
-    got = np.interp(t, b.t[0], b.u_r[0][0])
+    t, eta = simulate_linear_newmark(M[np.ix_(i_, i_)], np.zeros_like(Kc), Kc, lambda t: fc * law(t), dt,
+                                     int(T / dt))
+    ub = Kbb_inv @ (f[b_, None] * law(t)[None, :] - K[np.ix_(b_, i_)] @ eta)
+    ref = ub[list(b_).index(_le_x(ci_rom))]
+    got = np.interp(t, b.t[0], _le(b))
     err = np.abs(got - ref).max() / np.abs(ref).max()
+    # two discretisations of one model: Newmark's phase error (w dt)^2 / 12 per radian and the central differences'
+    # (w h)^2 / 24, over w T ~ 11 rad of the 1B response (w ~ 5.4e3 rad/s), are ~1e-4; 1 % bounds both with the
+    # modes up to 20 kHz that carry the response
     print("massless scheme vs condensed Newmark:", err)
     assert err < 0.01
     a = simulate(std, 1.0, n_steps=int(T / std.h), forcing=lambda t: f * law(t), record_every=1)
-    full = np.interp(t, a.t[0], a.u_r[0][0])
-    print("massless vs full-inertia ROM, forced LE response:", np.abs(full - ref).max() / np.abs(full).max())
+    full = np.interp(t, a.t[0], _le(a))
+    model_error = np.abs(full - ref).max() / np.abs(full).max()
+    print("massless vs full-inertia ROM, forced LE response:", model_error)
+    assert model_error > 0.01        # a modelling error, above what verifies either scheme: the method's price
 
 
+@pytest.mark.slow
+@pytest.mark.kernels
 def test_frequency_cap_mass_scaling(ci_rom):
     """Spectral mass scaling (CentralDifference(frequency_cap=...)): the modes of (K~, M_s) below the cap keep their
     frequency and shape to round-off, the ones above sit at the cap, so h_crit = 2 / cap exactly. The linear scheme
-    still conserves its discrete energy, contact stays exact, and, unlike the massless boundary (~18 % off), the
-    point-forced LE response at 3000 rad/s stays within 1 % of the unscaled ROM (measured 0.5-0.9 % at the 8 tip
-    nodes with h = 0.5 x 2/cap, 6.8x the unscaled step; at 0.98 x 2/cap the capped modes ring at the edge of the
-    scheme's range and the error doubles)."""
-    from rotor37_rom.integrator import capped_mass
+    still conserves its discrete energy, contact stays exact, and, unlike the massless boundary, the point-forced
+    LE response at 3000 rad/s stays close to the unscaled ROM: the cap changes only the frequencies of the modes above
+    it, whose transients under a 3000 rad/s force are (w / w_i) of their static share at node LE (the bound below
+    sums that over the modes, with each scheme's own discrete frequencies).
+
+    Round-off of the eigenvalues of (K, M): relative u lambda_max / lambda_i ~ 1e-16 x 7e5 for the lowest mode, so
+    1e-9 on the eigenvalues below the cap and 1e-8 on the residual of their shapes."""
+    from rotor37_rom.integrator import capped_mass, largest_states
 
     K, M = ci_rom.K, ci_rom.M
     cap = 2 * np.pi * 60e3
@@ -206,11 +268,11 @@ def test_frequency_cap_mass_scaling(ci_rom):
     np.testing.assert_allclose(lam_s[low.sum():], cap**2, rtol=1e-9)
     resid = K @ V[:, low] - Ms @ V[:, low] * lam[low]                    # same shapes below the cap
     assert np.abs(resid).max() <= 1e-8 * np.abs(K @ V[:, low]).max()
-    np.testing.assert_allclose(Ms, Ms.T, rtol=0, atol=1e-14 * np.abs(Ms).max())
     std = CentralDifference(ci_rom, nonlinear=False, damping=False)
     capped = CentralDifference(ci_rom, nonlinear=False, damping=False, frequency_cap=cap, safety=0.98)
     np.testing.assert_allclose(capped.h_crit, 2 / cap, rtol=1e-9)
-    assert capped.h > 10 * std.h
+    np.testing.assert_allclose(capped.h / std.h, (0.98 / 0.9) * std.omega_max / cap, rtol=1e-9)
+    assert capped.h > 10 * std.h                   # the spectrum's property: omega_max / cap (eigh round-off)
     # discrete energy of the scaled scheme, free vibration
     q0 = _free_vibration_start(ci_rom)
     res = simulate(capped, 1.0, n_steps=20_000, initial=(q0, q0), record_every=20, energy=True)
@@ -219,37 +281,54 @@ def test_frequency_cap_mass_scaling(ci_rom):
     # forced LE response: 50 N sin(3000 t) at node LE along e_x, 2 ms from rest
     w, T = 3000.0, 2e-3
     f = np.zeros(ci_rom.r)
-    f[0] = 50.0
+    f[_le_x(ci_rom)] = 50.0
     a = simulate(std, 1.0, n_steps=int(T / std.h), forcing=lambda t: f * np.sin(w * t), record_every=1)
     half = CentralDifference(ci_rom, nonlinear=False, damping=False, frequency_cap=cap, safety=0.5)
     assert half.h > 5 * std.h
     b = simulate(half, 1.0, n_steps=int(T / half.h), forcing=lambda t: f * np.sin(w * t), record_every=1)
-    ref = a.u_r[0][0]
-    got = np.interp(a.t[0], b.t[0], b.u_r[0][0])
+    ref = _le(a)
+    got = np.interp(a.t[0], b.t[0], _le(b))
     err = np.abs(got - ref).max() / np.abs(ref).max()
-    print(f"cap 60 kHz: h {half.h:.3g} vs {std.h:.3g} s, forced LE response error {err:.2e}")
-    assert err < 1e-2
+    # bound by modal superposition (both schemes share the modes' shapes): mode i under F sin(w t) from rest is
+    # s_i (sin(w t) - (w / w_i) sin(w_i t)) / (1 - (w / w_i)^2), s_i its static share at LE, and each scheme runs it
+    # at its own discrete frequency 2/h asin(h w_i / 2) (the capped one with min(w_i, cap)); two such responses
+    # differ by at most the change of the steady part, of the transient's amplitude, and min(2, |dw| T) of it
+    shares = np.abs(V[_le_x(ci_rom)] * (V.T @ f) / lam)
+    w_i = np.sqrt(lam)
+    w_std = 2 / std.h * np.arcsin(std.h * w_i / 2)
+    w_cap = 2 / half.h * np.arcsin(half.h * np.minimum(w_i, cap) / 2)
+    steady = np.abs(1 / (1 - (w / w_std) ** 2) - 1 / (1 - (w / w_cap) ** 2))
+    transient = np.abs(w / w_std - w / w_cap) + np.minimum(2, np.abs(w_std - w_cap) * T) * w / np.minimum(w_std, w_cap)
+    bound = (shares * (steady + transient)).sum() / np.abs(ref).max()
+    print(f"cap 60 kHz: h {half.h:.3g} vs {std.h:.3g} s, forced LE response error {err:.2e} (bound {bound:.2e})")
+    assert err <= bound
     # contact stays exact at the larger step
     gnl = CentralDifference(ci_rom, nonlinear=True, frequency_cap=cap, safety=0.25)
     res = simulate(gnl, [1300.0, 1450.0], Casing(mu=0.15), n_steps=3000, record_every=10)
-    assert (res.contact_steps > 20).all() and res.max_penetration.max() <= 1e-12
+    assert (res.contact_steps > 0).all() and res.max_penetration.max() <= 1e-12
     assert res.min_multiplier.min() >= 0.0 and res.friction_power.max() < 0.0
-    # where it breaks: with GNL, stress stiffening raises the capped modes' tangent frequencies (measured 3.9x the
-    # cap at 60 kHz on ~1 mm states), so 0.5 x 2/cap blows up; the run is flagged at its step, no solver error
-    bad_h = CentralDifference(ci_rom, nonlinear=True, frequency_cap=cap, safety=0.5)
-    res = simulate(bad_h, [1300.0, 1450.0], Casing(mu=0.15), n_steps=3000, record_every=10, on_blowup="flag")
-    assert (res.diverged_step > 0).any()
-    # the GNL step from the tangent limit on the largest states of a short unscaled probe run is stable
+    # where it breaks: with GNL, stress stiffening raises the capped modes' tangent frequencies several times over the
+    # cap on the states of these runs (from a short unscaled probe run), so 0.5 x 2/cap is beyond the tangent limit
+    # there and blows up; the run is flagged at its step, no solver error
     from rotor37_rom.integrator import gnl_time_step, probe_states
 
     T = 5e-3
     states = probe_states(ci_rom, [1300.0, 1450.0], Casing(mu=0.15), duration=T)
+    bad_h = CentralDifference(ci_rom, nonlinear=True, frequency_cap=cap, safety=0.5)
+    assert tangent_highest_frequency(ci_rom, states, mass=bad_h.M) * bad_h.h > 2.0
+    res = simulate(bad_h, [1300.0, 1450.0], Casing(mu=0.15), n_steps=3000, record_every=10, on_blowup="flag")
+    assert (res.diverged_step > 0).any()
+    # the GNL step from the tangent limit on those states is stable, and the states the run reaches keep it within
+    # the tangent limit (checked after the run: self-consistent on any machine)
     h = gnl_time_step(ci_rom, states, cap)
     assert std.h < h < bad_h.h
-    res = simulate(CentralDifference(ci_rom, nonlinear=True, frequency_cap=cap, h=h), [1300.0, 1450.0],
-                   Casing(mu=0.15), n_steps=int(np.ceil(T / h)), duration=T, record_every=10, on_blowup="flag")
+    scheme = CentralDifference(ci_rom, nonlinear=True, frequency_cap=cap, h=h)
+    res = simulate(scheme, [1300.0, 1450.0], Casing(mu=0.15), n_steps=int(np.ceil(T / h)), duration=T,
+                   record_every=10, on_blowup="flag", record_q=True)
     print("probe-based GNL step", h, "diverged", res.diverged_step, "pen", res.max_penetration)
     assert (res.diverged_step < 0).all() and res.max_penetration.max() <= 1e-12
+    reached = largest_states(res, _boundary_rows(ci_rom), 24)
+    assert tangent_highest_frequency(ci_rom, reached, mass=scheme.M) * h < 2.0
     # bad input
     for bad in (0.0, -1.0, float("nan"), 100.0):
         with pytest.raises(ValueError, match="frequency_cap"):
@@ -273,21 +352,27 @@ def test_linear_rom_matches_full_order_transient(ci_blade, ci_ops, ci_rom):
                             nonlinear=False, ops=ci_ops)
     scheme = CentralDifference(ci_rom, nonlinear=False, damping=False)
     fr = np.zeros(ci_rom.r)
-    fr[0] = F0
+    fr[_le_x(ci_rom)] = F0
     every = 1
     rom = simulate(scheme, 1.0, n_steps=int(T / scheme.h) + 1, forcing=lambda t: fr * np.sin(w * t),
                    record_every=every)
-    u_rom = np.interp(fom.t, rom.t[0], rom.u_r[0][0])
+    u_rom = np.interp(fom.t, rom.t[0], _le(rom))
     u_fom = fom.monitored.reshape(len(fom.t), -1)[:, 0]
     err = np.abs(u_rom - u_fom).max() / np.abs(u_fom).max()
     print("linear ROM vs full order (node LE, e_x):", err, "peak", np.abs(u_fom).max())
     assert err < 0.01
 
 
-@pytest.mark.parametrize("P", [1, 8, 80])
+@pytest.mark.parametrize("P", [2, 8, 80])
 def test_batches_equal_one_by_one(ci_rom, P):
     """P simulations at different speeds, clearances and friction coefficients in one batch equal the same
-    simulations run one by one to 1e-8 (relative, node LE), over 1e4 steps with contact."""
+    simulations run one by one to 1e-8 (relative, node LE), over 1e4 steps with contact.
+
+    A batch multiplies (r, r) by (r, P) (GEMM), a single run by (r, 1) (GEMV): the sums run in another order and
+    differ by ~r u = 5e-15 per step; the linear scheme is neutrally stable, so only a contact that starts or ends a
+    step earlier in one of the two amplifies that. Measured over the kernel variants of ``make test-kernels``
+    (SkylakeX, Haswell and Zen kernels, 1 and 2 BLAS threads): at most 1e-10; 1e-8 leaves two orders of
+    magnitude."""
     scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
     rng = np.random.default_rng(P)
     speeds = np.linspace(1300.0, 1600.0, P)
@@ -305,7 +390,10 @@ def test_batches_equal_one_by_one(ci_rom, P):
 
 def test_nonlinear_batch_equals_one_by_one(ci_rom):
     """GNL batches: a single state uses one GEMV over all cubic monomials, a batch the per-index GEMMs of eqs. 35-36;
-    the two summation orders differ by round-off (1e-16), which 8000 steps with contact grow to ~5e-8: 1e-6 here."""
+    the two summation orders differ by round-off (~1e-16 relative per step), which 8000 steps with contact grow to
+    at most ~5e-8 over the kernel variants of ``make test-kernels`` (SkylakeX, Haswell, Zen; 1 and 2 threads): the
+    growth is the dynamics' (the same for any kernel), the seed is u times a kernel-dependent factor of order one,
+    so 1e-6 leaves a factor 20."""
     scheme = CentralDifference(ci_rom, nonlinear=True, safety=0.5)
     speeds = np.array([1300.0, 1400.0, 1500.0, 1600.0])
     batch = simulate(scheme, speeds, Casing(), n_steps=8000, record_every=10)
@@ -331,6 +419,8 @@ def test_bad_input(ci_rom):
         simulate(scheme, 1300.0, Casing())
 
 
+@pytest.mark.slow
+@pytest.mark.kernels
 def test_point_cubature_trained_on_contact_states(ci_blade, ci_rom, tmp_path):
     """Empirical cubature (single quadrature points, non-negative weights) trained on the states of a GNL contact
     run: it reproduces the exact reduced force on the states of a run at another speed, keeps K~ exact, and a
@@ -346,7 +436,7 @@ def test_point_cubature_trained_on_contact_states(ci_blade, ci_rom, tmp_path):
     Q_train, Q_held = exact.records_q[0][:, ::3], exact.records_q[1]
     hr, rep = hyper_reduce(ci_blade, ci_rom, Q_train, tol=1e-3, level="point")
     n_all = rep["exact"].w.size
-    Q_held = Q_held[:, np.abs(Q_held[:ci_rom.sizes["r_b"]]).max(axis=0) > 1e-5]   # in motion
+    Q_held = Q_held[:, np.abs(Q_held[_boundary_rows(ci_rom)]).max(axis=0) > 1e-5]   # in motion
     err = state_errors(rep["exact"], hr.forces, Q_held)
     g = rep["exact"].evaluate(Q_held)
     err_run = np.linalg.norm(hr.forces.evaluate(Q_held) - g, axis=0).max() / np.linalg.norm(g, axis=0).max()
@@ -358,12 +448,14 @@ def test_point_cubature_trained_on_contact_states(ci_blade, ci_rom, tmp_path):
     assert hr.K is ci_rom.K and hr.key != ci_rom.key
     assert np.median(err) <= 5e-3 and err_run <= 1e-2
     # contact dynamics amplify any force perturbation (~30x over this revolution): compare with the exact model's
-    # forces scaled by 1 + the cubature's largest held-out error, a perturbation of the same size
+    # forces scaled by 1 + the cubature's largest held-out error, a perturbation of the same size. Both deviations are
+    # that size times the dynamics' amplification, which does not depend on the machine; 3 allows the cubature's
+    # error, which varies with the state, to act up to three times more than a uniform scaling of the same norm
     def deviation(model):
         run = simulate(CentralDifference(model, nonlinear=True, h=scheme.h), speeds[1], Casing(mu=0.0),
                        n_steps=20_000, record_every=100)
-        u = exact.u_r[1][0]
-        return np.abs(run.u_r[0][0] - u).max() / np.abs(u).max()
+        u = _le(exact, 1)
+        return np.abs(_le(run) - u).max() / np.abs(u).max()
 
     scaled = dataclasses.replace(ci_rom, forces=PolynomialForces(ci_rom.forces.A * (1 + err_run),
                                                                  ci_rom.forces.B * (1 + err_run)))

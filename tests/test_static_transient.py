@@ -1,14 +1,20 @@
 """Full-order static (displacement control) and transient (GNL Newmark) solvers on the ci blade.
 
 Small amplitudes: the SVK response differs from the linear one by a relative amount proportional to the amplitude
-(quadratic terms), so halving the amplitude must halve the difference (ratio 2 +- 10 %) — the Taylor argument applied
-to the solvers' outputs.
+(quadratic terms), so halving the amplitude must halve the difference — the Taylor argument applied to the solvers'
+outputs. The next-order term changes the ratio by O(difference) (2 (1 + c d), d ~ 1 %: measured ratios 1.99), so
+2 +- 10 % keeps a factor > 5 above it, while a difference dominated by solver noise (ratio ~1) or by a term of
+another order (ratio 1 or 4) fails. The amplitudes must keep the difference >= 1e3 times the solvers' tolerance
+(so that the ratio measures the physics) and <= 5 % (so that the next-order term stays within the +-10 %).
 """
+
 import numpy as np
 import ufl
 from dolfinx import fem as dfem
 
 from rotor37_rom import fem
+
+RTOL_STATIC = 1e-10   # fem.solve_static's Newton tolerance (relative residual), passed explicitly below
 
 
 def _tip_traction(sector, amplitude):
@@ -19,42 +25,83 @@ def _tip_traction(sector, amplitude):
 
 
 def test_force_control_tends_to_linear(ci_blade, ci_ops):
+    """GNL - linear difference halves with the load (module docstring); Newton converges quadratically.
+
+    Quadratic convergence: once inside the basin (relative residual e_k < 1e-2), e_{k+1} <= C e_k^2 with C <= 100
+    for every iteration whose e_{k+1} is above the round-off floor (taken as 1e-11; measured 5-7e-12). C is a
+    property of the SVK blade under this load (measured 5-14 at both loads), not of the arithmetic; a linearly
+    converging iteration (e_{k+1} = rho e_k) has C = rho / e_k, e.g. 1e3 for rho = 0.1 at e_k = 1e-4, and fails.
+    Iterations: measured 4 per step; a last residual within 2x of rtol could cost one more iteration on another
+    machine, so count + (1 if that) <= 6 is asserted.
+    """
     diffs = []
-    for amplitude in (4e6, 2e6):  # Pa on the tip face: tip deflection ~ 1 mm and 0.5 mm
+    for amplitude in (4e6, 2e6):  # Pa on the tip face: tip deflection ~ 0.75 mm and 0.37 mm
         f = _tip_traction(ci_blade, amplitude)
         lin = fem.solve_static(ci_blade, force=f, n_steps=1, linear=True, ops=ci_ops)
-        nl = fem.solve_static(ci_blade, force=f, n_steps=2, ops=ci_ops)
-        assert nl.iterations.max() <= 6
+        nl = fem.solve_static(ci_blade, force=f, n_steps=2, ops=ci_ops, rtol=RTOL_STATIC)
+        steps = nl.residuals
+        assert [len(s) - 1 for s in steps] == nl.iterations.tolist()
+        for s in steps:
+            e = s[:, 0] / s[:, 1]
+            k = np.flatnonzero((e[:-1] < 1e-2) & (e[1:] > 1e-11))
+            print(f"{amplitude:.0e} Pa: relative residuals {np.array2string(e, precision=1)}, "
+                  f"C = {np.array2string(e[k + 1] / e[k] ** 2, precision=1)}")
+            assert k.size >= 1 and np.all(e[k + 1] <= 100 * e[k] ** 2), e
+            assert len(e) - 1 + int(e[-1] > RTOL_STATIC / 2) <= 6
         diffs.append(np.linalg.norm(nl.u.x.array - lin.u.x.array) / np.linalg.norm(lin.u.x.array))
-    print("relative GNL - linear difference", diffs)
-    assert 1e-4 < diffs[1] < 0.1
+    print("relative GNL - linear difference", diffs, "ratio", diffs[0] / diffs[1])
+    assert diffs[1] >= 1e3 * RTOL_STATIC and diffs[0] <= 0.05
     assert 1.8 < diffs[0] / diffs[1] < 2.2, diffs
 
 
 def test_displacement_control_reproduces_force_control(ci_blade, ci_ops):
     """Prescribing the tip-node displacements of a force-controlled equilibrium (same load) returns that
-    equilibrium: the lifted Newton of displacement control converges to the same state."""
+    equilibrium: the lifted Newton of displacement control converges to the same state.
+
+    Both solutions are equilibria whose residuals r_f, r_d (``StaticResult.residuals``) are at most RTOL_STATIC x ref; the prescribed
+    values are copied, so they differ by dU = K_T^-1 (r_d - r_f) on the remaining free DOFs and
+    |dU| <= (|r_f| + |r_d|) / lambda_min, with lambda_min >= lambda_min(K) / 2 (fixing the tip DOFs only raises it;
+    K_T differs from K by ~1 % at this load). lambda_min(K) is computed (Euclidean, ~200 N/m on the ci mesh). The
+    1e-8 of the original statement is kept as well (measured 1e-15)."""
+    import scipy.sparse.linalg
+
     f = _tip_traction(ci_blade, 4e6)
-    u_f = fem.solve_static(ci_blade, force=f, n_steps=2, ops=ci_ops).u.x.array.copy()
+    force_control = fem.solve_static(ci_blade, force=f, n_steps=2, ops=ci_ops, rtol=RTOL_STATIC)
+    u_f = force_control.u.x.array.copy()
+    r_f = force_control.residuals[-1][-1, 0]
     dofs = ci_blade.tip_dofs.ravel()
-    nl = fem.solve_static(ci_blade, force=f, prescribed=[(dofs, u_f[dofs])], n_steps=2, ops=ci_ops)
+    nl = fem.solve_static(ci_blade, force=f, prescribed=[(dofs, u_f[dofs])], n_steps=2, ops=ci_ops, rtol=RTOL_STATIC)
+    r_d = nl.residuals[-1][-1, 0]
+    # prescribed values: u + (lambda v - u) rounds to lambda v within an ulp of |u| + |v| (~1e-19 m)
     np.testing.assert_allclose(nl.u.x.array[dofs], u_f[dofs], atol=1e-15)
-    assert np.linalg.norm(nl.u.x.array - u_f) <= 1e-8 * np.linalg.norm(u_f)
+    K, _, _ = fem.assemble_free_operators(ci_blade, ci_ops)
+    lam_min = scipy.sparse.linalg.eigsh(K.tocsc(), 1, sigma=0, which="LM", return_eigenvectors=False)[0]
+    diff = np.linalg.norm(nl.u.x.array - u_f)
+    bound = 2 * (r_f + r_d) / lam_min
+    print(f"|u_d - u_f| = {diff:.2e} m, bound {bound:.2e} m (lambda_min(K) = {lam_min:.1f} N/m), "
+          f"relative {diff / np.linalg.norm(u_f):.1e}")
+    assert diff <= bound and diff <= 1e-8 * np.linalg.norm(u_f)
     lin = fem.solve_static(ci_blade, prescribed=[(dofs, u_f[dofs])], n_steps=1, linear=True, ops=ci_ops)
     np.testing.assert_allclose(lin.u.x.array[dofs], u_f[dofs], atol=1e-15)
 
 
+@pytest.mark.slow
 def test_nonlinear_newmark_tends_to_linear(ci_blade, ci_ops):
+    """Newmark (average acceleration), 8 steps under a step load: the GNL - linear tip difference halves with the
+    load (module docstring). Newmark's Newton stops at a relative residual of 1e-9 (solve_newmark's rtol), so a
+    difference >= 1e3 x 1e-9 is the physics, not the solver."""
     v = ufl.TestFunction(ci_blade.V)
     ds = ufl.Measure("ds", domain=ci_blade.mesh, subdomain_data=ci_blade.facet_tags)
     tip = ci_blade.groups["tip"]
     dt = 2 * np.pi / 5400.0 / 20
+    rtol = 1e-9
     diffs = []
     for amplitude in (2e5, 1e5):
         f = fem.assemble_vector(dfem.form(ufl.inner(ufl.as_vector([0.0, amplitude, 0.0]), v) * ds(tip)))
         args = (ci_blade, f, lambda t: 1.0, dt, 8, ci_blade.tip_dofs)
         lin = fem.solve_newmark(*args, nonlinear=False, ops=ci_ops)
-        nl = fem.solve_newmark(*args, nonlinear=True, ops=ci_ops)
+        nl = fem.solve_newmark(*args, nonlinear=True, ops=ci_ops, rtol=rtol)
         diffs.append(np.abs(nl.monitored - lin.monitored).max() / np.abs(lin.monitored).max())
-    assert 1e-6 < diffs[1] < 1e-2
+    print("relative GNL - linear tip difference", diffs, "ratio", diffs[0] / diffs[1])
+    assert diffs[1] >= 1e3 * rtol and diffs[0] <= 0.05
     assert 1.8 < diffs[0] / diffs[1] < 2.2, diffs

@@ -68,6 +68,8 @@ def test_killed_sweep_resumes(ci_rom, tmp_path, monkeypatch):
     assert len(load_sweep(folder)) == 2
 
 
+@pytest.mark.slow
+@pytest.mark.mpi
 def test_mpi_sweep_equals_serial(ci_rom, tmp_path):
     """The demo under mpirun -n 2 gives the serial map, and its continuation branches (up on rank 0, down on rank 1,
     gathered on rank 0) equal serial ones."""
@@ -105,20 +107,25 @@ def test_mpi_sweep_equals_serial(ci_rom, tmp_path):
 
 
 def test_interaction_map_spectrum_and_steady_state():
-    """A sampled 2-tone signal: the map recovers both amplitudes (interpolated spectrum at the tones) and the
-    steady-state test accepts a periodic signal but not a growing one."""
+    """A sampled 2-tone signal: the map recovers both amplitudes (interpolated spectrum at the tones) of the node it
+    is asked for (by label), from the second half of the run only (a transient in the first half changes nothing),
+    and the steady-state test accepts a periodic signal but not a growing one."""
     omega = 1400.0
     t = np.arange(0, 40 * 2 * np.pi / omega, 1e-5)
     w1, w2 = 4 * omega, 9.5 * omega
     u = 2e-4 * np.sin(w1 * t) + 5e-5 * np.cos(w2 * t)
-    res = {"t": t, "u_r": np.vstack([u, u]), "omega": omega, "diverged_step": -1}
+    res = {"t": t, "u_r": np.vstack([0 * u, u]), "omega": omega, "diverged_step": -1,
+           "labels": np.array(["0:TE", "0:LE"])}
     imap = interaction_map([res], f_max=20000.0, n_freq=20001)
-    half = len(t) - len(t) // 2
     for w, a in ((w1, 2e-4), (w2, 5e-5)):
         k = np.argmin(np.abs(imap.frequencies - w))
         assert abs(imap.amplitude[0, k] - a) < 0.1 * a          # leakage of a non-bin tone < 10 % (rectangular)
     assert imap.nfrc[0] == pytest.approx(np.abs(u[t >= t[-1] - 2 * np.pi / omega]).max())
-    assert half > 0
+    first_half = t < t[len(t) - len(t) // 2]                    # the spectrum's window is the second half
+    transient = dict(res, u_r=np.vstack([0 * u, u + np.where(first_half, 1e-3 * np.sin(3.3 * omega * t), 0.0)]))
+    np.testing.assert_array_equal(interaction_map([transient], f_max=20000.0, n_freq=20001).amplitude, imap.amplitude)
+    with pytest.raises(ValueError, match="not recorded"):
+        interaction_map([res], node="3:LE")
     assert is_steady(t, u, omega)
     assert not is_steady(t, u * np.exp(0.05 * t * omega / (2 * np.pi)), omega)   # +5 % per revolution
     # period 11T/2 (the paper's quasi-periodic branch; |sub| has period 11T/4): wherever the run ends, the max of one
@@ -141,7 +148,8 @@ def test_diverged_runs_are_reported_as_results(ci_rom):
     ref = CentralDifference(ci_rom, nonlinear=False)
     scheme = CentralDifference(ci_rom, nonlinear=False, h=1.02 * ref.h_crit, force=True)
     _, V = scipy.linalg.eigh(ci_rom.K, ci_rom.M)
-    q0 = 1e-4 * V[:, 0] / np.abs(V[:24, 0]).max() + 1e-9 * V[:, -1]
+    tip = ci_rom.nodes.boundary_rows
+    q0 = 1e-4 * V[:, 0] / np.abs(V[tip, 0]).max() + 1e-9 * V[:, -1]          # either sign diverges above the limit
     done = {}
     simulate_ = sweep_mod.simulate
     simulate_(scheme, [1300.0, 1600.0], None, n_steps=20_000, initial=(q0, q0), on_blowup="flag",
@@ -153,7 +161,9 @@ def test_diverged_runs_are_reported_as_results(ci_rom):
 
 def test_continuation_carries_state_and_casing_angle(ci_rom):
     """A run split in two (final states and rotor angle handed over) equals the run in one piece; without the angle
-    the casing would jump under the blade."""
+    the casing would jump under the blade. The two differ only in how the casing angle is rounded (-omega n1 h +
+    omega m h instead of omega (n1 + m) h, ~1e-16 rad), which 4000 steps with friction contact grow to ~1e-12 of the
+    amplitude (the batch tests' amplification): 1e-9. Without the angle the bump sits omega n1 h = 2.3 rad away."""
     from rotor37_rom.integrator import simulate
 
     scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
@@ -169,6 +179,8 @@ def test_continuation_carries_state_and_casing_angle(ci_rom):
     assert np.abs(jumped.u_r[0] - whole.u_r[0][:, n1:]).max() > 1e-3 * scale
 
 
+@pytest.mark.slow
+@pytest.mark.kernels
 def test_batched_halvings_accept_the_one_by_one_points(ci_rom, monkeypatch):
     """The halved candidates run as one batch accept the speeds, halvings and steadiness of the paper's one-by-one
     procedure, with amplitudes equal to the batch's round-off (1e-8 relative, the batch tolerance of the
@@ -189,8 +201,10 @@ def test_batched_halvings_accept_the_one_by_one_points(ci_rom, monkeypatch):
     assert [(p.omega, p.steady, p.halvings) for p in batched] == [(p.omega, p.steady, p.halvings) for p in one]
     speeds, halved = [p.omega for p in one], [p.halvings for p in one[1:]]
     assert speeds[0] == 1300.0 and speeds[-1] == 1380.0 and np.all(np.diff(speeds) > 0)
-    assert 0 < sum(halved) < len(halved)                     # the case exercises both paths
-    assert all(np.isfinite(p.amplitude) and p.amplitude < 5e-3 for p in one)
+    # the case exercises both paths: the response builds up towards the resonance over 2-revolution runs, so its
+    # steadiness test fails near the resonance and passes away from it, a margin far above round-off
+    assert 0 < sum(halved) < len(halved)
+    assert all(np.isfinite(p.amplitude) for p in one)                          # bounded: no run blew up
     a, b = np.array([p.amplitude for p in one]), np.array([p.amplitude for p in batched])
     assert np.abs(a - b).max() <= 1e-8 * np.abs(a).max()
     assert len(calls) < n_one and max(calls) > 1
@@ -258,6 +272,8 @@ def test_contact_map_frequency_cap_flag(ci_rom, tmp_path):
     assert bad.stderr.strip().splitlines() == ["error: --frequency-cap must be > 0 kHz, got -1.0"]
 
 
+@pytest.mark.slow
+@pytest.mark.mpi
 def test_contact_map_cubature_flag(ci_rom, tmp_path):
     """demos/contact_map.py --cubature: the GNL sweep runs on point cubature trained on exact GNL runs at the sweep's
     speeds (recorded in the summary); its NFRC follows the exact GNL sweep (over half a revolution the contact
@@ -317,6 +333,7 @@ def test_contact_map_cubature_flag(ci_rom, tmp_path):
         "error: --precision single needs --cubature (the exact cubic tensors are evaluated in double)"]
 
 
+@pytest.mark.mpi
 def test_blown_up_speeds_run_again_with_half_the_step(ci_rom, tmp_path):
     """rerun_diverged: at 1.05 h_crit (forced) the unstable mode grows ~1.9x per step once the casing excites it, so
     both speeds blow up; halving the step (0.525 h_crit) makes them stable, and they then equal a plain sweep at that

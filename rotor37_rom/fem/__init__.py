@@ -1,0 +1,37 @@
+"""The dolfinx/PETSc/SLEPc adapter: the only package of rotor37_rom (plotting aside) that touches them.
+
+It turns gmsh models into :class:`Sector` objects (mesh, tags by name, function space, named DOF sets,
+communicator), assembles the SVK operators, solves eigenproblems with SLEPc shift-invert (also per nodal diameter of
+a cyclic sector), and provides the full-order nonlinear static (Newton, exact tangent) and implicit transient
+(Newmark) solvers that the reduced models are checked against. Everything runs under MPI unless a function says it
+is serial; the communicator always comes from the mesh.
+
+Modules: ``sector`` (building sectors), ``operators`` (forms and assembly), ``solvers`` (eigen, static, transient,
+the factorisation and eigen-solver given to ``reduction.craig_bampton``), ``fields`` (displacements and stress on the
+mesh), ``cyclic`` (disk and plate sectors, face pairing, operators and modes per nodal diameter).
+"""
+from .cyclic import (CyclicModes, assemble_cyclic_operators, create_annular_sector, create_disk_sector,
+                     sector_fields, solve_cyclic_modes)
+from .fields import (cell_midpoints, cells_touching_points, displacement_function, von_mises_at_quadrature,
+                     von_mises_function)
+from .operators import (JIT_PARAMS, MASS_DIAGONAL, SvkOperators, assemble_free_operators, assemble_mass,
+                        assemble_scalar, assemble_stiffness, assemble_tangent_scipy, assemble_vector,
+                        create_svk_operators, evaluate_forces, evaluate_second_derivative, free_dofs,
+                        gather_dof_values, petsc_to_scipy, quadrature_gradients, scipy_to_petsc)
+from .sector import (Sector, build_on_rank0, clamp_cell_group, create_blade_sector, create_sector_from_file,
+                     create_sector_from_gmsh, create_sector_from_mesh, locate_cyclic_pairs, tip_node_names)
+from .solvers import (ModalResult, StaticResult, TransientResult, compute_clamped_modes, mumps_solver,
+                      slepc_eigenpairs, solve_clamped_static, solve_eigenproblem, solve_newmark, solve_static)
+
+__all__ = [
+    "Sector", "SvkOperators", "ModalResult", "StaticResult", "TransientResult",
+    "create_blade_sector", "create_sector_from_file", "create_sector_from_gmsh", "create_sector_from_mesh",
+    "tip_node_names", "create_svk_operators", "assemble_stiffness", "assemble_mass", "assemble_vector",
+    "assemble_scalar", "gather_dof_values", "free_dofs", "petsc_to_scipy", "scipy_to_petsc",
+    "assemble_free_operators", "evaluate_forces", "evaluate_second_derivative", "assemble_tangent_scipy",
+    "quadrature_gradients", "solve_eigenproblem", "compute_clamped_modes", "solve_static", "solve_newmark",
+    "solve_clamped_static", "mumps_solver", "slepc_eigenpairs", "displacement_function", "von_mises_function",
+    "von_mises_at_quadrature", "cell_midpoints", "cells_touching_points", "MASS_DIAGONAL", "JIT_PARAMS",
+    "create_disk_sector", "create_annular_sector", "locate_cyclic_pairs", "assemble_cyclic_operators", "CyclicModes",
+    "solve_cyclic_modes", "sector_fields", "clamp_cell_group", "build_on_rank0",
+]

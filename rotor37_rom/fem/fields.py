@@ -1,0 +1,82 @@
+"""Fields on a sector from reduced states: displacement Functions, von Mises stress (linear or SVK Cauchy),
+cell geometry for locating maxima.
+
+Part of the dolfinx adapter (``rotor37_rom.fem``).
+"""
+from __future__ import annotations
+
+import numpy as np
+from dolfinx import fem
+
+from rotor37_rom import forms
+
+from .operators import JIT_PARAMS, _require_serial
+from .sector import Sector
+
+__all__ = ["displacement_function", "von_mises_function", "von_mises_at_quadrature", "cell_midpoints",
+           "cells_touching_points"]
+
+
+def displacement_function(sector: Sector, Phi: np.ndarray, q: np.ndarray, name: str = "displacement"):
+    """u = Phi q as a dolfinx Function on the sector (serial: Phi holds all DOFs)."""
+    _require_serial(sector, "displacement_function")
+    Phi = np.asarray(Phi)
+    q = np.asarray(q, float)
+    if Phi.ndim != 2 or Phi.shape[0] != sector.V.dofmap.index_map.size_local * 3:
+        raise ValueError(f"basis Phi has shape {Phi.shape}; the sector has "
+                         f"{sector.V.dofmap.index_map.size_local * 3} DOFs (was it built on another mesh?)")
+    if q.ndim != 1 or q.size != Phi.shape[1]:
+        raise ValueError(f"reduced state q has shape {q.shape}; the basis has r = {Phi.shape[1]} columns")
+    u = fem.Function(sector.V, name=name)
+    u.x.array[:] = Phi @ q
+    return u
+
+
+def _stress_expression(sector: Sector, u, nonlinear: bool):
+    lmbda, mu = sector.material.lame
+    sigma = forms.cauchy_stress(u, lmbda, mu) if nonlinear else forms.linear_stress(u, lmbda, mu)
+    return forms.von_mises(sigma)
+
+
+def von_mises_function(sector: Sector, u, nonlinear: bool = True, degree: int = 1):
+    """von Mises stress (Pa) of the displacement u interpolated into a DG space of the given degree (0 or 1)."""
+    if degree not in (0, 1):
+        raise ValueError(f"degree must be 0 or 1, got {degree}")
+    W = fem.FunctionSpace(sector.mesh, ("DG", degree))
+    expr = fem.Expression(_stress_expression(sector, u, nonlinear), W.element.interpolation_points(),
+                          jit_params=JIT_PARAMS)
+    out = fem.Function(W, name="von_mises")
+    out.interpolate(expr)
+    return out
+
+
+def von_mises_at_quadrature(sector: Sector, u, nonlinear: bool = True, degree: int = 4) -> np.ndarray:
+    """Direct UFL evaluation of von Mises at the quadrature points of every local cell, ordered as
+    ``quadrature_gradients`` (points grouped by cell), for checks of the NumPy recovery."""
+    import basix
+
+    points, _ = basix.make_quadrature(basix.CellType.tetrahedron, degree)
+    n_cells = sector.mesh.topology.index_map(3).size_local
+    expr = fem.Expression(_stress_expression(sector, u, nonlinear), points, jit_params=JIT_PARAMS)
+    return expr.eval(np.arange(n_cells, dtype=np.int32)).ravel()
+
+
+def cell_midpoints(sector: Sector) -> np.ndarray:
+    """Centroids (n_local_cells, 3) of the local cells (for locating stress maxima)."""
+    from dolfinx import mesh as dmesh
+
+    n_cells = sector.mesh.topology.index_map(3).size_local
+    return dmesh.compute_midpoints(sector.mesh, 3, np.arange(n_cells, dtype=np.int32))
+
+
+def cells_touching_points(sector: Sector, points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    """Local cells having one of ``points`` (n, 3) among their geometry nodes (e.g. the contact nodes, where point
+    contact forces make the FE stress singular)."""
+    x = sector.mesh.geometry.x
+    n_cells = sector.mesh.topology.index_map(3).size_local
+    dofmap = sector.mesh.geometry.dofmap.array
+    geom = dofmap.reshape(-1, dofmap.size // sector.mesh.geometry.dofmap.num_nodes)[:n_cells]
+    hit = np.zeros(len(x), bool)
+    for p in np.asarray(points, float).reshape(-1, 3):
+        hit |= np.linalg.norm(x - p, axis=1) < tol
+    return np.nonzero(hit[geom].any(axis=1))[0]

@@ -1,0 +1,282 @@
+"""Sectors: a meshed structure with its named groups and DOF sets (a blade, a disk sector with cyclic faces).
+
+Part of the dolfinx adapter (``rotor37_rom.fem``): gmsh models are turned into distributed dolfinx meshes here.
+"""
+from __future__ import annotations
+
+import dataclasses
+import logging
+from pathlib import Path
+
+import numpy as np
+import ufl
+from scipy.spatial import cKDTree
+from dolfinx import fem
+from dolfinx.io import gmshio
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from rotor37_rom.cyclic import CyclicPairs, rotation_z
+from rotor37_rom.forms import Material
+from rotor37_rom.geometry import blade as blade_geometry
+from rotor37_rom.geometry.tables import read_blade_table
+
+from .operators import assemble_scalar
+
+__all__ = ["Sector", "create_blade_sector", "create_sector_from_file", "create_sector_from_gmsh",
+           "create_sector_from_mesh", "tip_node_names", "clamp_cell_group", "build_on_rank0", "locate_cyclic_pairs"]
+
+LOG = logging.getLogger(__name__)
+
+
+def tip_node_names(n: int) -> tuple:
+    """Names of n tip contact nodes ordered from LE to TE: 'LE', 'tip1', ..., 'TE'."""
+    return tuple(["LE"] + [f"tip{k}" for k in range(1, n - 1)] + (["TE"] if n > 1 else []))
+
+
+@dataclasses.dataclass(frozen=True)
+class Sector:
+    """A meshed structure with named groups and DOF sets: a blade, or a disk sector with cyclic faces.
+
+    Attributes:
+        mesh: dolfinx mesh (distributed over ``mesh.comm``).
+        cell_tags, facet_tags: gmsh physical groups as dolfinx MeshTags.
+        groups: group name -> tag (BladeGroup names, lower case).
+        V: vector P``degree`` function space.
+        material: the material.
+        clamp_bc: homogeneous Dirichlet condition on the clamp facets.
+        tip_nodes: (n_tip, 3) coordinates of the contact nodes, LE first (m), identical on all ranks.
+        tip_dofs: (n_tip, 3) local (unblocked) DOF indices of the tip nodes on this rank, -1 where not owned here.
+        tip_names: the contact nodes' names, 'LE', 'tip1', ..., 'TE' in the order of tip_nodes.
+        cyclic: the cyclic faces as global DOF indices paired node for node (``cyclic.CyclicPairs``: right[i] is
+            left[i] turned by 2 pi / N), None for a single blade.
+        volume: CAD volume (m^3).
+        source: where the geometry came from; preset: mesh preset name.
+    """
+
+    mesh: object
+    cell_tags: object
+    facet_tags: object
+    groups: dict
+    V: object
+    material: Material
+    clamp_bc: object
+    tip_nodes: np.ndarray
+    tip_dofs: np.ndarray
+    tip_names: tuple
+    cyclic: object
+    volume: float
+    source: str
+    preset: str
+
+    @property
+    def comm(self) -> MPI.Comm:
+        return self.mesh.comm
+
+    @property
+    def n_dofs(self) -> int:
+        """Global number of DOFs (clamped ones included)."""
+        im = self.V.dofmap.index_map
+        return im.size_global * self.V.dofmap.index_map_bs
+
+    def facets(self, name: str) -> np.ndarray:
+        """Local facet indices of a named group."""
+        if name not in self.groups:
+            raise ValueError(f"group {name!r} not in this sector; it has {sorted(self.groups)}")
+        return self.facet_tags.find(self.groups[name])
+
+    def total_mass(self) -> float:
+        return assemble_scalar(self.material.rho * ufl.dx(domain=self.mesh), self.comm)
+
+
+def _locate_point_dofs(V, points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    """(n, 3) owned local DOF indices of the vertices at ``points`` (-1 where not owned by this rank)."""
+    bs = V.dofmap.index_map_bs
+    n_owned = V.dofmap.index_map.size_local
+    out = -np.ones((len(points), bs), dtype=np.int64)
+    for k, p in enumerate(points):  # loop over a handful of contact nodes, not over DOFs
+        blocks = fem.locate_dofs_geometrical(V, lambda x, p=p: np.linalg.norm(x.T - p, axis=1) < tol)
+        blocks = blocks[blocks < n_owned]
+        if blocks.size:
+            out[k] = blocks[0] * bs + np.arange(bs)
+    found = V.mesh.comm.allreduce((out[:, 0] >= 0).astype(int), op=MPI.SUM)
+    if np.any(found != 1):
+        missing = np.flatnonzero(found != 1)
+        raise ValueError(f"tip nodes {missing.tolist()} are not vertices of the mesh (boundary nodes not on the mesh)")
+    return out
+
+
+def create_sector_from_gmsh(comm: MPI.Comm, model_info, material: Material, degree: int = 2,
+                            preset: str = "") -> Sector:
+    """Build a :class:`Sector` from the current gmsh model (alive on rank 0 only) and its builder report; a report
+    with ``n_sectors`` (a cyclic sector) gets its left/right faces paired."""
+    import gmsh
+
+    names = {}
+    if comm.rank == 0:
+        names = {gmsh.model.getPhysicalName(d, t): t for d, t in gmsh.model.getPhysicalGroups()}
+    names = comm.bcast(names, root=0)
+    model_info = comm.bcast(model_info, root=0)
+    mesh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model if comm.rank == 0 else None, comm, 0, gdim=3)
+    sector = create_sector_from_mesh(mesh, cell_tags, facet_tags, names, material, degree,
+                                     np.asarray(model_info.tip_nodes, dtype=float).reshape(-1, 3),
+                                     float(model_info.volume), model_info.source, preset)
+    n_sectors = getattr(model_info, "n_sectors", 0)
+    if n_sectors:                            # a cyclic sector: pair its faces now
+        sector = dataclasses.replace(sector, cyclic=locate_cyclic_pairs(sector, n_sectors))
+    return sector
+
+
+def create_sector_from_mesh(mesh, cell_tags, facet_tags, groups: dict, material: Material, degree: int = 2,
+                            tip_nodes: np.ndarray | None = None, volume: float = float("nan"), source: str = "mesh",
+                            preset: str = "") -> Sector:
+    """A :class:`Sector` from a distributed dolfinx mesh whose facet tags hold a group named 'clamp'."""
+    if not (1 <= degree <= 3):
+        raise ValueError(f"degree must be 1, 2 or 3, got {degree}")
+    comm = mesh.comm
+    V = fem.VectorFunctionSpace(mesh, ("Lagrange", degree))
+    if "clamp" not in groups:
+        raise ValueError(f"the model of {source} has no 'clamp' group; it has {sorted(groups)}")
+    clamp_facets = facet_tags.find(groups["clamp"])
+    if comm.allreduce(clamp_facets.size, op=MPI.SUM) == 0:
+        raise ValueError(f"the clamp group of {source} holds no facets")
+    mesh.topology.create_connectivity(mesh.topology.dim - 1, mesh.topology.dim)
+    clamp_dofs = fem.locate_dofs_topological(V, mesh.topology.dim - 1, clamp_facets)
+    clamp_bc = fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), clamp_dofs, V)
+    tip_nodes = np.zeros((0, 3)) if tip_nodes is None else np.asarray(tip_nodes, float).reshape(-1, 3)
+    tip_dofs = _locate_point_dofs(V, tip_nodes) if len(tip_nodes) else np.zeros((0, 3), dtype=np.int64)
+    return Sector(mesh=mesh, cell_tags=cell_tags, facet_tags=facet_tags, groups=dict(groups), V=V,
+                  material=material, clamp_bc=clamp_bc, tip_nodes=tip_nodes, tip_dofs=tip_dofs,
+                  tip_names=tip_node_names(len(tip_nodes)), cyclic=None, volume=volume, source=source,
+                  preset=preset)
+
+
+def build_on_rank0(comm: MPI.Comm, build, material: Material, degree: int, preset: str, what: str) -> Sector:
+    """Run a gmsh builder (``build()``, returning its model report) on rank 0 and distribute its mesh as a Sector.
+    A builder's ValueError, or gmsh's own failure, becomes one ValueError on every rank naming ``what``."""
+    info, error = None, None
+    if comm.rank == 0:
+        with blade_geometry.gmsh_session():
+            try:
+                info = build()
+            except ValueError as exc:
+                error = str(exc)
+            except Exception as exc:  # gmsh's own failures: one line, naming the step
+                error = f"gmsh failed on {what} ({str(exc).splitlines()[0]})"
+            error = comm.bcast(error, root=0)
+            if error is None:
+                return create_sector_from_gmsh(comm, info, material, degree, preset)
+    else:
+        error = comm.bcast(None, root=0)
+        if error is None:
+            return create_sector_from_gmsh(comm, None, material, degree, preset)
+    raise ValueError(error)
+
+
+def create_blade_sector(comm: MPI.Comm = MPI.COMM_WORLD, table: str | Path | None = None, preset="coarse",
+                        material: Material | None = None, degree: int = 2,
+                        n_tip_nodes: int = blade_geometry.N_TIP_NODES, shorten: float = 0.0) -> Sector:
+    """Mesh the rotor 37 blade with gmsh (rank 0) and distribute it.
+
+    Args:
+        comm: communicator.
+        table: path of NASA Table IV for the exact loft; None for the built-in parametric blade.
+        preset: mesh preset name ('ci', 'coarse', 'paper') or a geometry.blade.MeshPreset.
+        material: defaults to the paper's maraging steel.
+        degree: Lagrange degree of the displacement (2 = the paper's quadratic elements).
+        n_tip_nodes: contact nodes along the tip camber line, LE and TE included.
+        shorten: radial length removed at the tip (m), parametric blade only.
+    """
+    preset_obj = blade_geometry.get_mesh_preset(preset)
+    table_obj = read_blade_table(table) if table is not None else None
+    return build_on_rank0(comm, lambda: blade_geometry.create_blade_model(table_obj, preset_obj,
+                                                                         n_tip_nodes=n_tip_nodes, shorten=shorten),
+                          material or Material(), degree, preset_obj.name, "the blade")
+
+
+def create_sector_from_file(path: str | Path, clamp, tip=None, comm: MPI.Comm = MPI.COMM_WORLD,
+                            preset="coarse", material: Material | None = None, degree: int = 2,
+                            scale: float = 1.0) -> Sector:
+    """A user's blade from a STEP/BREP/MSH file (see geometry.blade.import_blade_model for clamp/tip)."""
+    return build_on_rank0(comm, lambda: blade_geometry.import_blade_model(path, clamp, tip, preset, scale),
+                          material or Material(), degree, str(preset), str(path))
+
+
+def clamp_cell_group(sector: Sector, group: str) -> Sector:
+    """The sector with every DOF of the cells of a named volume group clamped as well (e.g. 'disk': the blade of a
+    disk sector clamped at its root, on the same mesh; by Rayleigh's theorem of constraint its frequencies bound the
+    unclamped structure's from above)."""
+    if group not in sector.groups:
+        raise ValueError(f"group {group!r} not in this sector; it has {sorted(sector.groups)}")
+    cells = sector.cell_tags.find(sector.groups[group])
+    dofs = fem.locate_dofs_topological(sector.V, sector.mesh.topology.dim, cells)
+    all_dofs = np.union1d(dofs, sector.clamp_bc.dof_indices()[0] // sector.V.dofmap.index_map_bs)
+    bc = fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), all_dofs.astype(np.int32), sector.V)
+    return dataclasses.replace(sector, clamp_bc=bc, cyclic=None, source=f"{sector.source} with {group} clamped")
+
+
+def _face_nodes(sector: Sector, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """(global blocks, coordinates) of the DOF nodes on a named face group, gathered on every rank."""
+    V, mesh = sector.V, sector.mesh
+    mesh.topology.create_connectivity(mesh.topology.dim - 1, mesh.topology.dim)
+    blocks = fem.locate_dofs_topological(V, mesh.topology.dim - 1, sector.facets(name))
+    blocks = blocks[blocks < V.dofmap.index_map.size_local]
+    coords = V.tabulate_dof_coordinates()[blocks]
+    glob = V.dofmap.index_map.local_range[0] + blocks
+    parts = sector.comm.allgather((glob, coords))
+    g = np.concatenate([p[0] for p in parts]).astype(np.int64)
+    x = np.vstack([p[1] for p in parts]) if g.size else np.zeros((0, 3))
+    order = np.argsort(g)
+    return g[order], x[order]
+
+
+def locate_cyclic_pairs(sector: Sector, n_sectors: int, rel_tol: float = 1e-6) -> CyclicPairs:
+    """Pair the DOF nodes of the sector's 'left' and 'right' faces under the rotation by 2 pi / N about e_z.
+
+    Every right node must sit within rel_tol x (the sector's size) of a turned left node, one to one (gmsh's
+    ``setPeriodic`` builds such meshes; the worst distance is reported). Nodes on both faces are axis nodes. Pairs
+    clamped on both faces are dropped (u = 0 meets every constraint); a pair clamped on one face only is an error.
+    Returns global (unblocked) DOF indices, identical on every rank."""
+    for name in ("left", "right"):
+        if name not in sector.groups:
+            raise ValueError(f"the mesh of {sector.source} has no '{name}' face group: it is not a cyclic sector "
+                             f"(groups: {sorted(sector.groups)})")
+    if int(n_sectors) != n_sectors or not 2 <= n_sectors <= 360:
+        raise ValueError(f"n_sectors must be an integer in [2, 360] (the sector angle 360/N degrees divides the "
+                         f"circle), got {n_sectors}")
+    left, x_left = _face_nodes(sector, "left")
+    right, x_right = _face_nodes(sector, "right")
+    if left.size == 0 or left.size != right.size:
+        raise ValueError(f"cyclic faces: {left.size} left and {right.size} right nodes (the meshes do not match)")
+    axis = np.intersect1d(left, right)
+    keep_l, keep_r = ~np.isin(left, axis), ~np.isin(right, axis)
+    left, x_left, right, x_right = left[keep_l], x_left[keep_l], right[keep_r], x_right[keep_r]
+    angle = 2 * np.pi / n_sectors
+    turned_back = x_right @ rotation_z(-angle).T
+    dist, match = cKDTree(x_left).query(turned_back)
+    scale = float(np.abs(np.vstack([x_left, x_right])).max())
+    worst = int(np.argmax(dist)) if dist.size else 0
+    if dist.size and dist[worst] > rel_tol * scale:
+        p = x_right[worst]
+        raise ValueError(f"cyclic faces do not match under a rotation by 360/{n_sectors} degrees: the right node at "
+                         f"({p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g}) m is {dist[worst]:.3g} m from the nearest turned left "
+                         f"node (tolerance {rel_tol * scale:.3g} m)")
+    if len(np.unique(match)) != match.size:
+        raise ValueError("cyclic faces: two right nodes match the same left node (duplicate nodes on a face?)")
+    left = left[match]
+    clamped_local = sector.clamp_bc.dof_indices()[0]
+    bs = sector.V.dofmap.index_map_bs
+    owned = clamped_local[clamped_local < sector.V.dofmap.index_map.size_local * bs]
+    start = sector.V.dofmap.index_map.local_range[0]
+    clamped_blocks = np.unique(np.concatenate(sector.comm.allgather(start + owned // bs)))
+    cl, cr = np.isin(left, clamped_blocks), np.isin(right, clamped_blocks)
+    if np.any(cl != cr):
+        raise ValueError("cyclic faces: a node is clamped on one face and free on the other (the clamp must be "
+                         "cyclic too)")
+    left, right = left[~cl], right[~cr]
+    axis = axis[~np.isin(axis, clamped_blocks)]
+    triples = lambda b: (bs * b[:, None] + np.arange(bs)[None, :]).astype(np.int64)      # noqa: E731
+    LOG.info("cyclic faces: %d node pairs, %d axis nodes, worst distance %.3g m", left.size, axis.size,
+             dist.max() if dist.size else 0.0)
+    return CyclicPairs(int(n_sectors), triples(left), triples(right), triples(axis),
+                       float(dist.max()) if dist.size else 0.0)

@@ -1,0 +1,415 @@
+"""Full-order solvers on a sector: SLEPc eigenproblems (shift-invert, MUMPS), Newton statics with the exact tangent,
+implicit Newmark transients, and the factorisation and eigen-solver that the pure Craig-Bampton function
+(``reduction.craig_bampton``) is given for SciPy matrices.
+
+Part of the dolfinx adapter (``rotor37_rom.fem``). Everything but the SciPy-matrix helpers runs under MPI.
+"""
+from __future__ import annotations
+
+import dataclasses
+import logging
+from typing import Callable, Sequence
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx.fem import petsc as fem_petsc
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from .operators import (JIT_PARAMS, SvkOperators, _require_serial, assemble_mass, assemble_stiffness,
+                        assemble_vector, create_svk_operators, gather_dof_values, scipy_to_petsc)
+from .sector import Sector
+
+__all__ = ["ModalResult", "StaticResult", "TransientResult", "solve_eigenproblem", "compute_clamped_modes",
+           "solve_static", "solve_newmark", "solve_clamped_static", "mumps_solver", "slepc_eigenpairs"]
+
+LOG = logging.getLogger(__name__)
+
+
+def _lu_solver(comm, A: PETSc.Mat, prefix: str) -> PETSc.KSP:
+    ksp = PETSc.KSP().create(comm)
+    ksp.setOptionsPrefix(prefix)
+    ksp.setOperators(A)
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType("mumps")
+    ksp.setFromOptions()
+    return ksp
+
+
+@dataclasses.dataclass(frozen=True)
+class ModalResult:
+    """Clamped modes: omega (rad/s), mass-normalised mode Functions, tip displacements (n_modes, n_tip, 3)."""
+
+    omega: np.ndarray
+    modes: list
+    tip_displacements: np.ndarray
+
+
+def solve_eigenproblem(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float = 0.0, tol: float = 1e-12,
+                       prefix: str = "modes_") -> tuple[np.ndarray, list]:
+    """Lowest ``n_modes`` eigenpairs of K x = lambda M x by SLEPc Krylov-Schur with shift-invert (MUMPS LU).
+
+    Returns:
+        (omega, vectors): omega = sqrt(lambda) in rad/s ascending, vectors M-normalised (x^T M x = 1).
+    """
+    from slepc4py import SLEPc
+
+    n_global = K.getSize()[0]
+    if not (1 <= n_modes < n_global):
+        raise ValueError(f"n_modes must be in [1, {n_global - 1}], got {n_modes}")
+    eps = SLEPc.EPS().create(K.getComm())
+    eps.setOptionsPrefix(prefix)
+    eps.setOperators(K, M)
+    eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
+    eps.setType(SLEPc.EPS.Type.KRYLOVSCHUR)
+    eps.setDimensions(n_modes, max(2 * n_modes, n_modes + 15))
+    eps.setTolerances(tol, 500)
+    eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
+    eps.setTarget(sigma)
+    st = eps.getST()
+    st.setType(SLEPc.ST.Type.SINVERT)
+    st.setShift(sigma)
+    ksp = st.getKSP()
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType("mumps")
+    eps.setFromOptions()
+    eps.solve()
+    n_conv = eps.getConverged()
+    if n_conv < n_modes:
+        raise RuntimeError(f"SLEPc converged {n_conv} of {n_modes} eigenpairs")
+    lams, vecs = [], []
+    for i in range(n_conv):
+        x = K.createVecRight()
+        lam = eps.getEigenpair(i, x).real
+        lams.append(lam)
+        vecs.append(x)
+    order = np.argsort(lams)[:n_modes]
+    lam = np.array(lams)[order]
+    if np.any(lam <= 0):
+        raise ValueError("K is not positive definite on the free DOFs (non-positive eigenvalue): check the clamp")
+    vecs = [vecs[i] for i in order]
+    comm = K.getComm().tompi4py()
+    for x in vecs:  # M-normalise (SLEPc already does for GHEP; make it explicit), then fix the sign
+        Mx = M.createVecLeft()
+        M.mult(x, Mx)
+        x.scale(1.0 / np.sqrt(x.dot(Mx)))
+        # the sign SLEPc returns depends on the BLAS and the rank count: make the largest entry positive
+        # (modes.normalise_signs, over all ranks)
+        local = x.getArray(readonly=True)
+        k = int(np.argmax(np.abs(local))) if local.size else -1
+        candidates = comm.allgather((abs(local[k]), local[k]) if k >= 0 else (-1.0, 0.0))
+        if max(candidates)[1] < 0:
+            x.scale(-1.0)
+    eps.destroy()
+    return np.sqrt(lam), vecs
+
+
+def compute_clamped_modes(sector: Sector, n_modes: int = 6, ops: SvkOperators | None = None) -> ModalResult:
+    """First ``n_modes`` clamped modes with tip-node displacements gathered on every rank."""
+    ops = ops or create_svk_operators(sector)
+    K, M = assemble_stiffness(sector, ops), assemble_mass(sector, ops)
+    omega, vecs = solve_eigenproblem(K, M, n_modes)
+    modes, tips = [], []
+    for i, x in enumerate(vecs):
+        f = fem.Function(sector.V, name=f"mode_{i + 1}")
+        f.vector.array[:] = x.array
+        f.x.scatter_forward()
+        modes.append(f)
+        tips.append(gather_dof_values(sector, f.x.array, sector.tip_dofs))
+    K.destroy()
+    M.destroy()
+    return ModalResult(omega=omega, modes=modes, tip_displacements=np.array(tips))
+
+
+@dataclasses.dataclass(frozen=True)
+class StaticResult:
+    """Load factors, tip displacements (n_steps, n_tip, 3) and Newton iterations per step; u: final Function;
+    residuals: per load step, (iterations + 1, 2) of (|r|, ref) at each Newton iterate (convergence checks)."""
+
+    load_factors: np.ndarray
+    tip_displacements: np.ndarray
+    iterations: np.ndarray
+    u: object
+    residuals: list = dataclasses.field(default_factory=list)
+
+
+def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec | None = None,
+                 prescribed: Sequence[tuple[np.ndarray, np.ndarray]] = (), n_steps: int = 10,
+                 rtol: float = 1e-10, max_iterations: int = 25, ops: SvkOperators | None = None,
+                 linear: bool = False) -> StaticResult:
+    """Nonlinear static equilibrium f_int(u) = lambda f_ext by Newton with the exact tangent and load stepping.
+
+    Args:
+        sector: the structure (clamp applied).
+        force: external load for lambda = 1: a PETSc vector (N) or a function v -> UFL 1-form (e.g. a traction).
+        prescribed: displacement control: (local DOF indices, values at lambda = 1) pairs, imposed as lambda*values.
+        n_steps: equal load increments (1..10000).
+        rtol: Newton stops when ||r|| <= rtol * max(||lambda f_ext||, ||reaction||) (relative residual).
+        linear: solve K u = lambda f (one factorisation) instead.
+    """
+    if not (1 <= n_steps <= 10000):
+        raise ValueError(f"n_steps must be in [1, 10000], got {n_steps}")
+    ops = ops or create_svk_operators(sector)
+    V = sector.V
+    u = ops.u
+    u.x.array[:] = 0.0
+    f_ext = None
+    if isinstance(force, PETSc.Vec):
+        f_ext = force
+    elif force is not None:
+        f_ext = assemble_vector(fem.form(force(ufl.TestFunction(V)), jit_params=JIT_PARAMS))
+    dofs = np.concatenate([np.asarray(d, dtype=np.int64).ravel() for d, _ in prescribed]) if prescribed else \
+        np.zeros(0, np.int64)
+    values = np.concatenate([np.asarray(v, float).ravel() for _, v in prescribed]) if prescribed else np.zeros(0)
+    if dofs.shape != values.shape:
+        raise ValueError(f"prescribed: {dofs.size} DOFs but {values.size} values")
+    owned = dofs >= 0  # per-rank local indices, -1 where the DOF lives on another rank
+    dofs, values = dofs[owned], values[owned]
+    bs = V.dofmap.index_map_bs
+    n_owned = V.dofmap.index_map.size_local * bs
+    if np.any(dofs >= n_owned):
+        raise ValueError("prescribed: DOF indices must be owned local (unblocked) indices, as in Sector.tip_dofs")
+    global_rows = (V.dofmap.index_map.local_range[0] * bs + dofs).astype(PETSc.IntType)
+    bcs = [sector.clamp_bc]
+    lambdas = np.linspace(0.0, 1.0, n_steps + 1)[1:]
+    tips, its, history = [], [], []
+    du = u.vector.duplicate()
+    K_full = assemble_stiffness(sector, ops) if linear else None
+    if linear:  # one factorisation of K with the prescribed rows and columns eliminated
+        K_lin = K_full.copy()
+        K_lin.zeroRowsColumns(global_rows, diag=1.0)
+        ksp = _lu_solver(sector.comm, K_lin, "static_")
+    lift, rhs, r = u.vector.duplicate(), u.vector.duplicate(), u.vector.duplicate()
+    for lam in lambdas:
+        step_history = []
+        for it in range(max_iterations + 1):
+            # the prescribed increment still to apply (only non-zero on the first iteration of a step)
+            lift.set(0.0)
+            with u.vector.localForm() as local:
+                lift.array[dofs] = lam * values - local.array[dofs]
+            if linear:
+                K_full.mult(u.vector, r)
+            else:
+                r = assemble_vector(ops.f_int)
+            reaction = r.norm()
+            load_norm = 0.0
+            if f_ext is not None:
+                r.axpy(-lam, f_ext)
+                load_norm = abs(lam) * f_ext.norm()
+            fem_petsc.set_bc(r, bcs, scale=0.0)
+            r.array[dofs] = 0.0
+            res, ref = r.norm(), max(load_norm, reaction, 1e-300)
+            LOG.debug("lambda=%.4f it=%d |r|=%.3e ref=%.3e", lam, it, res, ref)
+            step_history.append((res, ref))
+            if (res <= rtol * ref or (linear and it == 1)) and lift.norm() == 0.0:
+                break
+            if it == max_iterations:
+                raise RuntimeError(f"Newton did not converge at load factor {lam:.4g} "
+                                   f"(|r|/ref = {res / ref:.2e} after {it} iterations); use more n_steps")
+            A = K_full
+            if not linear:
+                A = fem_petsc.assemble_matrix(ops.tangent, bcs=bcs, diagonal=1.0)
+                A.assemble()
+            # rhs = -r - A lift on the free rows, = lift on the prescribed rows (a lifted predictor: no spike)
+            A.mult(lift, rhs)
+            rhs.axpy(1.0, r)
+            rhs.scale(-1.0)
+            fem_petsc.set_bc(rhs, bcs, scale=0.0)
+            rhs.array[dofs] = lift.array[dofs]
+            if not linear:
+                A.zeroRowsColumns(global_rows, diag=1.0)
+                ksp = _lu_solver(sector.comm, A, "newton_")
+            ksp.solve(rhs, du)
+            u.vector.axpy(1.0, du)
+            u.x.scatter_forward()
+            if not linear:
+                A.destroy()
+                ksp.destroy()
+        tips.append(gather_dof_values(sector, u.x.array, sector.tip_dofs))
+        its.append(it)
+        history.append(np.array(step_history))
+    out = fem.Function(V, name="u")
+    out.x.array[:] = u.x.array
+    return StaticResult(load_factors=lambdas, tip_displacements=np.array(tips), iterations=np.array(its), u=out,
+                        residuals=history)
+
+
+@dataclasses.dataclass(frozen=True)
+class TransientResult:
+    """Times (n+1,), monitored DOF values (n+1, n_monitor) and final displacement/velocity Functions."""
+
+    t: np.ndarray
+    monitored: np.ndarray
+    u: object
+    v: object
+    energy: np.ndarray
+
+
+def solve_newmark(sector: Sector, force_shape: PETSc.Vec, load: Callable[[float], float], dt: float,
+                  n_steps: int, monitor_dofs: np.ndarray, nonlinear: bool = True, rayleigh=(0.0, 0.0),
+                  beta: float = 0.25, gamma: float = 0.5, rtol: float = 1e-9, max_iterations: int = 20,
+                  ops: SvkOperators | None = None) -> TransientResult:
+    """Implicit Newmark integration of M a + C v + f_int(u) = load(t) f from rest (full-order reference).
+
+    Args:
+        force_shape: spatial load vector f (N).
+        load: time law load(t) (dimensionless).
+        dt: time step (s), > 0; n_steps: number of steps.
+        monitor_dofs: per-rank local DOF indices (-1 = not here) recorded each step, e.g. ``sector.tip_dofs``.
+        nonlinear: SVK internal force with Newton on the exact tangent; False: linear K u (one factorisation).
+        rayleigh: (alpha, beta_K): C = alpha M + beta_K K.
+        beta, gamma: Newmark parameters (default: average acceleration, unconditionally stable, no dissipation).
+    Returns:
+        TransientResult with energy (n+1,): kinetic + strain energy (linear: u^T K u / 2), for checks.
+    """
+    if not dt > 0:
+        raise ValueError(f"dt must be > 0 s, got {dt}")
+    if not (1 <= n_steps <= 10_000_000):
+        raise ValueError(f"n_steps must be in [1, 1e7], got {n_steps}")
+    if not (0.0 < beta <= 0.5 and 0.5 <= gamma <= 1.0):
+        raise ValueError(f"Newmark needs 0 < beta <= 0.5 and 0.5 <= gamma <= 1, got beta={beta}, gamma={gamma}")
+    ops = ops or create_svk_operators(sector)
+    comm, bcs = sector.comm, [sector.clamp_bc]
+    K, M = assemble_stiffness(sector, ops), assemble_mass(sector, ops)
+    C = M.copy()
+    C.scale(rayleigh[0])
+    C.axpy(rayleigh[1], K)
+    c_mass, c_damp = 1.0 / (beta * dt**2), gamma / (beta * dt)
+    u = ops.u
+    u.x.array[:] = 0.0
+    un, vn, an = u.vector.copy(), u.vector.duplicate(), u.vector.duplicate()
+    for w in (vn, an):
+        w.set(0.0)
+    # initial acceleration from rest: M a0 = f(0)
+    rhs = force_shape.copy()
+    rhs.scale(load(0.0))
+    fem_petsc.set_bc(rhs, bcs, scale=0.0)
+    ksp_m = _lu_solver(comm, M, "newmark_mass_")
+    ksp_m.solve(rhs, an)
+    ksp_m.destroy()
+    if not nonlinear:
+        A_lin = K.copy()
+        A_lin.axpy(c_mass, M)
+        A_lin.axpy(c_damp, C)
+        ksp_lin = _lu_solver(comm, A_lin, "newmark_")
+    t = np.arange(n_steps + 1) * dt
+    monitored = [gather_dof_values(sector, u.x.array, monitor_dofs)]
+    energies = [0.0]
+    pred_a, pred_v, tmp, r, du = (u.vector.duplicate() for _ in range(5))
+    for n in range(1, n_steps + 1):
+        # predictors: a_{n+1} = c_mass (u - un) - pred_a, v_{n+1} = pred_v + gamma dt a_{n+1}
+        pred_a.set(0.0)
+        pred_a.axpy(c_mass * dt, vn)
+        pred_a.axpy(1.0 / (2.0 * beta) - 1.0, an)
+        pred_v.set(0.0)
+        pred_v.axpy(1.0, vn)
+        pred_v.axpy((1.0 - gamma) * dt, an)
+        f_n = force_shape.copy()
+        f_n.scale(load(t[n]))
+        for it in range(max_iterations + 1):
+            # a = c_mass (u - un) - pred_a ; v = pred_v + gamma dt a
+            a_vec = u.vector.copy()
+            a_vec.axpy(-1.0, un)
+            a_vec.scale(c_mass)
+            a_vec.axpy(-1.0, pred_a)
+            v_vec = pred_v.copy()
+            v_vec.axpy(gamma * dt, a_vec)
+            if nonlinear:
+                r = assemble_vector(ops.f_int)
+            else:
+                K.mult(u.vector, r)
+            M.mult(a_vec, tmp)
+            # residual scale: the largest of the force terms, so round-off in any of them cannot stall Newton
+            ref = max(f_n.norm(), r.norm(), tmp.norm(), 1e-30)
+            r.axpy(1.0, tmp)
+            C.multAdd(v_vec, r, r)
+            r.axpy(-1.0, f_n)
+            fem_petsc.set_bc(r, bcs, scale=0.0)
+            res = r.norm()
+            if not nonlinear and it == 1:
+                break
+            if nonlinear and (res <= rtol * ref or (it > 0 and res < 1e-14)):
+                break
+            if it == max_iterations:
+                raise RuntimeError(f"Newmark-Newton did not converge at step {n} (|r|/|f| = {res / ref:.2e})")
+            if nonlinear:
+                A = fem_petsc.assemble_matrix(ops.tangent, bcs=bcs, diagonal=1.0)
+                A.assemble()
+                A.axpy(c_mass, M)
+                A.axpy(c_damp, C)
+                ksp = _lu_solver(comm, A, "newmark_")
+            else:
+                ksp = ksp_lin
+            r.scale(-1.0)
+            ksp.solve(r, du)
+            u.vector.axpy(1.0, du)
+            u.x.scatter_forward()
+            if nonlinear:
+                ksp.destroy()
+                A.destroy()
+        un.array[:] = u.vector.array
+        vn.array[:] = v_vec.array
+        an.array[:] = a_vec.array
+        monitored.append(gather_dof_values(sector, u.x.array, monitor_dofs))
+        M.mult(vn, tmp)
+        kinetic = 0.5 * vn.dot(tmp)
+        K.mult(un, tmp)
+        energies.append(kinetic + 0.5 * un.dot(tmp))
+    v_out = fem.Function(sector.V, name="velocity")
+    v_out.vector.array[:] = vn.array
+    u_out = fem.Function(sector.V, name="u")
+    u_out.x.array[:] = u.x.array
+    return TransientResult(t=t, monitored=np.array(monitored), u=u_out, v=v_out, energy=np.array(energies))
+
+
+def solve_clamped_static(sector: Sector, rhs: np.ndarray, ops: SvkOperators | None = None) -> np.ndarray:
+    """Solve K x = b for many right-hand sides b (n_rhs, n_dofs) with the clamp (one MUMPS factorisation)."""
+    _require_serial(sector, "solve_clamped_static")
+    ops = ops or create_svk_operators(sector)
+    K = assemble_stiffness(sector, ops)
+    ksp = _lu_solver(sector.comm, K, "md_")
+    clamped = sector.clamp_bc.dof_indices()[0]
+    b, x = K.createVecLeft(), K.createVecRight()
+    rhs = np.atleast_2d(rhs)
+    out = np.empty_like(rhs)
+    for k, r in enumerate(rhs):
+        b.array[:] = r
+        b.array[clamped] = 0.0
+        ksp.solve(b, x)
+        out[k] = x.array
+    ksp.destroy()
+    K.destroy()
+    return out
+
+
+def mumps_solver(A) -> Callable[[np.ndarray], np.ndarray]:
+    """Factorise a SciPy sparse matrix once with MUMPS (serial); returns solve(B) for B (n,) or (n, m)."""
+    Ap = scipy_to_petsc(A)
+    ksp = _lu_solver(MPI.COMM_SELF, Ap, "cb_")
+    b, x = Ap.createVecLeft(), Ap.createVecRight()
+
+    def solve(B: np.ndarray) -> np.ndarray:
+        B = np.asarray(B, float)
+        cols = B.reshape(B.shape[0], -1)
+        out = np.empty_like(cols)
+        for j in range(cols.shape[1]):             # one factorisation, many right-hand sides
+            b.array[:] = cols[:, j]
+            ksp.solve(b, x)
+            out[:, j] = x.array
+        return out.reshape(B.shape)
+
+    return solve
+
+
+def slepc_eigenpairs(K, M, n_modes: int, sigma: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Lowest ``n_modes`` eigenpairs of SciPy sparse (K, M) (serial) through ``solve_eigenproblem``: (omega (n,),
+    V (n_dofs, n_modes)) with V^T M V = I and each vector's largest entry positive."""
+    Kp, Mp = scipy_to_petsc(K), scipy_to_petsc(M)
+    omega, vecs = solve_eigenproblem(Kp, Mp, n_modes, sigma=sigma, prefix="cb_interface_")
+    V = np.column_stack([v.array.copy() for v in vecs])
+    Kp.destroy()
+    Mp.destroy()
+    return omega, V
