@@ -9,6 +9,7 @@ another order (ratio 1 or 4) fails. The amplitudes must keep the difference >= 1
 """
 
 import numpy as np
+import pytest
 import ufl
 from dolfinx import fem as dfem
 
