@@ -59,11 +59,13 @@ test-slow: $(STAMP)
 # portability: the numerically sensitive tests under the native OpenBLAS kernels with 2 and 1 threads, and with
 # the AMD Zen and Intel Haswell kernels forced (each run prints its kernels in the header); ~20 min
 KERNEL_TESTS := -m "kernels or (not slow and not mpi)" tests
+KERNELS := $(PY) -c "import numpy; from rotor37_rom.blas_check import openblas_core; print('OpenBLAS kernels:', openblas_core())"
 test-kernels: $(STAMP)
-	OPENBLAS_NUM_THREADS=2 $(PY) -m pytest -q -ra $(KERNEL_TESTS)
-	OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -q -ra $(KERNEL_TESTS)
-	OPENBLAS_CORETYPE=Zen OPENBLAS_NUM_THREADS=2 $(PY) -m pytest -q -ra $(KERNEL_TESTS)
-	OPENBLAS_CORETYPE=Haswell OPENBLAS_NUM_THREADS=2 $(PY) -m pytest -q -ra $(KERNEL_TESTS)
+	OPENBLAS_NUM_THREADS=2 $(KERNELS) && OPENBLAS_NUM_THREADS=2 $(PY) -m pytest -q -ra $(KERNEL_TESTS)
+	OPENBLAS_NUM_THREADS=1 $(KERNELS) && OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -q -ra $(KERNEL_TESTS)
+	OPENBLAS_CORETYPE=Zen $(KERNELS) && OPENBLAS_CORETYPE=Zen OPENBLAS_NUM_THREADS=2 $(PY) -m pytest -q -ra $(KERNEL_TESTS)
+	OPENBLAS_CORETYPE=Haswell $(KERNELS) && OPENBLAS_CORETYPE=Haswell OPENBLAS_NUM_THREADS=2 $(PY) -m pytest -q -ra \
+	  $(KERNEL_TESTS)
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_full_order.py

@@ -29,6 +29,7 @@ __all__ = [
     "add_blade_from_sections",
     "table_sections",
     "law_sections",
+    "blade_sections",
     "create_blade_model",
     "import_blade_model",
     "embed_tip_nodes",
@@ -333,6 +334,37 @@ def _tag_and_mesh(volume: int, groups: dict[BladeGroup, list[int]], tip_points: 
     return np.array([gmsh.model.mesh.getNodes(0, t)[1] for t in point_tags]).reshape(-1, 3)
 
 
+def blade_sections(table: BladeTable | None, law: BladeLaw | None = None, shorten: float = 0.0,
+                   root_depth: float = 0.0) -> tuple[list, str]:
+    """The sections to loft, from ``root_depth`` (m) below the root (into a disk's rim) to the tip shortened by
+    ``shorten`` (m, at the LE; the tip section sits at span fraction 1 - shorten / LE span), and the source name.
+
+    Parametric blade: N_TABLE_SECTIONS + (1 if root_depth) sections of the law, evenly spaced in span fraction (the
+    law is smooth, so it is evaluated slightly outside [0, 1] below the root). Table IV: its sections 1-12 as read,
+    the part above the shortened tip replaced by a section interpolated point by point between its neighbours, and
+    below the root a section extrapolated from sections 1 and 2."""
+    if table is None:
+        law = law or default_blade_law()
+        span_le = float(np.diff(law.evaluate(0.0, np.array([0.0, 1.0]))[1])[0])
+        count = N_TABLE_SECTIONS + (1 if root_depth else 0)
+        etas = np.linspace(-root_depth / span_le, 1.0 - shorten / span_le, count)
+        source = "parametric" if not shorten else f"parametric(shorten={shorten:g})"
+        return [(law.side_points(e, "suction"), law.side_points(e, "pressure")) for e in etas], source
+    sections = table_sections(table)
+    radius = lambda side: np.hypot(side[0, 0], side[0, 1])          # noqa: E731  (LE radius of a side)
+    span = np.array([radius(s) - radius(sections[0][0]) for s, _ in sections])
+    top = span[-1] - shorten
+    k = min(int(np.searchsorted(span, top)) - 1, len(span) - 2)       # the tip lies between sections k and k + 1
+    t = (top - span[k]) / (span[k + 1] - span[k])
+    tip = tuple((1 - t) * a + t * b for a, b in zip(sections[k], sections[k + 1]))
+    kept = list(sections[:k + 1]) + [tip]
+    if root_depth:
+        below = root_depth / (span[1] - span[0])
+        kept = [tuple(a[0] + below * (a[0] - a[1]) for a in zip(sections[0], sections[1]))] + kept
+    source = f"table:{table.source}" + (f"(shorten={shorten:g})" if shorten else "")
+    return kept, source
+
+
 def create_blade_model(table: BladeTable | None = None, preset: str | MeshPreset = "coarse",
                        law: BladeLaw | None = None, n_tip_nodes: int = N_TIP_NODES,
                        shorten: float = 0.0) -> BladeModel:
@@ -344,7 +376,7 @@ def create_blade_model(table: BladeTable | None = None, preset: str | MeshPreset
         law: parametric law (default: the built-in one); ignored when a table is given.
         n_tip_nodes: contact nodes on the tip camber line, LE to TE inclusive (2..40).
         shorten: radial length (m) removed at the tip, 0 <= shorten < 20 mm (the paper shortens the disk's
-            blades by 4 mm); the tip section then sits at span fraction 1 - shorten/span.
+            blades by 4 mm): ``blade_sections``.
     """
     import gmsh
 
@@ -353,19 +385,9 @@ def create_blade_model(table: BladeTable | None = None, preset: str | MeshPreset
         raise ValueError(f"n_tip_nodes must be in [2, 40], got {n_tip_nodes}")
     if not (0.0 <= shorten < 0.02):
         raise ValueError(f"shorten must be in [0, 0.02) m, got {shorten}")
-    if table is not None:
-        if table.n_sections < N_TABLE_SECTIONS:
-            raise ValueError(f"blade table {table.source} has {table.n_sections} sections, needs >= {N_TABLE_SECTIONS}")
-        if shorten:
-            raise ValueError("shorten is only available for the parametric blade (table=None)")
-        sections, source = table_sections(table), f"table:{table.source}"
-    else:
-        law = law or default_blade_law()
-        span_le = float(np.diff(law.evaluate(0.0, np.array([0.0, 1.0]))[1])[0])
-        eta_tip = 1.0 - shorten / span_le
-        etas = np.linspace(0.0, eta_tip, N_TABLE_SECTIONS)
-        sections = [(law.side_points(e, "suction"), law.side_points(e, "pressure")) for e in etas]
-        source = "parametric" if not shorten else f"parametric(shorten={shorten:g})"
+    if table is not None and table.n_sections < N_TABLE_SECTIONS:
+        raise ValueError(f"blade table {table.source} has {table.n_sections} sections, needs >= {N_TABLE_SECTIONS}")
+    sections, source = blade_sections(table, law, shorten)
     gmsh.model.add("blade")
     volume = add_blade_from_sections(sections)
     groups = _classify_blade_faces(volume)

@@ -23,8 +23,8 @@ import dataclasses
 import numpy as np
 
 from .blade import (N_TIP_NODES, BladeGroup, MeshPreset, _apply_mesh_preset, _classify_blade_faces, _edge_curves,
-                    _tip_camber_points, add_blade_from_sections, embed_tip_nodes, get_mesh_preset, table_sections)
-from .parametric import N_TABLE_SECTIONS, BladeLaw, default_blade_law
+                    _tip_camber_points, add_blade_from_sections, blade_sections, embed_tip_nodes, get_mesh_preset)
+from .parametric import N_TABLE_SECTIONS, BladeLaw
 from .tables import BladeTable
 
 __all__ = ["DiskProfile", "SectorModel", "root_camber_angle", "create_disk_sector_model",
@@ -212,25 +212,6 @@ def _cut_sector(block: int, theta_left, z_range, r_range, n_sectors: int) -> tup
     return keep[0], lefts, rights
 
 
-def _blade_sections(table: BladeTable | None, law: BladeLaw | None, shorten: float, root_depth: float):
-    """Blade sections from below the root (root_depth into the rim) to the tip shortened by ``shorten``."""
-    if table is None:
-        law = law or default_blade_law()
-        span_le = float(np.diff(law.evaluate(0.0, np.array([0.0, 1.0]))[1])[0])
-        etas = np.linspace(-root_depth / span_le, 1.0 - shorten / span_le, N_TABLE_SECTIONS + 1)
-        return [(law.side_points(e, "suction"), law.side_points(e, "pressure")) for e in etas], "parametric"
-    sections = table_sections(table)
-    radius = lambda p: np.hypot(p[0, 0], p[0, 1])         # noqa: E731  (LE radius of a side)
-    span = [radius(s) - radius(sections[0][0]) for s, _ in sections]
-    below = root_depth / (span[1] - span[0])
-    root = tuple(a[0] + below * (a[0] - a[1]) for a in zip(sections[0], sections[1]))
-    top = span[-1] - shorten
-    k = int(np.searchsorted(span, top)) - 1              # the tip lies between sections k and k + 1
-    t = (top - span[k]) / (span[k + 1] - span[k])
-    tip = tuple((1 - t) * a + t * b for a, b in zip(sections[k], sections[k + 1]))
-    return [root] + list(sections[:k + 1]) + [tip], f"table:{table.source}"
-
-
 def _add_group(dim: int, tags: list[int], tag: int, name: str) -> None:
     import gmsh
 
@@ -277,7 +258,7 @@ def create_disk_sector_model(table: BladeTable | None = None, preset: str | Mesh
     block = _revolved_block(outline, thetas.min() - 0.2, thetas.max() + angle + 0.2)
     disk, lefts, rights = _cut_sector(block, theta_left, z_range,
                                       (profile.bore_radius - margin, outline[:, 1].max() + margin), n_sectors)
-    sections, source = _blade_sections(table, law, shorten, root_depth=4e-3)
+    sections, source = blade_sections(table, law, shorten, root_depth=4e-3)
     blade = add_blade_from_sections(sections)
     # one boolean: the blade (its root 4 mm into the rim) and the disk fragment into the blade above the rim, the
     # root inside the rim (counted as disk) and the rest of the disk, with conforming interfaces

@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["plot_clearance_consumption", "plot_md_weights", "plot_interaction_map", "plot_nfrc", "plot_time_history",
-           "plot_speed_accuracy", "plot_indicator_vs_rmd"]
+           "plot_speed_accuracy", "plot_indicator_vs_rmd", "plot_safe_diagram"]
 
 
 def _pyplot():
@@ -167,3 +167,37 @@ def plot_indicator_vs_rmd(rows: list, path: str | Path, title: str = "") -> Path
     ax.grid(alpha=0.3, which="both")
     ax.legend()
     return _save(fig, path)
+
+
+def plot_safe_diagram(safe, path: str | Path, references: dict | None = None, title: str = "") -> Path:
+    """Fig. 15 analogue: frequency (rad/s) against nodal diameter, one colour per family (1B, 1T, 2B, other
+    blade-dominated modes, disk-dominated modes), with ``references`` {label: omega} drawn as horizontal lines (e.g.
+    the clamped single blade's 1B/1T/2B). ``safe``: a ``fem.safe.SafeDiagram`` or its ``as_dict()``."""
+    plt = _pyplot()
+    d = safe.as_dict() if hasattr(safe, "as_dict") else safe
+    k, omega, family = np.asarray(d["k"]), np.asarray(d["omega"]), np.asarray(d["family"])
+    colors = {"1B": "C0", "1T": "C1", "2B": "C2"}
+    fig, ax = plt.subplots(figsize=(8, 5))
+    drawn = set()
+    for label in ["1B", "1T", "2B"]:
+        curve = np.array([omega[i][np.flatnonzero(family[i] == label)[0]] if (family[i] == label).any() else np.nan
+                          for i in range(len(k))])
+        ax.plot(k, curve, "-o", color=colors[label], ms=4, label=f"{label} family")
+        drawn.add(label)
+    for i, kk in enumerate(k):
+        for w, fam in zip(omega[i], family[i]):
+            if fam in drawn:
+                continue
+            color, name = ("C3", "disk-dominated") if fam == "disk" else ("C7", "other blade modes")
+            ax.plot(kk, w, "s" if fam == "disk" else "^", color=color, ms=5,
+                    label=name if name not in ax.get_legend_handles_labels()[1] else None)
+    for label, w in (references or {}).items():
+        ax.axhline(w, color=colors.get(label.split()[-1], "k"), ls="--", lw=0.8, label=label)
+    ax.set_xlabel("nodal diameter k")
+    ax.set_ylabel("ω (rad/s)")
+    ax.set_xticks(k[:: max(1, len(k) // 19)])
+    ax.set_title(title or "SAFE diagram")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    return _save(fig, path)
+

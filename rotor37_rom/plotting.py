@@ -7,7 +7,7 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["write_xdmf", "render_mode_shapes", "render_stress", "vtk_grid"]
+__all__ = ["write_xdmf", "render_mode_shapes", "render_stress", "vtk_grid", "render_cyclic_mode", "write_cyclic_xdmf"]
 
 LOG = logging.getLogger(__name__)
 
@@ -128,3 +128,59 @@ def render_stress(sector, u, cell_values: np.ndarray, path: str | Path, title: s
 def _check_serial(sector) -> None:
     if sector.comm.size > 1:
         raise RuntimeError("pyvista rendering runs serially; call it from a serial run")
+
+
+def _sector_fields(sector, a, b, k: int) -> np.ndarray:
+    """(N, n_nodes, 3) displacement of every sector, each turned to the common frame, of the mode (a, b) of index k
+    (``cyclic.expand_sector_mode``)."""
+    from rotor37_rom.cyclic import expand_sector_mode
+
+    n = sector.cyclic.n_sectors
+    local = expand_sector_mode(a.x.array, None if b is None else b.x.array, k, n).reshape(n, -1, 3)
+    return np.stack([_rotate_z(local[s], 2 * np.pi * s / n) for s in range(n)])
+
+
+def render_cyclic_mode(sector, a, b, k: int, path: str | Path, title: str, amplitude: float = 0.08) -> Path:
+    """PNG of a mode of harmonic index k of a cyclic sector on the whole structure (all N sectors, the disk
+    included), deformed so that the largest displacement is ``amplitude`` x the radius, coloured by the normalised
+    displacement magnitude. Writes ``path`` and ``path.json`` (what was drawn). Serial only."""
+    _check_serial(sector)
+    if sector.cyclic is None:
+        raise ValueError(f"{sector.source} is not a cyclic sector")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    topology, cell_types, x = vtk_grid(sector)
+    n = sector.cyclic.n_sectors
+    u = _sector_fields(sector, a, b, k)
+    magnitude = np.linalg.norm(u, axis=2)
+    top = topology.reshape(-1, topology[0] + 1)
+    tops = [np.column_stack([top[:, :1], top[:, 1:] + s * len(x)]).ravel() for s in range(n)]
+    radius = np.hypot(x[:, 0], x[:, 1]).max()
+    scene = {"topology": np.concatenate(tops), "cell_types": np.tile(cell_types, n),
+             "points": np.vstack([_rotate_z(x, 2 * np.pi * s / n) for s in range(n)]), "n_frames": 1,
+             "scalar_name": "|u| (normalised)", "u_0": u.reshape(-1, 3), "s_0": (magnitude / magnitude.max()).ravel(),
+             "title_0": title, "path_0": str(path), "factor_0": amplitude * radius / magnitude.max(),
+             "no_ghost": True, "view": (0.55, -0.45, 0.7), "viewup": (0.0, 0.0, 1.0)}
+    run_render(scene, path.with_suffix(".scene.npz"))
+    return path
+
+
+def write_cyclic_xdmf(sector, a, b, k: int, path: str | Path) -> Path:
+    """The mode (a, b) of index k on every sector, as one XDMF series over the sector's mesh: step s is sector s's
+    displacement in the common frame (ParaView: turn the mesh of step s by 360 s / N degrees about z to place it)."""
+    from dolfinx import fem, io
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    u = _sector_fields(sector, a, b, k)
+    f = fem.Function(sector.V, name="displacement")
+    V1 = fem.VectorFunctionSpace(sector.mesh, ("Lagrange", 1))
+    out = fem.Function(V1, name="displacement")
+    with io.XDMFFile(sector.comm, str(path), "w") as xdmf:
+        xdmf.write_mesh(sector.mesh)
+        for s in range(sector.cyclic.n_sectors):
+            f.x.array[:] = u[s].ravel()
+            out.interpolate(f)
+            xdmf.write_function(out, float(s))
+    return path
+

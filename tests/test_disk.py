@@ -173,3 +173,33 @@ def test_cyclic_bad_input(plate, ci_blade):
         fem.solve_cyclic_modes(plate, 5)
     with pytest.raises(ValueError, match="not a cyclic sector"):
         fem.solve_cyclic_modes(ci_blade, 0)
+
+
+@pytest.mark.slow
+def test_safe_families_and_full_disk_pictures(ci_disk, tmp_path):
+    """SAFE labels at k = 0 and 18: the three lowest modes are the blade's 1B, 1T, 2B (blade-dominated: most of their
+    strain energy in the blade), and at k = 0 a disk-dominated mode follows (low nodal diameters bend the disk most).
+    The 1B family drawn on the whole disk (36 sectors, disk included) at k = 0, 3, 18: non-blank pictures whose drawn
+    range is the normalised magnitude [0, 1] on 36 x the sector's cells."""
+    import json
+
+    from PIL import Image
+
+    from rotor37_rom.fem.safe import compute_safe_diagram
+    from rotor37_rom.plotting import render_cyclic_mode
+
+    safe = compute_safe_diagram(ci_disk, 4, ks=(0, 18))
+    print(safe.family, safe.omega, safe.blade_share)
+    for i in range(2):
+        assert list(safe.family[i][:3]) == ["1B", "1T", "2B"]
+        assert np.all(safe.blade_share[i][:3] > 0.5)
+    assert "disk" in safe.family[0]
+    n_cells = ci_disk.mesh.topology.index_map(3).size_local
+    for k in (0, 3, 18):
+        modes = fem.solve_cyclic_modes(ci_disk, k, 1)
+        path = render_cyclic_mode(ci_disk, modes.a[0], modes.b[0], k, tmp_path / f"k{k}.png", f"1B, k = {k}")
+        info = json.loads(path.with_name(path.name + ".json").read_text())
+        assert info["n_cells"] == 36 * n_cells
+        assert info["scalar_range"][1] == pytest.approx(1.0, abs=1e-12) and info["scalar_range"][0] >= 0.0
+        pixels = np.asarray(Image.open(path).convert("L"))
+        assert (pixels < 250).mean() > 0.02                      # not blank
