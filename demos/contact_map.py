@@ -11,66 +11,403 @@
 #     OPENBLAS_NUM_THREADS=1 mpirun -n 2 python demos/contact_map.py --model results/contact_map/rom.npz --gnl on \
 #         --cubature 1e-4 --precision single --frequency-cap 120 --mu 0 --speeds 1200 1600 100 --revolutions 200 \
 #         --batch 50 --out results/headline     # the GNL headline map on 2 cores (README: measured wall time)
+#
+# The whole study is one function, `run_contact_map(ContactMapConfig(...))`, which returns a `ContactMapResult`; the
+# command line only turns its options into that configuration. A bad option is one line on stderr and exit status 2.
 
 # +
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import hashlib
+import importlib
 import json
 import logging
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 import scipy.linalg
 
+from rotor37_rom.casing import Casing, contact_matrices
+from rotor37_rom.charts import plot_interaction_map, plot_nfrc, plot_time_history
+from rotor37_rom.friction import sprag_slip_friction
+from rotor37_rom.geometry.blade import MESH_PRESETS
+from rotor37_rom.integrator import CentralDifference, gnl_time_step, probe_states, training_speeds
+from rotor37_rom.reduction import ReducedModel, load_reduced_model, save_reduced_model, with_force_precision
+from rotor37_rom.sweep import (ContinuationPoint, InteractionMap, SweepSpec, continuation, interaction_map,
+                               load_sweep, record_row, rerun_diverged, run_sweep)
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
+
 PAPER = {"linear 1B/EO4": 1317.0, "zero IC, no GNL": 1446.0, "zero IC, GNL": 1535.0,
          "continuation, no GNL": 1520.0, "continuation, GNL": 1551.0}
+GNL_SETTINGS = {"off": (False,), "on": (True,), "both": (False, True)}
+PRECISIONS = ("double", "single")
 # -
 
 
-# +
-def build_or_load(args, comm):
-    from rotor37_rom.reduction import load_reduced_model, save_reduced_model
+# ## Configuration
+#
+# One field per command-line option (`--frequency-cap` is `frequency_cap`), with the same defaults. Every check
+# names the option it concerns, so that the command line can report it as is. Numbers are stored as floats, as the
+# command line gives them: the cache keys of sweeps and cubatures hash them, and a run from Python then reuses the
+# files of the same run from the shell.
 
-    out = Path(args.out)
-    if args.model:
-        return load_reduced_model(args.model)
+# +
+def continued_revolutions(revolutions: float) -> float:
+    """Length of each continued run: 15 % of the first (the paper: 200 then 30), at least 5 revolutions."""
+    return max(5.0, revolutions * 0.15)
+
+
+@dataclasses.dataclass(frozen=True)
+class ContactMapConfig:
+    """What to compute: the reduced model, the speeds, the scheme, the casing and the continuation.
+
+    Attributes:
+        preset: mesh preset of the blade the model is built on (and the cubature trained on): ci, coarse, paper.
+        model: a saved reduced model (.npz) to load instead of building one (required under MPI).
+        r_c: fixed-interface modes of the model built (>= 1).
+        r_md: modal derivatives selected by the criterion (>= 0).
+        global_md: also the modal derivatives of the first N clamped modes (0..10).
+        speeds: (START, STOP, N): N angular speeds (rad/s) from START to STOP.
+        revolutions: rotor revolutions simulated at each speed (> 0).
+        gnl: geometric nonlinearity: 'off', 'on' or 'both' (one map each).
+        safety: h = safety x 2 / omega_max of the linear model, in (0, 1].
+        h: time step (s); overrides ``safety``. None: from ``safety``.
+        frequency_cap: spectral mass scaling (kHz): the modes above it are slowed to it; a GNL step then comes from
+            the tangent limit on a short unscaled probe run. None: no scaling.
+        tangent_safety: with a cap, the GNL step is this x 2 / the largest tangent frequency, in (0, 1].
+        cubature: GNL forces by point cubature trained to this relative tolerance, in (0, 1). None: exact tensors.
+        precision: arithmetic of the cubature forces: 'double' or 'single' (float32; needs ``cubature``).
+        retry_diverged: runs that blew up run again with the step halved, up to this many times (0..4).
+        mu: Coulomb friction coefficient of the casing contact (paper 0.15).
+        c0: clearance at rest (m).
+        hb: height h_b of the casing's two bumps (m).
+        direction: contact normal: 'x' (the paper's e_x) or 'radial'.
+        batch: speeds integrated together in one batch (>= 1).
+        continuation: speed step (rad/s) of a continuation up and down (0: none).
+        continuation_range: (LOW, HIGH) speeds (rad/s) of the continuation; None: the map's range.
+        steady_window: a continued run is steady when its max over the last N revolutions and the N before agree.
+        out: folder of the charts, summary.json, the sweeps' records and the caches.
+        quiet: no progress bars and no sprag-slip note.
+    """
+
+    preset: str = "ci"
+    model: Path | None = None
+    r_c: int = 15
+    r_md: int = 0
+    global_md: int = 3
+    speeds: tuple[float, float, int] = (1200.0, 1600.0, 21)
+    revolutions: float = 20.0
+    gnl: str = "both"
+    safety: float = 0.5
+    h: float | None = None
+    frequency_cap: float | None = None
+    tangent_safety: float = 0.5
+    cubature: float | None = None
+    precision: str = "double"
+    retry_diverged: int = 0
+    mu: float = 0.15
+    c0: float = 0.5e-3
+    hb: float = 0.625e-3
+    direction: str = "x"
+    batch: int = 16
+    continuation: float = 0.0
+    continuation_range: tuple[float, float] | None = None
+    steady_window: int = 1
+    out: Path = Path("results/contact_map")
+    quiet: bool = False
+
+    def __post_init__(self):
+        """Check every option (ValueError naming it) and store the numbers as the command line gives them."""
+        self._check_model()
+        self._check_sweep()
+        self._check_casing()
+        self._check_scheme()
+        self._check_continuation()
+        self._normalise()
+
+    def _check_model(self) -> None:
+        """The mesh preset and the sizes of a model to build."""
+        if self.preset not in MESH_PRESETS:
+            raise ValueError(f"--preset must be one of {', '.join(MESH_PRESETS)}, got {self.preset!r}")
+        if not self.r_c >= 1:
+            raise ValueError(f"--r-c must be >= 1, got {self.r_c}")
+        if not self.r_md >= 0:
+            raise ValueError(f"--r-md must be >= 0, got {self.r_md}")
+        if not 0 <= self.global_md <= 10:
+            raise ValueError(f"--global-md must be in 0..10, got {self.global_md}")
+
+    def _check_sweep(self) -> None:
+        """Speeds, run length, batches and retries."""
+        if len(self.speeds) != 3 or not 0 < self.speeds[0] <= self.speeds[1] or not self.speeds[2] >= 1 \
+                or not float(self.speeds[2]).is_integer():
+            raise ValueError(f"--speeds: need 0 < START <= STOP and an integer N >= 1, got {list(self.speeds)}")
+        if not self.revolutions > 0:
+            raise ValueError(f"--revolutions must be > 0, got {self.revolutions}")
+        if self.gnl not in GNL_SETTINGS:
+            raise ValueError(f"--gnl must be one of {', '.join(GNL_SETTINGS)}, got {self.gnl!r}")
+        if not self.batch >= 1:
+            raise ValueError(f"--batch must be >= 1, got {self.batch}")
+        if not 0 <= self.retry_diverged <= 4:
+            raise ValueError(f"--retry-diverged must be in 0..4, got {self.retry_diverged}")
+
+    def _check_casing(self) -> None:
+        """Each casing option alone through rotor37_rom.casing.Casing (its checks are per field)."""
+        for flag, name, value in (("--c0", "c0", self.c0), ("--hb", "h_b", self.hb), ("--mu", "mu", self.mu),
+                                  ("--direction", "direction", self.direction)):
+            try:
+                Casing(**{name: value})
+            except ValueError as exc:
+                raise ValueError(f"{flag}: {exc}") from None
+
+    def _check_scheme(self) -> None:
+        """Time step, frequency cap and the GNL forces."""
+        if not 0 < self.safety <= 1:
+            raise ValueError(f"--safety must be in (0, 1], got {self.safety}")
+        if self.h is not None and not self.h > 0:
+            raise ValueError(f"--h must be > 0 s, got {self.h}")
+        if self.frequency_cap is not None and not self.frequency_cap > 0:
+            raise ValueError(f"--frequency-cap must be > 0 kHz, got {self.frequency_cap}")
+        if not 0 < self.tangent_safety <= 1:
+            raise ValueError(f"--tangent-safety must be in (0, 1], got {self.tangent_safety}")
+        if self.cubature is not None and not 0 < self.cubature < 1:
+            raise ValueError(f"--cubature must be in (0, 1), got {self.cubature}")
+        if self.precision not in PRECISIONS:
+            raise ValueError(f"--precision must be one of {', '.join(PRECISIONS)}, got {self.precision!r}")
+        if self.precision != "double" and self.cubature is None:
+            raise ValueError("--precision single needs --cubature (the exact cubic tensors are evaluated in double)")
+
+    def _check_continuation(self) -> None:
+        """Continuation step, range and steadiness window."""
+        if not self.continuation >= 0:
+            raise ValueError(f"--continuation must be >= 0 rad/s (0: none), got {self.continuation}")
+        if self.continuation_range is not None and (len(self.continuation_range) != 2
+                                                    or not 0 < self.continuation_range[0] < self.continuation_range[1]):
+            raise ValueError(f"--continuation-range: need 0 < LOW < HIGH rad/s, got {list(self.continuation_range)}")
+        half = continued_revolutions(self.revolutions) / 2
+        if not 1 <= self.steady_window <= half:
+            raise ValueError(f"--steady-window must be in 1..{int(half)} revolutions (half of a continued run), got "
+                             f"{self.steady_window}")
+
+    def _normalise(self) -> None:
+        """Floats, tuples and paths, as the command line gives them (same cache keys from Python and the shell)."""
+        for name in ("revolutions", "safety", "h", "frequency_cap", "tangent_safety", "cubature", "mu", "c0", "hb",
+                     "continuation"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, float(getattr(self, name)))
+        start, stop, n = self.speeds
+        object.__setattr__(self, "speeds", (float(start), float(stop), int(n)))
+        if self.continuation_range is not None:
+            object.__setattr__(self, "continuation_range", tuple(float(w) for w in self.continuation_range))
+        object.__setattr__(self, "out", Path(self.out))
+        if self.model is not None:
+            object.__setattr__(self, "model", Path(self.model))
+
+    @property
+    def speed_grid(self) -> np.ndarray:
+        """The map's angular speeds (rad/s)."""
+        start, stop, n = self.speeds
+        return np.linspace(start, stop, n)
+
+    @property
+    def continuation_span(self) -> tuple[float, float]:
+        """(LOW, HIGH) of the continuation (rad/s): ``continuation_range`` or the map's range."""
+        return self.continuation_range or self.speeds[:2]
+
+    @property
+    def casing(self) -> Casing:
+        """The casing and contact law."""
+        return Casing(c0=self.c0, h_b=self.hb, mu=self.mu, direction=self.direction)
+
+    @property
+    def sweep_spec(self) -> SweepSpec:
+        """The contact scenario each speed runs."""
+        return SweepSpec(revolutions=self.revolutions, casing=self.casing, batch_size=self.batch)
+
+    @property
+    def frequency_cap_rad_s(self) -> float | None:
+        """``frequency_cap`` in rad/s (None: no cap)."""
+        return None if self.frequency_cap is None else 2 * np.pi * 1e3 * self.frequency_cap
+# -
+
+
+# ## Results
+#
+# One `MapResult` per GNL setting ('no GNL', 'GNL', with the cubature and the cap in the label when used): its
+# interaction map, the speeds run again with a smaller step and the continuation branches. `ContactMapResult` holds
+# them with what the run wrote. Under MPI rank 0 gets them all; the other ranks get no maps and write nothing.
+
+# +
+@dataclasses.dataclass(frozen=True)
+class Branch:
+    """One continuation branch (§2.3.3): its accepted points, the step it ran with (s) and its wall time (s)."""
+
+    points: list[ContinuationPoint]
+    h: float
+    wall_s: float
+
+    @property
+    def peak(self) -> ContinuationPoint:
+        """The point of largest (finite) amplitude."""
+        return max(self.points, key=lambda p: p.amplitude if np.isfinite(p.amplitude) else -1)
+
+
+@dataclasses.dataclass(frozen=True)
+class MapResult:
+    """The interaction map of one setting.
+
+    Attributes:
+        label: chart and summary label, e.g. 'no GNL' or 'GNL, cubature 0.0001, cap 120 kHz'.
+        tag: the same in file names, e.g. 'linear' or 'gnl_cub0.0001_cap120k'.
+        folder: folder of the sweep's per-speed records (speeds run again are in sweeps of their own).
+        imap: spectra and NFRC of node LE (speeds in rad/s, amplitudes in m; NaN where a run diverged).
+        h: time step of the sweep (s); h_crit: 2 / omega_max of its scheme (s).
+        retried: {speed (rad/s): step of its last retry (s)} for the speeds run again after a blow-up.
+        wall_s: wall time of the sweep and its retries (s).
+        branches: {'up' | 'down': Branch}, empty without a continuation.
+    """
+
+    label: str
+    tag: str
+    folder: Path
+    imap: InteractionMap
+    h: float
+    h_crit: float
+    retried: dict[float, float]
+    wall_s: float
+    branches: dict[str, Branch]
+
+    @property
+    def speeds(self) -> np.ndarray:
+        """Angular speeds of the map (rad/s)."""
+        return self.imap.speeds
+
+    @property
+    def nfrc(self) -> np.ndarray:
+        """Max |u_LE,r| over the last revolution at each speed (m); NaN where the run diverged."""
+        return self.imap.nfrc
+
+    @property
+    def diverged(self) -> np.ndarray:
+        """Whether each speed's run blew up (after its retries)."""
+        return self.imap.diverged
+
+    @property
+    def peak_speed(self) -> float:
+        """The speed of largest response (rad/s); NaN when every run diverged."""
+        ok = np.isfinite(self.nfrc)
+        return float(self.speeds[ok][np.argmax(self.nfrc[ok])]) if ok.any() else float("nan")
+
+
+@dataclasses.dataclass(frozen=True)
+class ContactMapResult:
+    """What ``run_contact_map`` produced.
+
+    Attributes:
+        out: the output folder.
+        eigenfrequencies: the model's first three frequencies omega_1..3 (rad/s).
+        linear_resonance: omega_1 / 4, where 1B crosses engine order 4 (rad/s).
+        runs: {label: MapResult} of this call (rank 0; empty on the other ranks).
+        summary: the content of summary.json (rank 0; with the runs of an earlier call on the same set-up).
+        files: the files written: the model built (if any), the charts and summary.json.
+    """
+
+    out: Path
+    eigenfrequencies: np.ndarray
+    linear_resonance: float
+    runs: dict[str, MapResult]
+    summary: dict
+    files: list[Path]
+# -
+
+
+# ## The reduced model
+#
+# Loaded from `--model`, or built serially from the blade mesh (Craig-Bampton with r_c fixed-interface modes and
+# modal derivatives, exact cubic tensors) and saved as `<out>/rom.npz` for later runs and MPI runs.
+
+# +
+def reduced_model(config: ContactMapConfig, comm: MPI.Comm | None) -> tuple[ReducedModel, list[Path]]:
+    """The model of ``config.model``, or one built and saved; returns it and the files written."""
+    if config.model is not None:
+        try:
+            return load_reduced_model(config.model), []
+        except ValueError as exc:
+            raise ValueError(f"--model: {exc}") from None
     if comm is not None and comm.size > 1:
-        raise SystemExit("error: under MPI give --model (the rom.npz a serial run saved); the reduction is serial")
+        raise ValueError("under MPI give --model (the rom.npz a serial run saved); the reduction is serial")
+    model = build_model(config)
+    return model, [save_reduced_model(model, config.out / "rom.npz")]
+
+
+def build_model(config: ContactMapConfig) -> ReducedModel:
+    """Build the reduced model of the ``config.preset`` blade (cached in <out>/cache)."""
     from rotor37_rom import fem
     from rotor37_rom.builder import ReductionConfig, build_reduced_model
 
-    sector = fem.create_blade_sector(preset=args.preset)
-    config = ReductionConfig(r_c=args.r_c, r_md=args.r_md, global_md_modes=args.global_md, forces="intrusive")
+    sector = fem.create_blade_sector(preset=config.preset)
+    reduction = ReductionConfig(r_c=config.r_c, r_md=config.r_md, global_md_modes=config.global_md,
+                                forces="intrusive")
     t0 = time.perf_counter()
-    model, _ = build_reduced_model(sector, config, cache_dir=out / "cache")
-    print(f"reduced model: {args.preset} preset ({sector.n_dofs} DOF) -> r = {model.r} {model.sizes} "
+    model, _ = build_reduced_model(sector, reduction, cache_dir=config.out / "cache")
+    print(f"reduced model: {config.preset} preset ({sector.n_dofs} DOF) -> r = {model.r} {model.sizes} "
           f"in {time.perf_counter() - t0:.1f} s")
-    save_reduced_model(model, out / "rom.npz")
     return model
 
 
-def cubature_model(args, model, speeds, casing, comm):
+def eigenfrequencies(model: ReducedModel) -> np.ndarray:
+    """The first three frequencies of the reduced model (rad/s)."""
+    return np.sqrt(scipy.linalg.eigh(model.K, model.M, eigvals_only=True)[:3])
+
+
+def sprag_slip_onsets(model: ReducedModel, casing: Casing) -> dict:
+    """Friction coefficients at which sustained sliding on the casing diverges (rotor37_rom.friction)."""
+    N, S, _, _ = contact_matrices(model.nodes, model.r, casing)
+    single = [sprag_slip_friction(model.K, N, S, [k]) for k in range(N.shape[0])]
+    return {"weakest_node": min(single), "per_node": single, "all_nodes": sprag_slip_friction(model.K, N, S)}
+
+
+def _finite(x: float) -> float | None:
+    """x, or None for inf (JSON has no inf: null = friction never wedges these nodes)."""
+    return x if np.isfinite(x) else None
+
+
+def model_summary(config: ContactMapConfig, model: ReducedModel, omega: np.ndarray, onset: dict) -> dict:
+    """The summary.json entries of the model and the set-up (its 'runs' still empty)."""
+    return {"r": model.r, "sizes": model.sizes, "omega_1_3": omega.tolist(), "linear_resonance": omega[0] / 4,
+            "speeds": list(config.speeds), "revolutions": config.revolutions, "casing": vars(config.casing),
+            "runs": {}, "sprag_slip": {k: ([_finite(x) for x in v] if isinstance(v, list) else _finite(v))
+                                       for k, v in onset.items()}}
+# -
+
+
+# ## Time step and GNL forces
+#
+# Without GNL the step is `safety` x 2 / omega_max (or `--h`). With GNL and `--cubature`, the exact cubic forces are
+# replaced by point cubature trained on exact GNL runs at 6 of the speeds; with a frequency cap the GNL step comes
+# from the tangent frequencies of the states a GNL run reaches (the cubature's training runs, or a short probe).
+
+# +
+def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm | None
+                   ) -> tuple[ReducedModel, np.ndarray]:
     """The model with point-cubature GNL forces trained on exact GNL runs at 6 of the speeds (trajectory states), and
     the states the GNL step is taken over (those runs' 24 of largest tip motion and the training states). Cached in
     <out>/cache: a restarted map does not retrain.
     Under MPI rank 0 trains (serial FE quadrature on its own copy of the mesh) while the others wait."""
-    import hashlib
-    import importlib
-
     importlib.import_module("rotor37_rom.fem")    # on every rank: importing dolfinx initializes PETSc (collective)
-    from rotor37_rom.integrator import CentralDifference, training_speeds
-    from rotor37_rom.reduction import load_reduced_model
-
-    train = training_speeds(speeds)
-    revolutions = min(args.revolutions, 12.0)
-    scheme = CentralDifference(model, nonlinear=True, safety=args.safety)
-    key = hashlib.sha256(json.dumps([model.key, train.tolist(), revolutions, scheme.h, vars(casing), args.cubature,
-                                     "step states: largest and training"],
+    train = training_speeds(config.speed_grid)
+    revolutions = min(config.revolutions, 12.0)
+    scheme = CentralDifference(model, nonlinear=True, safety=config.safety)
+    key = hashlib.sha256(json.dumps([model.key, train.tolist(), revolutions, scheme.h, vars(config.casing),
+                                     config.cubature, "step states: largest and training"],
                                     sort_keys=True, default=str).encode()).hexdigest()[:16]
-    cache = Path(args.out) / "cache" / f"cubature_{key}.npz"
+    cache = config.out / "cache" / f"cubature_{key}.npz"
     rank = 0 if comm is None else comm.rank
     if cache.is_file():
         if rank == 0:
@@ -79,7 +416,7 @@ def cubature_model(args, model, speeds, casing, comm):
         error = None
         if rank == 0:
             try:
-                _train_cubature(args, model, scheme, train, revolutions, casing, cache)
+                _train_cubature(config, model, scheme, train, revolutions, cache)
             except ValueError as exc:
                 error = str(exc)
         if comm is not None:
@@ -91,49 +428,20 @@ def cubature_model(args, model, speeds, casing, comm):
     return load_reduced_model(cache), states
 
 
-def continued_revolutions(revolutions: float) -> float:
-    """Length of each continued run: 15 % of the first (the paper: 200 then 30), at least 5 revolutions."""
-    return max(5.0, revolutions * 0.15)
-
-
-def continuation_branches(args, scheme, retried, start, stop, casing, out: Path, tag: str, comm) -> dict:
-    """Continuation up and down (§2.3.3) at the step the map's speeds all ran with (the smallest retry step, if any
-    speed was run again), the first run as long as the map's, the next 15 % of it (the paper: 200 then 30).
-    Under MPI the two branches run on ranks 0 and 1 at once; rank 0 gets both. Each branch is written after every
-    accepted speed (``sweep.continuation(out=...)``), so a killed run resumes. Returns {name: (points, h, wall)}."""
-    from rotor37_rom.sweep import continuation
-
-    if args.continuation <= 0:
-        return {}
-    run_scheme = scheme.with_step(min(retried.values())) if retried else scheme
-    legs = {"up": (start, stop), "down": (stop, start)}
-    rank, size = (0, 1) if comm is None else (comm.rank, comm.size)
-    mine = {}
-    for k, (name, (a, b)) in enumerate(legs.items()):
-        if k % size == rank:
-            t0 = time.perf_counter()
-            pts = continuation(run_scheme, a, b, args.continuation, casing, first_revolutions=args.revolutions,
-                               revolutions=continued_revolutions(args.revolutions), out=out / "continuation" / tag,
-                               window=args.steady_window, progress=not args.quiet)
-            mine[name] = (pts, run_scheme.h, time.perf_counter() - t0)
-    if comm is not None:
-        gathered = comm.gather(mine, root=0)
-        mine = {k: v for part in gathered for k, v in part.items()} if rank == 0 else {}
-    return mine
-
-
-def _train_cubature(args, model, scheme, train, revolutions, casing, cache: Path):
+def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: CentralDifference, train: np.ndarray,
+                    revolutions: float, cache: Path) -> None:
+    """Train the point cubature on exact GNL runs at ``train`` and save it with the step states to ``cache``."""
     from mpi4py import MPI
 
     from rotor37_rom import fem
     from rotor37_rom.builder import hyper_reduce
     from rotor37_rom.integrator import contact_training_states
-    from rotor37_rom.reduction import save_reduced_model
 
+    casing = config.casing
     t0 = time.perf_counter()
     Q_train, step_states = contact_training_states(scheme, train, casing, revolutions)
-    sector = fem.create_blade_sector(MPI.COMM_SELF, preset=args.preset)
-    reduced, rep = hyper_reduce(sector, model, Q_train, tol=args.cubature, level="point",
+    sector = fem.create_blade_sector(MPI.COMM_SELF, preset=config.preset)
+    reduced, rep = hyper_reduce(sector, model, Q_train, tol=config.cubature, level="point",
                                 label=f"contact runs {train.tolist()} x {revolutions:g} rev, mu = {casing.mu:g}")
     print(f"cubature: {rep['points']} of {rep['exact'].w.size} quadrature points (training error "
           f"{rep['result'].training_error:.1e}) from {Q_train.shape[1]} states of exact GNL runs at "
@@ -143,240 +451,321 @@ def _train_cubature(args, model, scheme, train, revolutions, casing, cache: Path
     save_reduced_model(reduced, cache)                  # written last: its presence means both are complete
 
 
-def sprag_slip_onsets(model, casing) -> dict:
-    """Friction coefficients at which sustained sliding on the casing diverges (rotor37_rom.friction)."""
-    from rotor37_rom.casing import contact_matrices
-    from rotor37_rom.friction import sprag_slip_friction
+def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: ReducedModel,
+                    states: np.ndarray | None) -> float:
+    """The GNL step with a frequency cap, from the tangent limit on ``states`` (None: on a short unscaled probe)."""
+    if states is None:
+        probe = config.speed_grid[:: max(1, config.speeds[2] // 16)]
+        revolutions = min(4.0, config.revolutions)
+        states = probe_states(model, probe, config.casing, revolutions=revolutions)
+        print(f"GNL step from the tangent limit on a {revolutions:g}-revolution unscaled probe at {len(probe)} speeds")
+    h = gnl_time_step(run_model, states, config.frequency_cap_rad_s, safety=config.tangent_safety,
+                      cap_safety=config.safety)
+    print(f"GNL with a {config.frequency_cap:g} kHz cap: h = {h:.3g} s")
+    return h
 
-    N, S, _, _ = contact_matrices(model.nodes, model.r, casing)
-    single = [sprag_slip_friction(model.K, N, S, [k]) for k in range(N.shape[0])]
-    return {"weakest_node": min(single), "per_node": single, "all_nodes": sprag_slip_friction(model.K, N, S)}
+
+def time_scheme(config: ContactMapConfig, model: ReducedModel, gnl: bool, comm: MPI.Comm | None
+                ) -> CentralDifference:
+    """The central-difference scheme of one setting: its forces (exact or cubature), step and frequency cap."""
+    run_model, states, h = model, None, config.h
+    if gnl and config.cubature is not None:
+        run_model, states = cubature_model(config, model, comm)
+        run_model = with_force_precision(run_model, config.precision)
+    if gnl and config.frequency_cap is not None and h is None:
+        h = capped_gnl_step(config, model, run_model, states)
+    return CentralDifference(run_model, nonlinear=gnl, h=h, safety=config.safety,
+                             frequency_cap=config.frequency_cap_rad_s)
 
 
-def _finite(x):
-    return x if np.isfinite(x) else None            # JSON has no inf: null = friction never wedges these nodes
+def setting_names(config: ContactMapConfig, gnl: bool) -> tuple[str, str]:
+    """(chart label, file tag) of one setting, e.g. ('GNL, cubature 0.0001, single', 'gnl_cub0.0001_f32')."""
+    parts = [("GNL", "gnl") if gnl else ("no GNL", "linear")]
+    if gnl and config.cubature is not None:
+        parts.append((f"cubature {config.cubature:g}", f"cub{config.cubature:g}"))
+        if config.precision == "single":
+            parts.append(("single", "f32"))
+    if config.frequency_cap is not None:
+        parts.append((f"cap {config.frequency_cap:g} kHz", f"cap{config.frequency_cap:g}k"))
+    return ", ".join(p[0] for p in parts), "_".join(p[1] for p in parts)
+# -
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description="interaction maps of the reduced blade with casing contact")
-    parser.add_argument("--preset", default="ci")
-    parser.add_argument("--model", help="load this reduced model (.npz) instead of building one")
-    parser.add_argument("--r-c", type=int, default=15)
-    parser.add_argument("--r-md", type=int, default=0)
-    parser.add_argument("--global-md", type=int, default=3)
-    parser.add_argument("--speeds", type=float, nargs=3, default=[1200.0, 1600.0, 21], metavar=("START", "STOP", "N"))
-    parser.add_argument("--revolutions", type=float, default=20.0)
-    parser.add_argument("--gnl", choices=["off", "on", "both"], default="both")
-    parser.add_argument("--safety", type=float, default=0.5, help="h = safety * 2 / omega_max (linear model)")
+# ## One map: sweep, retries, continuation
+#
+# Every speed starts from rest (§2.3.1); speeds that blew up run again with the step halved (`--retry-diverged`).
+# The continuation (§2.3.3) then runs up and down at the step all the map's speeds ran with.
+
+# +
+def sweep_map(config: ContactMapConfig, scheme: CentralDifference, comm: MPI.Comm | None
+              ) -> tuple[Path, list[dict], dict[float, float], float]:
+    """Run the map's speeds and retry those that blew up. Returns the sweep folder, the per-speed records (rank 0;
+    [] on the others), {retried speed: its last step} and the wall time (s)."""
+    rank = 0 if comm is None else comm.rank
+    spec, speeds, sweeps = config.sweep_spec, config.speed_grid, config.out / "sweeps"
+    t0 = time.perf_counter()
+    folder = run_sweep(scheme, speeds, spec, sweeps, comm=comm, progress=not config.quiet)
+    # rank 0 reads the records (~1 GB for the 100-speed headline map); rerun_diverged tells the others
+    records = [r for r in load_sweep(folder) if np.isclose(float(r["omega"]), speeds).any()] if rank == 0 else []
+    records, retried = rerun_diverged(scheme, records, spec, sweeps, config.retry_diverged, comm=comm,
+                                      progress=not config.quiet)
+    return folder, records, retried, time.perf_counter() - t0
+
+
+def continuation_branches(config: ContactMapConfig, scheme: CentralDifference, retried: dict[float, float],
+                          tag: str, comm: MPI.Comm | None) -> dict[str, Branch]:
+    """Continuation up and down (§2.3.3) at the step the map's speeds all ran with (the smallest retry step, if any
+    speed was run again), the first run as long as the map's, the next 15 % of it (the paper: 200 then 30).
+    Under MPI the two branches run on ranks 0 and 1 at once; rank 0 gets both. Each branch is written after every
+    accepted speed (``sweep.continuation(out=...)``), so a killed run resumes. Returns {'up' | 'down': Branch}."""
+    if config.continuation <= 0:
+        return {}
+    run_scheme = scheme.with_step(min(retried.values())) if retried else scheme
+    start, stop = config.continuation_span
+    legs = {"up": (start, stop), "down": (stop, start)}
+    rank, size = (0, 1) if comm is None else (comm.rank, comm.size)
+    mine = {}
+    for k, (name, (a, b)) in enumerate(legs.items()):
+        if k % size == rank:
+            t0 = time.perf_counter()
+            points = continuation(run_scheme, a, b, config.continuation, config.casing,
+                                  first_revolutions=config.revolutions,
+                                  revolutions=continued_revolutions(config.revolutions),
+                                  out=config.out / "continuation" / tag, window=config.steady_window,
+                                  progress=not config.quiet)
+            mine[name] = Branch(points, run_scheme.h, time.perf_counter() - t0)
+    if comm is not None:
+        gathered = comm.gather(mine, root=0)
+        mine = {k: v for part in gathered for k, v in part.items()} if rank == 0 else {}
+    return mine
+# -
+
+
+# ## Charts, summary and report
+#
+# Each map gives an interaction map, the LE/TE time history of its largest bounded response and, with a continuation,
+# the NFRC of both branches next to the zero-IC map. summary.json keeps the runs of an earlier call on the same
+# model, speeds and revolutions, and nfrc.png draws them all.
+
+# +
+def chart_map(config: ContactMapConfig, result: MapResult, records: list[dict], omega: np.ndarray, r: int
+              ) -> list[Path]:
+    """Draw the interaction map, the time history of the largest response and the continuation NFRC (if any)."""
+    out, imap, lin_res = config.out, result.imap, omega[0] / 4
+    files = [plot_interaction_map(imap, out / f"interaction_map_{result.tag}.png", eigenfrequencies=omega,
+                                  linear_resonance=lin_res,
+                                  title=f"node LE, {result.label}, r = {r}, {config.revolutions:g} rev., "
+                                        f"h = {result.h:.3g} s")]
+    ok = np.isfinite(imap.nfrc)
+    worst = records[int(np.nanargmax(np.where(ok, imap.nfrc, -1)))] if ok.any() else records[0]
+    files.append(plot_time_history(worst["t"], {"LE": worst["u_r"][record_row(worst, "0:LE")],
+                                                "TE": worst["u_r"][record_row(worst, "0:TE")]},
+                                   out / f"time_history_{result.tag}.png",
+                                   title=f"{result.label}, Omega = {float(worst['omega']):.0f} rad/s"))
+    if result.branches:
+        curves = {f"continuation {name}": ([p.omega for p in b.points], [p.amplitude for p in b.points],
+                                           "+" if name == "up" else "o") for name, b in result.branches.items()}
+        curves["zero IC"] = (imap.speeds, imap.nfrc, "--")
+        files.append(plot_nfrc(curves, out / f"nfrc_continuation_{result.tag}.png", lin_res, PAPER))
+    return files
+
+
+def summary_entry(config: ContactMapConfig, scheme: CentralDifference, result: MapResult, records: list[dict]
+                  ) -> dict:
+    """The summary.json entry of one map: step, forces, NFRC, contact works and checks, continuation branches."""
+    imap, wall = result.imap, result.wall_s
+    works = np.array([np.asarray(r.get("work", np.full(4, np.nan)), float)[:2] for r in records])
+    entry = {"h": scheme.h, "h_crit": scheme.h_crit, "frequency_cap_khz": config.frequency_cap,
+             "cubature": scheme.model.metadata.get("hyper_reduction"),
+             "force_precision": getattr(scheme.model.forces, "precision", "double"), "peak_speed": result.peak_speed,
+             "peak_amplitude": float(np.nanmax(imap.nfrc)),
+             "diverged": imap.speeds[imap.diverged].tolist(), "wall_s": wall,
+             "retried": {f"{w:g}": hk for w, hk in result.retried.items()},
+             "rev_per_s": config.revolutions * len(records) / wall if wall > 1 else None, "nfrc": imap.nfrc.tolist(),
+             "work_normal_J": works[:, 0].tolist(), "work_friction_J": works[:, 1].tolist(),
+             "speeds": imap.speeds.tolist(), "contact_checks": {
+                 "max_penetration": max(float(r["max_penetration"]) for r in records),
+                 "min_multiplier": min(float(r["min_multiplier"]) for r in records),
+                 "max_friction_power": max(float(r["friction_power"]) for r in records)}}
+    for name, branch in result.branches.items():
+        entry[f"continuation_{name}_peak"] = branch.peak.omega
+        entry[f"continuation_{name}"] = [(p.omega, p.amplitude, p.steady, p.halvings) for p in branch.points]
+        entry[f"continuation_{name}_h"], entry[f"continuation_{name}_wall_s"] = branch.h, branch.wall_s
+        entry["continuation_steady_window"] = config.steady_window
+    return entry
+
+
+def print_map(result: MapResult, linear_resonance: float) -> None:
+    """One line per map (step, largest response, divergences) and one per continuation branch."""
+    print(f"{result.label:>7}: h = {result.h:.3g} s (2/omega_max = {result.h_crit:.3g}), largest response at "
+          f"{result.peak_speed:.0f} rad/s ({np.nanmax(result.nfrc) * 1e3:.3f} mm), linear 1B/EO4 "
+          f"{linear_resonance:.0f} rad/s; {int(result.diverged.sum())} diverged ({len(result.retried)} run again "
+          f"with a smaller step); {result.wall_s:.0f} s")
+    for name, branch in result.branches.items():
+        best = branch.peak
+        unsteady = [f"{p.omega:.0f}" for p in branch.points if not p.steady]
+        print(f"         continuation {name} (h = {branch.h:.3g} s, {branch.wall_s:.0f} s): largest response at "
+              f"{best.omega:.0f} rad/s ({best.amplitude * 1e3:.3f} mm); {len(branch.points)} speeds, not steady at "
+              f"{', '.join(unsteady) or 'none'}")
+
+
+def merge_earlier_runs(summary: dict, previous: Path) -> None:
+    """Add to ``summary['runs']`` the runs of an earlier summary.json of the same model, speeds and revolutions
+    (this call's entries win, key by key)."""
+    if not previous.is_file():
+        return
+    old = json.loads(previous.read_text())
+    if (old.get("r"), old.get("speeds"), old.get("revolutions")) != (summary["r"], summary["speeds"],
+                                                                      summary["revolutions"]):
+        return
+    for label, run in old.get("runs", {}).items():
+        summary["runs"][label] = {**run, **summary["runs"].get(label, {})}
+
+
+def write_summary(out: Path, summary: dict) -> list[Path]:
+    """Write nfrc.png (every run of the summary) and summary.json; returns their paths."""
+    merge_earlier_runs(summary, out / "summary.json")
+    curves = {label: (np.array(run["speeds"]), np.array(run["nfrc"]), "-" if label.startswith("GNL") else "--")
+              for label, run in summary["runs"].items()}
+    chart = plot_nfrc(curves, out / "nfrc.png", summary["linear_resonance"], PAPER)
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "summary.json"
+    path.write_text(json.dumps(summary, indent=1, default=float))
+    return [chart, path]
+# -
+
+
+# ## The study
+#
+# The model, its sprag-slip onsets (the friction coefficient from which sustained sliding grows), then one map per
+# GNL setting. Under MPI every rank runs its share of the speeds and rank 0 writes the charts and the summary.
+
+# +
+def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None) -> ContactMapResult:
+    """Run the interaction maps (and continuations) of ``config``; ``comm``: split the speeds over its ranks
+    (None: serial). Raises ValueError for an input the library refuses (a corrupted model, a step above the
+    stability limit, ...)."""
+    rank = 0 if comm is None else comm.rank
+    model, files = reduced_model(config, comm)
+    omega = eigenfrequencies(model)
+    onset = sprag_slip_onsets(model, config.casing)
+    summary = model_summary(config, model, omega, onset)
+    if rank == 0 and not config.quiet:
+        print(f"sustained sliding diverges (sprag-slip) from mu = {onset['weakest_node']:.3f} on one contact node, "
+              f"{onset['all_nodes']:.3f} on all of them; this run: mu = {config.mu:g} (growth can start below: "
+              f"README, 'Why mu = 0.15 grows')")
+    runs = {}
+    for gnl in GNL_SETTINGS[config.gnl]:
+        scheme = time_scheme(config, model, gnl, comm)
+        label, tag = setting_names(config, gnl)
+        folder, records, retried, wall = sweep_map(config, scheme, comm)
+        branches = continuation_branches(config, scheme, retried, tag, comm)
+        if rank != 0:
+            continue
+        runs[label] = result = MapResult(label, tag, folder, interaction_map(records), scheme.h, scheme.h_crit,
+                                         retried, wall, branches)
+        files += chart_map(config, result, records, omega, model.r)
+        summary["runs"][label] = summary_entry(config, scheme, result, records)
+        print_map(result, summary["linear_resonance"])
+    if rank == 0:
+        files += write_summary(config.out, summary)
+    return ContactMapResult(config.out, omega, float(summary["linear_resonance"]), runs, summary, files)
+# -
+
+
+# ## Command line
+#
+# The options are the fields of `ContactMapConfig` (their defaults too: an option not given is left to the
+# dataclass). `main` runs the study and prints the comparison with the paper; a ValueError (a bad option, a file
+# that is not a reduced model, a step the library refuses) is one line on stderr and exit status 2.
+
+# +
+def build_parser() -> argparse.ArgumentParser:
+    """The command line: one option per ContactMapConfig field (defaults: the dataclass's)."""
+    parser = argparse.ArgumentParser(description="interaction maps of the reduced blade with casing contact",
+                                     argument_default=argparse.SUPPRESS)
+    parser.add_argument("--preset", help=f"mesh preset: {', '.join(MESH_PRESETS)} (default ci)")
+    parser.add_argument("--model", type=Path, help="load this reduced model (.npz) instead of building one")
+    parser.add_argument("--r-c", type=int, help="fixed-interface modes of the model built (default 15)")
+    parser.add_argument("--r-md", type=int, help="modal derivatives of the model built (default 0)")
+    parser.add_argument("--global-md", type=int, help="modal derivatives of the first N clamped modes (default 3)")
+    parser.add_argument("--speeds", type=float, nargs=3, metavar=("START", "STOP", "N"),
+                        help="N angular speeds (rad/s) from START to STOP (default 1200 1600 21)")
+    parser.add_argument("--revolutions", type=float, help="revolutions per speed (default 20)")
+    parser.add_argument("--gnl", choices=list(GNL_SETTINGS), help="geometric nonlinearity (default both)")
+    parser.add_argument("--safety", type=float, help="h = safety * 2 / omega_max (linear model; default 0.5)")
     parser.add_argument("--h", type=float, help="time step (s); overrides --safety")
     parser.add_argument("--frequency-cap", type=float, metavar="KHZ",
                         help="spectral mass scaling: slow the modes above this frequency (kHz) to it; the GNL step "
                              "then comes from the tangent limit on a short unscaled probe run "
                              "(benchmarks/bench_contact_convergence.py measures the error: 60 kHz is within 3 %%)")
-    parser.add_argument("--tangent-safety", type=float, default=0.5,
+    parser.add_argument("--tangent-safety", type=float,
                         help="GNL with a cap: h = this x 2 / tangent omega_max on the probe's largest states "
-                             "(0.7 lost speeds at 120 kHz in bench_contact_convergence, 0.5 none in "
+                             "(default 0.5; 0.7 lost speeds at 120 kHz in bench_contact_convergence, 0.5 none in "
                              "bench_contact_ecsw)")
     parser.add_argument("--cubature", type=float, metavar="TOL",
                         help="GNL: replace the exact cubic forces by point cubature trained to this relative "
                              "tolerance on exact GNL runs at 6 of the speeds (min(revolutions, 12) each; "
                              "bench_contact_ecsw: 1e-4 with a 120 kHz cap is the cheapest setting within the "
                              "problem's own sensitivity)")
-    parser.add_argument("--precision", choices=["double", "single"], default="double",
+    parser.add_argument("--precision", choices=PRECISIONS,
                         help="with --cubature: arithmetic of the cubature forces (single: float32, 1.6-2.1x faster "
-                             "in bench_contact_ecsw, within 4e-7 of the double force)")
-    parser.add_argument("--retry-diverged", type=int, default=0, metavar="N",
-                        help="run the speeds that blew up again with the step halved, up to N times")
-    parser.add_argument("--mu", type=float, default=0.15)
-    parser.add_argument("--c0", type=float, default=0.5e-3)
-    parser.add_argument("--hb", type=float, default=0.625e-3)
-    parser.add_argument("--direction", choices=["x", "radial"], default="x")
-    parser.add_argument("--batch", type=int, default=16)
-    parser.add_argument("--continuation", type=float, default=0.0,
-                        help="speed step (rad/s) of a continuation up and down over the map's range (0: none); "
-                             "under mpirun the two branches run on ranks 0 and 1; resumable")
+                             "in bench_contact_ecsw, within 4e-7 of the double force; default double)")
+    parser.add_argument("--retry-diverged", type=int, metavar="N",
+                        help="run the speeds that blew up again with the step halved, up to N times (0..4, default 0)")
+    parser.add_argument("--mu", type=float, help="friction coefficient (default 0.15)")
+    parser.add_argument("--c0", type=float, help="clearance at rest (m, default 0.5e-3)")
+    parser.add_argument("--hb", type=float, help="height of the casing's bumps (m, default 0.625e-3)")
+    parser.add_argument("--direction", choices=["x", "radial"], help="contact normal (default x)")
+    parser.add_argument("--batch", type=int, help="speeds integrated together (default 16)")
+    parser.add_argument("--continuation", type=float,
+                        help="speed step (rad/s) of a continuation up and down over the map's range (0: none, the "
+                             "default); under mpirun the two branches run on ranks 0 and 1; resumable")
     parser.add_argument("--continuation-range", type=float, nargs=2, metavar=("LOW", "HIGH"),
                         help="run the continuation over this speed range (rad/s) instead of the map's: up from LOW, "
                              "down from HIGH (each first run as long as the map's, 15 %% of it after)")
-    parser.add_argument("--steady-window", type=int, default=1, metavar="N",
+    parser.add_argument("--steady-window", type=int, metavar="N",
                         help="a continued run is steady when its max over the last N revolutions and the N before "
-                             "agree to 2 %% (1, the paper's: periodic with the rotor; N: periods up to N T)")
-    parser.add_argument("--out", default="results/contact_map")
-    parser.add_argument("--quiet", action="store_true")
-    args = parser.parse_args(argv)
-    logging.basicConfig(level=logging.WARNING, force=True)
-    logging.getLogger().handlers[0].setLevel(logging.WARNING)
+                             "agree to 2 %% (1, the paper's and the default: periodic with the rotor; N: periods up to "
+                             "N T)")
+    parser.add_argument("--out", type=Path, help="output folder (default results/contact_map)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    return parser
 
-    from rotor37_rom.casing import Casing
-    from rotor37_rom.integrator import CentralDifference
-    from rotor37_rom.sweep import SweepSpec, interaction_map, load_sweep, record_row, rerun_diverged, run_sweep
 
-    try:
-        casing = Casing(c0=args.c0, h_b=args.hb, mu=args.mu, direction=args.direction)
-        start, stop, n = args.speeds
-        if not (0 < start <= stop) or n < 1:
-            raise ValueError(f"--speeds: need 0 < START <= STOP and N >= 1, got {args.speeds}")
-        speeds = np.linspace(start, stop, int(n))
-        if args.frequency_cap is not None and not args.frequency_cap > 0:
-            raise ValueError(f"--frequency-cap must be > 0 kHz, got {args.frequency_cap}")
-        if args.cubature is not None and not 0 < args.cubature < 1:
-            raise ValueError(f"--cubature must be in (0, 1), got {args.cubature}")
-        if args.precision != "double" and args.cubature is None:
-            raise ValueError("--precision single needs --cubature (the exact cubic tensors are evaluated in double)")
-        if not 0 <= args.retry_diverged <= 4:
-            raise ValueError(f"--retry-diverged must be in 0..4, got {args.retry_diverged}")
-        if not args.continuation >= 0:
-            raise ValueError(f"--continuation must be >= 0 rad/s (0: none), got {args.continuation}")
-        c_start, c_stop = args.continuation_range or (start, stop)
-        if args.continuation_range is not None and not 0 < c_start < c_stop:
-            raise ValueError(f"--continuation-range: need 0 < LOW < HIGH rad/s, got {args.continuation_range}")
-        cont_revolutions = continued_revolutions(args.revolutions)
-        if not 1 <= args.steady_window <= cont_revolutions / 2:
-            raise ValueError(f"--steady-window must be in 1..{int(cont_revolutions // 2)} revolutions (half of a "
-                             f"continued run), got {args.steady_window}")
-        if not 0 < args.tangent_safety <= 1:
-            raise ValueError(f"--tangent-safety must be in (0, 1], got {args.tangent_safety}")
-        spec = SweepSpec(revolutions=args.revolutions, casing=casing, batch_size=args.batch)
-    except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    comm = None
+def world_comm() -> MPI.Comm | None:
+    """MPI.COMM_WORLD under mpirun with more than one rank; None when serial (or without mpi4py)."""
     try:
         from mpi4py import MPI
-
-        comm = MPI.COMM_WORLD if MPI.COMM_WORLD.size > 1 else None
     except ImportError:
-        pass
-    rank = comm.rank if comm is not None else 0
-    out = Path(args.out)
-    model = build_or_load(args, comm)
-    lam = scipy.linalg.eigh(model.K, model.M, eigvals_only=True)
-    omega = np.sqrt(lam[:3])
-    lin_res = omega[0] / 4
-    onset = sprag_slip_onsets(model, casing)
-    summary = {"r": model.r, "sizes": model.sizes, "omega_1_3": omega.tolist(), "linear_resonance": lin_res,
-               "speeds": [start, stop, int(n)], "revolutions": args.revolutions, "casing": vars(casing), "runs": {},
-               "sprag_slip": {k: ([_finite(x) for x in v] if isinstance(v, list) else _finite(v))
-                              for k, v in onset.items()}}
-    if rank == 0 and not args.quiet:
-        print(f"sustained sliding diverges (sprag-slip) from mu = {onset['weakest_node']:.3f} on one contact node, "
-              f"{onset['all_nodes']:.3f} on all of them; this run: mu = {casing.mu:g} (growth can start below: "
-              f"README, 'Why mu = 0.15 grows')")
-    modes = {"off": [False], "on": [True], "both": [False, True]}[args.gnl]
-    for gnl in modes:
-        try:
-            cap = None if args.frequency_cap is None else 2 * np.pi * 1e3 * args.frequency_cap
-            h = args.h
-            run_model, states = model, None
-            if gnl and args.cubature is not None:
-                from rotor37_rom.reduction import with_force_precision
+        return None
+    return MPI.COMM_WORLD if MPI.COMM_WORLD.size > 1 else None
 
-                run_model, states = cubature_model(args, model, speeds, casing, comm)
-                run_model = with_force_precision(run_model, args.precision)
-            if cap is not None and gnl and h is None:
-                from rotor37_rom.integrator import gnl_time_step, probe_states
 
-                if states is None:
-                    probe = speeds[:: max(1, len(speeds) // 16)]
-                    states = probe_states(model, probe, casing, revolutions=min(4.0, args.revolutions))
-                    print(f"GNL step from the tangent limit on a {min(4.0, args.revolutions):g}-revolution unscaled "
-                          f"probe at {len(probe)} speeds")
-                h = gnl_time_step(run_model, states, cap, safety=args.tangent_safety, cap_safety=args.safety)
-                print(f"GNL with a {args.frequency_cap:g} kHz cap: h = {h:.3g} s")
-            scheme = CentralDifference(run_model, nonlinear=gnl, h=h, safety=args.safety, frequency_cap=cap)
-        except ValueError as exc:
-            print(f"error: {exc}", file=sys.stderr)
-            return 2
-        cub = gnl and args.cubature
-        parts = [("GNL", "gnl") if gnl else ("no GNL", "linear")]      # (chart label, file tag) of each setting
-        if cub:
-            parts.append((f"cubature {args.cubature:g}", f"cub{args.cubature:g}"))
-            if args.precision == "single":
-                parts.append(("single", "f32"))
-        if cap is not None:
-            parts.append((f"cap {args.frequency_cap:g} kHz", f"cap{args.frequency_cap:g}k"))
-        label, tag = ", ".join(p[0] for p in parts), "_".join(p[1] for p in parts)
-        t0 = time.perf_counter()
-        folder = run_sweep(scheme, speeds, spec, out / "sweeps", comm=comm, progress=not args.quiet)
-        # rank 0 reads the records (~1 GB for the 100-speed headline map); rerun_diverged tells the others
-        results = [r for r in load_sweep(folder) if np.isclose(float(r["omega"]), speeds).any()] if rank == 0 else []
-        results, retried = rerun_diverged(scheme, results, spec, out / "sweeps", args.retry_diverged, comm=comm,
-                                          progress=not args.quiet)
-        wall = time.perf_counter() - t0
-        branches = continuation_branches(args, scheme, retried, c_start, c_stop, casing, out, tag, comm)
-        if rank != 0:
-            continue
-        imap = interaction_map(results)
-        from rotor37_rom.charts import plot_interaction_map, plot_nfrc, plot_time_history
+def print_report(result: ContactMapResult) -> None:
+    """The paper's speeds to compare with, and where the outputs are."""
+    print(f"paper: linear {PAPER['linear 1B/EO4']:.0f}, zero IC {PAPER['zero IC, no GNL']:.0f} / "
+          f"{PAPER['zero IC, GNL']:.0f} (no GNL / GNL), continuation {PAPER['continuation, no GNL']:.0f} / "
+          f"{PAPER['continuation, GNL']:.0f} rad/s")
+    print(f"charts and summary.json in {result.out}/")
 
-        plot_interaction_map(imap, out / f"interaction_map_{tag}.png", eigenfrequencies=omega, linear_resonance=lin_res,
-                             title=f"node LE, {label}, r = {model.r}, {args.revolutions:g} rev., h = {scheme.h:.3g} s")
-        ok = np.isfinite(imap.nfrc)
-        peak = float(imap.speeds[ok][np.argmax(imap.nfrc[ok])]) if ok.any() else float("nan")
-        worst = results[int(np.nanargmax(np.where(ok, imap.nfrc, -1)))] if ok.any() else results[0]
-        plot_time_history(worst["t"], {"LE": worst["u_r"][record_row(worst, "0:LE")],
-                                         "TE": worst["u_r"][record_row(worst, "0:TE")]},
-                          out / f"time_history_{tag}.png", title=f"{label}, Omega = {float(worst['omega']):.0f} rad/s")
-        revs = args.revolutions * len(results)
-        works = np.array([np.asarray(r.get("work", np.full(4, np.nan)), float)[:2] for r in results])
-        run = {"h": scheme.h, "h_crit": scheme.h_crit, "frequency_cap_khz": args.frequency_cap,
-               "cubature": run_model.metadata.get("hyper_reduction"),
-               "force_precision": getattr(run_model.forces, "precision", "double"), "peak_speed": peak,
-               "peak_amplitude": float(np.nanmax(imap.nfrc)),
-               "diverged": imap.speeds[imap.diverged].tolist(), "wall_s": wall,
-               "retried": {f"{w:g}": hk for w, hk in retried.items()},
-               "rev_per_s": revs / wall if wall > 1 else None, "nfrc": imap.nfrc.tolist(),
-               "work_normal_J": works[:, 0].tolist(), "work_friction_J": works[:, 1].tolist(),
-               "speeds": imap.speeds.tolist(), "contact_checks": {
-                   "max_penetration": max(float(r["max_penetration"]) for r in results),
-                   "min_multiplier": min(float(r["min_multiplier"]) for r in results),
-                   "max_friction_power": max(float(r["friction_power"]) for r in results)}}
-        summary["runs"][label] = run
-        print(f"{label:>7}: h = {scheme.h:.3g} s (2/omega_max = {scheme.h_crit:.3g}), largest response at "
-              f"{peak:.0f} rad/s ({run['peak_amplitude'] * 1e3:.3f} mm), linear 1B/EO4 {lin_res:.0f} rad/s; "
-              f"{len(imap.diverged.nonzero()[0])} diverged ({len(retried)} run again with a smaller step); "
-              f"{wall:.0f} s")
-        if branches:
-            curves = {}
-            for name, (pts, h_cont, wall_cont) in branches.items():
-                curves[f"continuation {name}"] = ([p.omega for p in pts], [p.amplitude for p in pts],
-                                                  "+" if name == "up" else "o")
-                best = max(pts, key=lambda p: p.amplitude if np.isfinite(p.amplitude) else -1)
-                run[f"continuation_{name}_peak"] = best.omega
-                run[f"continuation_{name}"] = [(p.omega, p.amplitude, p.steady, p.halvings) for p in pts]
-                run[f"continuation_{name}_h"], run[f"continuation_{name}_wall_s"] = h_cont, wall_cont
-                run["continuation_steady_window"] = args.steady_window
-                unsteady = [f"{p.omega:.0f}" for p in pts if not p.steady]
-                print(f"         continuation {name} (h = {h_cont:.3g} s, {wall_cont:.0f} s): largest response at "
-                      f"{best.omega:.0f} rad/s ({best.amplitude * 1e3:.3f} mm); {len(pts)} speeds, not steady at "
-                      f"{', '.join(unsteady) or 'none'}")
-            curves["zero IC"] = (imap.speeds, imap.nfrc, "--")
-            plot_nfrc(curves, out / f"nfrc_continuation_{tag}.png", lin_res, PAPER)
-    if rank == 0:
-        from rotor37_rom.charts import plot_nfrc
 
-        previous = out / "summary.json"
-        if previous.is_file():                     # keep the runs of an earlier call on the same set-up
-            old = json.loads(previous.read_text())
-            if (old.get("r"), old.get("speeds"), old.get("revolutions")) == (model.r, summary["speeds"],
-                                                                              args.revolutions):
-                for label, run in old.get("runs", {}).items():
-                    if label not in summary["runs"]:
-                        summary["runs"][label] = run
-                    else:
-                        summary["runs"][label] = {**run, **summary["runs"][label]}
-        curves = {label: (np.array(run["speeds"]), np.array(run["nfrc"]), "-" if label.startswith("GNL") else "--")
-                  for label, run in summary["runs"].items()}
-        plot_nfrc(curves, out / "nfrc.png", lin_res, PAPER)
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "summary.json").write_text(json.dumps(summary, indent=1, default=float))
-        print(f"paper: linear {PAPER['linear 1B/EO4']:.0f}, zero IC {PAPER['zero IC, no GNL']:.0f} / "
-              f"{PAPER['zero IC, GNL']:.0f} (no GNL / GNL), continuation {PAPER['continuation, no GNL']:.0f} / "
-              f"{PAPER['continuation, GNL']:.0f} rad/s")
-        print(f"charts and summary.json in {out}/")
+def main(argv: Sequence[str] | None = None) -> int:
+    """Parse the options, run the study, print the report; raises ValueError for a bad input."""
+    config = ContactMapConfig(**vars(build_parser().parse_args(argv)))
+    logging.basicConfig(level=logging.WARNING, force=True)
+    logging.getLogger().handlers[0].setLevel(logging.WARNING)
+    comm = world_comm()
+    result = run_contact_map(config, comm)
+    if comm is None or comm.rank == 0:
+        print_report(result)
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except ValueError as exc:  # bad input: one line, no traceback
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)
 # -

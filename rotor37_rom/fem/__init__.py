@@ -10,7 +10,7 @@ Modules: ``sector`` (building sectors), ``operators`` (forms and assembly), ``so
 the factorisation and eigen-solver given to ``reduction.craig_bampton``), ``fields`` (displacements and stress on the
 mesh), ``cyclic`` (disk and plate sectors, face pairing, operators and modes per nodal diameter).
 """
-from .cyclic import (CyclicModes, assemble_cyclic_operators, create_annular_sector, create_disk_sector,
+from .cyclic import (CyclicModes, CyclicOperators, assemble_cyclic_operators, create_annular_sector, create_disk_sector,
                      sector_fields, solve_cyclic_modes)
 from .fields import (cell_midpoints, cells_touching_points, displacement_function, von_mises_at_quadrature,
                      von_mises_function)
@@ -33,5 +33,5 @@ __all__ = [
     "solve_clamped_static", "mumps_solver", "slepc_eigenpairs", "displacement_function", "von_mises_function",
     "von_mises_at_quadrature", "cell_midpoints", "cells_touching_points", "MASS_DIAGONAL", "JIT_PARAMS",
     "create_disk_sector", "create_annular_sector", "locate_cyclic_pairs", "assemble_cyclic_operators", "CyclicModes",
-    "solve_cyclic_modes", "sector_fields", "clamp_cell_group", "build_on_rank0",
+    "solve_cyclic_modes", "sector_fields", "clamp_cell_group", "build_on_rank0", "CyclicOperators",
 ]

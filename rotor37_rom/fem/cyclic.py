@@ -30,7 +30,7 @@ from .operators import MASS_DIAGONAL, SvkOperators, assemble_mass, assemble_stif
 from .sector import Sector, build_on_rank0
 from .solvers import solve_eigenproblem
 
-__all__ = ["create_disk_sector", "create_annular_sector", "assemble_cyclic_operators",
+__all__ = ["create_disk_sector", "create_annular_sector", "CyclicOperators", "assemble_cyclic_operators",
            "CyclicModes", "solve_cyclic_modes", "sector_fields"]
 
 LOG = logging.getLogger(__name__)
@@ -102,41 +102,89 @@ def _block_diagonal(A: PETSc.Mat, sector: Sector, m: int, perm: np.ndarray, loca
     return _petsc_from_rows(sector.comm, blocks, perm, local_rows, m * n)
 
 
+class CyclicOperators:
+    """A cyclic sector's K and M, their block-diagonal copies (one per number of copies m) and the layout, reused
+    over the harmonic indices: each k costs one projection T_k, two PtAP and one eigen-solve, nothing is assembled
+    again (pitfall 6 of the cyclic notes: re-assembling per k is what makes tools slow).
+
+    Args:
+        sector: a cyclic Sector; K, M: its clamped operators (assembled from ``ops`` if None).
+    """
+
+    def __init__(self, sector: Sector, K: PETSc.Mat | None = None, M: PETSc.Mat | None = None,
+                 ops: SvkOperators | None = None):
+        if sector.cyclic is None:
+            raise ValueError(f"{sector.source} is not a cyclic sector (no paired left/right faces)")
+        if K is None or M is None:
+            ops = ops or create_svk_operators(sector)
+            K, M = assemble_stiffness(sector, ops), assemble_mass(sector, ops)
+        self.sector, self.K, self.M = sector, K, M
+        self._blocks: dict = {}
+
+    def _copies(self, m: int):
+        """(diag(K..), diag(M..), perm, first row, local rows) for m copies, built once."""
+        if m not in self._blocks:
+            perm, first, local_rows = _layout(self.sector, m)
+            self._blocks[m] = (_block_diagonal(self.K, self.sector, m, perm, local_rows),
+                               _block_diagonal(self.M, self.sector, m, perm, local_rows), perm, first, local_rows)
+        return self._blocks[m]
+
+    def project(self, k: int) -> tuple[PETSc.Mat, PETSc.Mat, PETSc.Mat]:
+        """(K_k, M_k, T_k) for harmonic index k: K_k = T_k^T diag(K, K) T_k and likewise M_k (one copy for k = 0 and
+        N/2), with 1 / MASS_DIAGONAL on the eliminated slots' diagonal."""
+        sector, pairs = self.sector, self.sector.cyclic
+        k = pairs.check_k(k)
+        m = pairs.n_copies(k)
+        K2, M2, perm, first, local_rows = self._copies(m)
+        n = sector.n_dofs
+        T, kept = cyclic_projection(n, pairs, k)
+        im, bs = sector.V.dofmap.index_map, sector.V.dofmap.index_map_bs
+        g0, g1 = im.local_range[0] * bs, im.local_range[1] * bs
+        mine = np.concatenate([c * n + np.arange(g0, g1) for c in range(m)])      # in layout order
+        T_p = _petsc_from_rows(sector.comm, T[mine], perm, local_rows, m * n)
+        eliminated = first + np.flatnonzero(~kept[mine])
+        operators = []
+        for A2, diag in ((K2, 1.0), (M2, MASS_DIAGONAL)):
+            Ak = A2.PtAP(T_p)
+            # the eliminated slots' empty rows get a diagonal: one merge of patterns (not one insertion per entry)
+            D = PETSc.Mat().createAIJ(size=((local_rows, m * n), (local_rows, m * n)), nnz=1, comm=sector.comm)
+            for r in eliminated:                                 # one face's slots, not the mesh
+                D.setValue(int(r), int(r), diag)
+            D.assemble()
+            Ak.axpy(1.0, D, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+            D.destroy()
+            operators.append(Ak)
+        return operators[0], operators[1], T_p
+
+    def modes(self, k: int, n_modes: int = 6, sigma: float = 0.0, initial=None) -> "CyclicModes":
+        """The lowest ``n_modes`` distinct modes of harmonic index k (2 n_modes eigenpairs for 0 < k < N/2), with the
+        sector's SLEPc shift-invert solver (``solve_eigenproblem``). ``initial``: the projected eigenvectors of a
+        neighbouring k with as many copies (``CyclicModes.x``), a good start for Krylov-Schur."""
+        if n_modes < 1:
+            raise ValueError(f"n_modes must be >= 1, got {n_modes}")
+        Kk, Mk, T = self.project(k)
+        m = self.sector.cyclic.n_copies(k)
+        omega, vecs = solve_eigenproblem(Kk, Mk, m * n_modes, sigma=sigma, prefix="cyclic_", initial=initial)
+        a, b = [], []
+        for x in vecs:
+            fa, fb = sector_fields(self.sector, T, x, m)
+            a.append(fa)
+            b.append(fb)
+        for A in (Kk, Mk, T):
+            A.destroy()
+        return CyclicModes(int(k), omega, a, b, vecs)
+
+    def destroy(self) -> None:
+        for K2, M2, *_ in self._blocks.values():
+            K2.destroy()
+            M2.destroy()
+        self._blocks.clear()
+
+
 def assemble_cyclic_operators(sector: Sector, k: int, K: PETSc.Mat | None = None, M: PETSc.Mat | None = None,
                               ops: SvkOperators | None = None) -> tuple[PETSc.Mat, PETSc.Mat, PETSc.Mat]:
-    """(K_k, M_k, T_k) of the sector for harmonic index k (``rotor37_rom.cyclic``): K_k = T_k^T diag(K, K) T_k and
-    likewise M_k (one copy for k = 0 and N/2), with 1 / MASS_DIAGONAL on the eliminated slots' diagonal. K, M: the
-    sector's clamped operators (assembled if None; pass them to reuse over k)."""
-    if sector.cyclic is None:
-        raise ValueError(f"{sector.source} is not a cyclic sector (no paired left/right faces)")
-    pairs = sector.cyclic
-    k = pairs.check_k(k)
-    m = pairs.n_copies(k)
-    if K is None or M is None:
-        ops = ops or create_svk_operators(sector)
-        K, M = assemble_stiffness(sector, ops), assemble_mass(sector, ops)
-    n = sector.n_dofs
-    perm, first, local_rows = _layout(sector, m)
-    T, kept = cyclic_projection(n, pairs, k)
-    im, bs = sector.V.dofmap.index_map, sector.V.dofmap.index_map_bs
-    g0, g1 = im.local_range[0] * bs, im.local_range[1] * bs
-    mine = np.concatenate([c * n + np.arange(g0, g1) for c in range(m)])      # in layout order
-    T_p = _petsc_from_rows(sector.comm, T[mine], perm, local_rows, m * n)
-    eliminated = ~kept[mine]
-    operators = []
-    for A, diag in ((K, 1.0), (M, MASS_DIAGONAL)):
-        A2 = _block_diagonal(A, sector, m, perm, local_rows)
-        Ak = A2.PtAP(T_p)
-        # the eliminated slots' empty rows get a diagonal: one merge of patterns (not one insertion per entry)
-        D = PETSc.Mat().createAIJ(size=((local_rows, m * n), (local_rows, m * n)), nnz=1, comm=sector.comm)
-        for r in first + np.flatnonzero(eliminated):          # one face's slots, not the mesh
-            D.setValue(int(r), int(r), diag)
-        D.assemble()
-        Ak.axpy(1.0, D, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
-        for X in (A2, D):
-            X.destroy()
-        operators.append(Ak)
-    return operators[0], operators[1], T_p
+    """(K_k, M_k, T_k) of the sector for harmonic index k (``CyclicOperators.project``)."""
+    return CyclicOperators(sector, K, M, ops).project(k)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -146,13 +194,15 @@ class CyclicModes:
     Attributes:
         k: harmonic index (nodal diameter); omega (n,): rad/s ascending, each value twice for 0 < k < N/2 (the cos
         and sin modes); a, b: lists of the sector's cos and sin fields (dolfinx Functions; b is None for k = 0 and
-        N/2), normalised so that a^T M a + b^T M b = 1.
+        N/2), normalised so that a^T M a + b^T M b = 1; x: the projected eigenvectors (PETSc), a start for a
+        neighbouring k.
     """
 
     k: int
     omega: np.ndarray
     a: list
     b: list
+    x: list = dataclasses.field(default_factory=list)
 
     def distinct(self) -> tuple[np.ndarray, list]:
         """(omega, indices) with each double mode counted once (every second of a pair)."""
@@ -178,18 +228,10 @@ def sector_fields(sector: Sector, T: PETSc.Mat, x: PETSc.Vec, m: int) -> tuple[f
 
 def solve_cyclic_modes(sector: Sector, k: int, n_modes: int = 6, K: PETSc.Mat | None = None,
                        M: PETSc.Mat | None = None, ops: SvkOperators | None = None, sigma: float = 0.0) -> CyclicModes:
-    """The lowest ``n_modes`` distinct modes of harmonic index k (2 n_modes eigenpairs for 0 < k < N/2), with the
-    sector's existing SLEPc shift-invert solver (``solve_eigenproblem``) on K_k, M_k."""
-    if n_modes < 1:
-        raise ValueError(f"n_modes must be >= 1, got {n_modes}")
-    Kk, Mk, T = assemble_cyclic_operators(sector, k, K, M, ops)
-    m = sector.cyclic.n_copies(k)
-    omega, vecs = solve_eigenproblem(Kk, Mk, m * n_modes, sigma=sigma, prefix="cyclic_")
-    a, b = [], []
-    for x in vecs:
-        fa, fb = sector_fields(sector, T, x, m)
-        a.append(fa)
-        b.append(fb)
-    for A in (Kk, Mk, T):
-        A.destroy()
-    return CyclicModes(int(k), omega, a, b)
+    """The lowest ``n_modes`` distinct modes of harmonic index k (``CyclicOperators.modes``; to sweep over k, keep one
+    CyclicOperators)."""
+    ops_k = CyclicOperators(sector, K, M, ops)
+    try:
+        return ops_k.modes(k, n_modes, sigma)
+    finally:
+        ops_k.destroy()

@@ -17,7 +17,7 @@ from rotor37_rom import forms
 from rotor37_rom.cyclic import harmonic_indices
 from rotor37_rom.modes import classify_blade_modes
 
-from .cyclic import solve_cyclic_modes
+from .cyclic import CyclicOperators
 from .operators import (JIT_PARAMS, SvkOperators, _assemble_matrix, assemble_mass, assemble_stiffness,
                         create_svk_operators, gather_dof_values)
 from .sector import Sector
@@ -82,6 +82,7 @@ def compute_safe_diagram(sector: Sector, n_modes: int = 6, ks=None, ops: SvkOper
     ks = harmonic_indices(sector.cyclic.n_sectors) if ks is None else np.asarray(ks, dtype=int)
     ops = ops or create_svk_operators(sector)
     K, M = assemble_stiffness(sector, ops), assemble_mass(sector, ops)
+    cyclic = CyclicOperators(sector, K, M)
     K_all = assemble_stiffness(sector, ops, clamped=False)
     K_blade = group_stiffness(sector, blade_group)
     x, y = K_all.createVecRight(), K_all.createVecLeft()
@@ -92,9 +93,12 @@ def compute_safe_diagram(sector: Sector, n_modes: int = 6, ks=None, ops: SvkOper
         return float(x.dot(y))
 
     omega, share, family, seconds = [], [], [], []
+    start = {}                                   # the last modes of each number of copies: the next k's start
     for k in ks:
         t0 = time.perf_counter()
-        modes = solve_cyclic_modes(sector, int(k), n_modes, K, M)
+        m = sector.cyclic.n_copies(int(k))
+        modes = cyclic.modes(int(k), n_modes, initial=start.get(m))
+        start[m] = modes.x
         seconds.append(time.perf_counter() - t0)
         w, idx = modes.distinct()
         shares, tips = [], []
@@ -111,6 +115,7 @@ def compute_safe_diagram(sector: Sector, n_modes: int = 6, ks=None, ops: SvkOper
         omega.append(w[:n_modes])
         share.append(np.array(shares)[:n_modes])
         family.append(labels[:n_modes].astype(str))
+    cyclic.destroy()
     for A in (K, M, K_all, K_blade):
         A.destroy()
     return SafeDiagram(sector.cyclic.n_sectors, np.asarray(ks), np.array(omega), np.array(share),

@@ -48,7 +48,7 @@ class ModalResult:
 
 
 def solve_eigenproblem(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float = 0.0, tol: float = 1e-12,
-                       prefix: str = "modes_") -> tuple[np.ndarray, list]:
+                       prefix: str = "modes_", initial: Sequence[PETSc.Vec] | None = None) -> tuple[np.ndarray, list]:
     """Lowest ``n_modes`` eigenpairs of K x = lambda M x by SLEPc Krylov-Schur with shift-invert (MUMPS LU).
 
     Returns:
@@ -76,6 +76,8 @@ def solve_eigenproblem(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float = 
     ksp.getPC().setType("lu")
     ksp.getPC().setFactorSolverType("mumps")
     eps.setFromOptions()
+    if initial:                       # e.g. the modes of a neighbouring problem: fewer Krylov-Schur restarts
+        eps.setInitialSpace(list(initial))
     eps.solve()
     n_conv = eps.getConverged()
     if n_conv < n_modes:

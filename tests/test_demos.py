@@ -1,0 +1,93 @@
+"""Importable demos (#18): demos/contact_map.py's work is run_contact_map(ContactMapConfig) -> ContactMapResult, which
+a test calls in-process; its command line is that configuration, and a bad input is one line on stderr naming the
+option, with exit status 2."""
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rotor37_rom import sweep
+from rotor37_rom.reduction import save_reduced_model
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def load_demo(name: str):
+    """Import demos/<name>.py as a module (demos/ is not a package)."""
+    spec = importlib.util.spec_from_file_location(f"demo_{name}", ROOT / "demos" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module          # dataclasses look their module up while creating the classes
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module")
+def contact_map():
+    return load_demo("contact_map")
+
+
+def test_contact_map_runs_in_process(contact_map, ci_rom, tmp_path):
+    """run_contact_map on 2 speeds x 0.3 revolutions (GNL off): the result object holds what summary.json says, its
+    NFRC is the map of the sweep folder it wrote, and it lists the files it wrote."""
+    out = tmp_path / "map"
+    config = contact_map.ContactMapConfig(model=save_reduced_model(ci_rom, tmp_path / "rom.npz"),
+                                          speeds=(1400, 1450, 2), revolutions=0.3, gnl="off", quiet=True, out=out)
+    result = contact_map.run_contact_map(config)
+    summary = json.loads((out / "summary.json").read_text())
+    assert json.loads(json.dumps(result.summary, default=float)) == summary
+    assert list(result.runs) == list(summary["runs"]) == ["no GNL"]
+    run, written = result.runs["no GNL"], summary["runs"]["no GNL"]
+    assert run.speeds.tolist() == written["speeds"] == [1400.0, 1450.0]
+    assert run.nfrc.tolist() == written["nfrc"] and np.all(run.nfrc > 0)
+    assert not run.diverged.any() and written["diverged"] == [] and run.retried == {} and run.branches == {}
+    assert run.h == written["h"] and run.peak_speed == written["peak_speed"]
+    assert result.linear_resonance == summary["linear_resonance"] == result.eigenfrequencies[0] / 4
+    assert run.folder.parent == out / "sweeps"
+    np.testing.assert_array_equal(run.nfrc, sweep.interaction_map(sweep.load_sweep(run.folder)).nfrc)
+    assert sorted(p.name for p in result.files) == ["interaction_map_linear.png", "nfrc.png", "summary.json",
+                                                    "time_history_linear.png"]
+    assert all(p.parent == out and p.is_file() for p in result.files)
+
+
+def test_contact_map_command_line_is_the_config(contact_map, tmp_path):
+    """The options parse into the config a Python caller writes (numbers as floats: the same cache keys)."""
+    argv = ["--model", str(tmp_path / "rom.npz"), "--speeds", "1400", "1450", "2", "--revolutions", "0.3", "--gnl",
+            "off", "--mu", "0", "--quiet", "--out", str(tmp_path)]
+    parsed = contact_map.ContactMapConfig(**vars(contact_map.build_parser().parse_args(argv)))
+    assert parsed == contact_map.ContactMapConfig(model=tmp_path / "rom.npz", speeds=(1400, 1450, 2), revolutions=0.3,
+                                                  gnl="off", mu=0, quiet=True, out=tmp_path)
+    assert contact_map.ContactMapConfig(**vars(contact_map.build_parser().parse_args([]))) \
+        == contact_map.ContactMapConfig()
+
+
+@pytest.mark.parametrize("fields, flag", [
+    ({"preset": "huge"}, "--preset"), ({"speeds": (1400, 1450, 2.5)}, "--speeds"), ({"revolutions": 0}, "--revolutions"),
+    ({"gnl": "maybe"}, "--gnl"), ({"c0": 0}, "--c0"), ({"hb": -1e-3}, "--hb"), ({"direction": "z"}, "--direction"),
+    ({"safety": 1.5}, "--safety"), ({"h": -1e-7}, "--h"), ({"batch": 0}, "--batch"), ({"r_c": 0}, "--r-c"),
+    ({"continuation": -5}, "--continuation"), ({"precision": "half"}, "--precision")])
+def test_contact_map_config_names_the_option(contact_map, fields, flag):
+    with pytest.raises(ValueError, match=f"^{flag}[ :]"):
+        contact_map.ContactMapConfig(**fields)
+
+
+@pytest.mark.parametrize("args, flag", [
+    (["--preset", "huge"], "--preset"), (["--model", "{text}"], "--model"), (["--revolutions", "-1"], "--revolutions"),
+    (["--speeds", "1600", "1200", "5"], "--speeds"), (["--mu", "-0.1"], "--mu")])
+def test_contact_map_bad_input_is_one_line(tmp_path, args, flag):
+    """A bad option or a file that is not a reduced model: one line naming the option, exit status 2, nothing
+    written."""
+    text = tmp_path / "notes.txt"
+    text.write_text("not a reduced model\n")
+    out = tmp_path / "out"
+    cmd = [sys.executable, str(ROOT / "demos" / "contact_map.py"), *[a.format(text=text) for a in args], "--quiet",
+           "--out", str(out)]
+    run = subprocess.run(cmd, env=dict(os.environ, MPLBACKEND="Agg"), capture_output=True, text=True, timeout=120)
+    assert run.returncode == 2
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {flag}") and "Traceback" not in run.stderr, run.stderr
+    assert not out.exists()
