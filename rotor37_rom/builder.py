@@ -176,6 +176,32 @@ def training_states(K_lin: np.ndarray, M_lin: np.ndarray, pairs: np.ndarray, md_
     return np.hstack([lift_states(a * base, pairs, md_scale) for a in amplitudes])
 
 
+
+def cached_model(metadata: dict, cache_dir: str | Path | None, prefix: str):
+    """(path, model): the cache file of a reduced model with this metadata (None without cache_dir) and the model
+    read from it when it exists (else None)."""
+    key = reduced_model_key(metadata)
+    cache = Path(cache_dir) / f"{prefix}_{key}.npz" if cache_dir else None
+    if cache is not None and cache.is_file():
+        LOG.info("loading cached reduced model %s", cache)
+        return cache, load_reduced_model(cache, expected_key=key)
+    return cache, None
+
+
+class Laps:
+    """Wall time between calls, stored under report['timings'][name]."""
+
+    def __init__(self, report: dict):
+        self.report = report
+        report.setdefault("timings", {})
+        self.clock = time.perf_counter()
+
+    def __call__(self, name: str) -> None:
+        now = time.perf_counter()
+        self.report["timings"][name] = now - self.clock
+        self.clock = now
+
+
 def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), boundary_dofs: np.ndarray | None = None,
                         ops=None, cache_dir: str | Path | None = None) -> tuple[ReducedModel, dict]:
     """Craig-Bampton + modal derivatives + reduced forces. Returns (model, report with timings and weights)."""
@@ -183,20 +209,11 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
     boundary_dofs = sector.tip_dofs.ravel() if boundary_dofs is None else np.asarray(boundary_dofs).ravel()
     metadata = {"config": dataclasses.asdict(config), "boundary_dofs": boundary_dofs.tolist(),
                 "mesh": mesh_signature(sector), "source": sector.source, "version": __version__}
-    key = reduced_model_key(metadata)
-    cache = Path(cache_dir) / f"rom_{key}.npz" if cache_dir else None
-    if cache is not None and cache.is_file():
-        LOG.info("loading cached reduced model %s", cache)
-        return load_reduced_model(cache, expected_key=key), {"cached": True}
-    report: dict = {"cached": False, "timings": {}}
-    clock = time.perf_counter()
-
-    def lap(name):
-        nonlocal clock
-        now = time.perf_counter()
-        report["timings"][name] = now - clock
-        clock = now
-
+    cache, cached = cached_model(metadata, cache_dir, "rom")
+    if cached is not None:
+        return cached, {"cached": True}
+    report: dict = {"cached": False}
+    lap = Laps(report)
     K_f, M_f, free = fem.assemble_free_operators(sector, ops)
     n_full = sector.V.dofmap.index_map.size_local * sector.V.dofmap.index_map_bs
     position = np.searchsorted(free, boundary_dofs)

@@ -33,7 +33,7 @@ import scipy.linalg
 import scipy.sparse as sp
 
 __all__ = ["CyclicPairs", "rotation_z", "harmonic_indices", "cyclic_projection", "project_cyclic",
-           "expand_sector_mode", "assemble_full_structure", "to_global_frame"]
+           "expand_sector_mode", "assemble_full_structure", "to_global_frame", "repeating_sector_maps"]
 
 
 def rotation_z(angle: float) -> np.ndarray:
@@ -235,3 +235,32 @@ def _block_rotation(n: int, node_dofs: np.ndarray, angle: float) -> sp.csr_matri
                 cols.append(node_dofs[:, j])
                 vals.append(np.full(len(node_dofs), R[i, j]))
     return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
+
+
+def repeating_sector_maps(n_dofs: int, pairs: CyclicPairs, n_repeat: int) -> tuple[list, int]:
+    """The DOF maps of ``n_repeat`` consecutive sectors closed on themselves, in their own frames: x holds each
+    sector's DOFs except its right face, and sector s's right face is sector s + 1's left face (mod n_repeat) turned
+    by R (eq. 43). A load of N_d nodal diameters gives a response that repeats every N / gcd(N, N_d) sectors, so that
+    many sectors carry the whole disk's (nonlinear) response. Returns ([P_s] (n_dofs, n_x) sparse per sector, n_x);
+    sector s's field is P_s x. Axis DOFs are not supported here (each sector keeps its own)."""
+    if not (1 <= n_repeat <= pairs.n_sectors) or pairs.n_sectors % n_repeat:
+        raise ValueError(f"n_repeat must divide the number of sectors {pairs.n_sectors}, got {n_repeat}")
+    n = int(n_dofs)
+    right = pairs.right.ravel()
+    own = np.setdiff1d(np.arange(n), right)
+    slot = np.full(n, -1, dtype=np.int64)
+    slot[own] = np.arange(own.size)
+    R = rotation_z(pairs.angle)
+    maps = []
+    for s in range(n_repeat):
+        nxt = (s + 1) % n_repeat
+        rows, cols, vals = [own], [s * own.size + slot[own]], [np.ones(own.size)]
+        for i in range(3):
+            for j in range(3):
+                if R[i, j] != 0.0:
+                    rows.append(pairs.right[:, i])
+                    cols.append(nxt * own.size + slot[pairs.left[:, j]])
+                    vals.append(np.full(len(pairs.right), R[i, j]))
+        maps.append(sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                                  shape=(n, n_repeat * own.size)))
+    return maps, n_repeat * own.size

@@ -28,6 +28,7 @@ __all__ = [
     "lift_states",
     "modal_damping",
     "simulate_linear_newmark",
+    "simulate_newmark",
     "ReducedModel",
     "save_reduced_model",
     "load_reduced_model",
@@ -337,18 +338,76 @@ def modal_damping(K: np.ndarray, M: np.ndarray, ratios: Callable[[np.ndarray], n
 def simulate_linear_newmark(M: np.ndarray, C: np.ndarray, K: np.ndarray, f: Callable[[float], np.ndarray],
                             dt: float, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
     """Average-acceleration Newmark for a small dense linear system from rest. Returns (t, q) with q (r, n+1)."""
+    return simulate_newmark(M, C, K, f, dt, n_steps)
+
+
+def simulate_newmark(M: np.ndarray, C: np.ndarray, K: np.ndarray, f: Callable[[float], np.ndarray], dt: float,
+                     n_steps: int, forces=None, rtol: float = 1e-10, max_iterations: int = 40
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Average-acceleration Newmark (beta = 1/4, gamma = 1/2) of M q'' + C q' + K q + g(q) = f(t) from rest, dense.
+
+    ``forces``: the reduced nonlinear force g (``evaluate``/``jacobian``), None for the linear model. Each step
+    iterates on the residual with the factorisation of K + 4 M / dt^2 + 2 C / dt (modified Newton); where that
+    converges slowly (a ratio above 1/4) the tangent of g at the iterate is added and factorised (Newton, with a
+    backtracking line search); a step whose Newton fails is split in two halves (up to 5 times).
+    Stops at |residual| <= rtol x max(|f|, |K q|). Returns (t, q) with q (r, n_steps + 1)."""
+    if not (dt > 0 and n_steps >= 1):
+        raise ValueError(f"dt must be > 0 s and n_steps >= 1, got {dt}, {n_steps}")
     r = K.shape[0]
-    A = K + 4.0 / dt**2 * M + 2.0 / dt * C
-    lu = scipy.linalg.lu_factor(A)
+    linear = {}
+
+    def factor(h):
+        if h not in linear:
+            A = K + 4.0 / h**2 * M + 2.0 / h * C
+            linear[h] = (A, scipy.linalg.lu_factor(A))
+        return linear[h]
+
+    def g(q):
+        return np.asarray(forces.evaluate(q)).reshape(r)
+
+    def advance(q, v, a, t_new, h):
+        A, lu = factor(h)
+        rhs = f(t_new) + M @ (4.0 / h**2 * q + 4.0 / h * v + a) + C @ (2.0 / h * q + v)
+        q_new = scipy.linalg.lu_solve(lu, rhs)
+        if forces is not None:
+            res = A @ q_new + g(q_new) - rhs
+            norm = np.linalg.norm(res)
+            for it in range(max_iterations + 1):
+                if norm <= rtol * max(np.linalg.norm(rhs), np.linalg.norm(K @ q_new), 1e-300):
+                    break
+                if it == max_iterations or not np.isfinite(norm):
+                    return None
+                trial = q_new - scipy.linalg.lu_solve(lu, res)       # modified Newton: the kept factorisation
+                res_trial = A @ trial + g(trial) - rhs
+                if np.linalg.norm(res_trial) > 0.25 * norm:         # too slow: Newton with a line search
+                    lu = scipy.linalg.lu_factor(A + forces.jacobian(q_new))
+                    step = scipy.linalg.lu_solve(lu, res)
+                    for _ in range(6):
+                        trial = q_new - step
+                        res_trial = A @ trial + g(trial) - rhs
+                        if np.linalg.norm(res_trial) < norm:
+                            break
+                        step = 0.5 * step
+                    else:
+                        return None                    # no descent along Newton's direction: the step is too long
+                q_new, res, norm = trial, res_trial, np.linalg.norm(res_trial)
+        a_new = 4.0 / h**2 * (q_new - q) - 4.0 / h * v - a
+        return q_new, v + 0.5 * h * (a + a_new), a_new
+
+    def advance_adaptive(q, v, a, t_new, h, depth=0):
+        out = advance(q, v, a, t_new, h)
+        if out is not None:
+            return out
+        if depth == 5:
+            raise RuntimeError(f"Newmark-Newton did not converge at t = {t_new:.6e} s even with dt / 32")
+        q, v, a = advance_adaptive(q, v, a, t_new - h / 2, h / 2, depth + 1)
+        return advance_adaptive(q, v, a, t_new, h / 2, depth + 1)
+
     q, v = np.zeros(r), np.zeros(r)
     a = np.linalg.solve(M, f(0.0))
     out = [q.copy()]
     for n in range(1, n_steps + 1):
-        rhs = f(n * dt) + M @ (4.0 / dt**2 * q + 4.0 / dt * v + a) + C @ (2.0 / dt * q + v)
-        q_new = scipy.linalg.lu_solve(lu, rhs)
-        a_new = 4.0 / dt**2 * (q_new - q) - 4.0 / dt * v - a
-        v = v + 0.5 * dt * (a + a_new)
-        q, a = q_new, a_new
+        q, v, a = advance_adaptive(q, v, a, n * dt, dt)
         out.append(q.copy())
     return np.arange(n_steps + 1) * dt, np.array(out).T
 
@@ -365,6 +424,8 @@ class ReducedModel:
         sizes: {'r_b', 'r_c', 'r_md'} per sector; md_pairs: (r_md, 2).
         Phi: (n, r) basis to rebuild fields (optional).
         metadata: parameters, mesh signature, version; ``key`` hashes them.
+        sectors: for a disk model, the per-sector basis that rebuilds each sector's field (``disk.DiskBasis``);
+            None for a blade.
     """
 
     M: np.ndarray
@@ -377,6 +438,7 @@ class ReducedModel:
     md_pairs: np.ndarray
     Phi: np.ndarray | None
     metadata: dict
+    sectors: object = None
 
     @property
     def r(self) -> int:
@@ -420,13 +482,19 @@ def save_reduced_model(model: ReducedModel, path: str | Path) -> Path:
                                           sort_keys=True, default=str))}
     if model.Phi is not None:
         arrays["Phi"] = model.Phi
-    if isinstance(model.forces, PolynomialForces):
-        arrays.update(forces="polynomial", A=model.forces.A, B=model.forces.B)
-    elif isinstance(model.forces, QuadratureForces):
-        arrays.update(forces="quadrature", H=model.forces.H, w=model.forces.w,
-                      lame=np.array([model.forces.lmbda, model.forces.mu]), precision=model.forces.precision)
+    forces, kind = model.forces, "none"
+    if forces is not None and hasattr(forces, "blocks"):          # a disk's sector forces (disk.SectorForces)
+        arrays.update(sector_blocks=forces.blocks, sector_scales=forces.scales)
+        forces, kind = forces.forces, "sector_"
+    if isinstance(forces, PolynomialForces):
+        arrays.update(forces=kind.replace("none", "") + "polynomial", A=forces.A, B=forces.B)
+    elif isinstance(forces, QuadratureForces):
+        arrays.update(forces=kind.replace("none", "") + "quadrature", H=forces.H, w=forces.w,
+                      lame=np.array([forces.lmbda, forces.mu]), precision=forces.precision)
     else:
         arrays["forces"] = "none"
+    if model.sectors is not None:
+        arrays.update({f"sectors_{name}": value for name, value in dataclasses.asdict(model.sectors).items()})
     tmp = path.with_name(path.name + ".tmp.npz")
     np.savez(tmp, **arrays)
     tmp.replace(path)
@@ -454,15 +522,24 @@ def load_reduced_model(path: str | Path, expected_key: str | None = None) -> Red
                          f"(key {key}, expected {expected_key}); it is stale: rebuild it")
     kind = str(arrays["forces"])
     forces = None
-    if kind == "polynomial":
+    if kind.endswith("polynomial"):
         forces = PolynomialForces(arrays["A"], arrays["B"])
-    elif kind == "quadrature":
+    elif kind.endswith("quadrature"):
         forces = QuadratureForces(arrays["H"], arrays["w"], *arrays["lame"],
                                   precision=str(arrays.get("precision", "double")))
+    if kind.startswith("sector_"):
+        from rotor37_rom.disk import SectorForces
+
+        forces = SectorForces(forces, arrays["sector_blocks"], arrays["K"].shape[0], arrays["sector_scales"])
+    sectors = None
+    if "sectors_Pi" in arrays:
+        from rotor37_rom.disk import DiskBasis
+
+        sectors = DiskBasis(**{f.name: arrays[f"sectors_{f.name}"] for f in dataclasses.fields(DiskBasis)})
     return ReducedModel(M=arrays["M"], C=arrays["C"], K=arrays["K"], forces=forces,
                         boundary_dofs=arrays["boundary_dofs"], nodes=nodes,
                         sizes=info["sizes"], md_pairs=arrays["md_pairs"], Phi=arrays.get("Phi"),
-                        metadata=info["metadata"])
+                        metadata=info["metadata"], sectors=sectors)
 
 
 def solve_reduced_static(model: ReducedModel, f: np.ndarray, load_factors: Sequence[float],

@@ -68,6 +68,13 @@ def ci_disk():
 
 
 @pytest.fixture(scope="session")
+def ci_disk_ops(ci_disk):
+    from rotor37_rom import fem
+
+    return fem.create_svk_operators(ci_disk)
+
+
+@pytest.fixture(scope="session")
 def ci_ops(ci_blade):
     from rotor37_rom import fem
 

@@ -8,7 +8,8 @@ is serial; the communicator always comes from the mesh.
 
 Modules: ``sector`` (building sectors), ``operators`` (forms and assembly), ``solvers`` (eigen, static, transient,
 the factorisation and eigen-solver given to ``reduction.craig_bampton``), ``fields`` (displacements and stress on the
-mesh), ``cyclic`` (disk and plate sectors, face pairing, operators and modes per nodal diameter).
+mesh), ``cyclic`` (disk and plate sectors, face pairing, operators and modes per nodal diameter), ``periodic``
+(the full-order transient of a disk under a nodal-diameter load on the sectors it repeats over), ``safe`` (SAFE diagram).
 """
 from .cyclic import (CyclicModes, CyclicOperators, assemble_cyclic_operators, create_annular_sector, create_disk_sector,
                      sector_fields, solve_cyclic_modes)
@@ -18,6 +19,7 @@ from .operators import (JIT_PARAMS, MASS_DIAGONAL, SvkOperators, assemble_free_o
                         assemble_scalar, assemble_stiffness, assemble_tangent_scipy, assemble_vector,
                         create_svk_operators, evaluate_forces, evaluate_second_derivative, free_dofs,
                         gather_dof_values, petsc_to_scipy, quadrature_gradients, scipy_to_petsc)
+from .periodic import RepeatingSectors, sector_harmonic_load, solve_repeating_newmark
 from .sector import (Sector, build_on_rank0, clamp_cell_group, create_blade_sector, create_sector_from_file,
                      create_sector_from_gmsh, create_sector_from_mesh, locate_cyclic_pairs, tip_node_names)
 from .solvers import (ModalResult, StaticResult, TransientResult, compute_clamped_modes, mumps_solver,
@@ -34,4 +36,5 @@ __all__ = [
     "von_mises_at_quadrature", "cell_midpoints", "cells_touching_points", "MASS_DIAGONAL", "JIT_PARAMS",
     "create_disk_sector", "create_annular_sector", "locate_cyclic_pairs", "assemble_cyclic_operators", "CyclicModes",
     "solve_cyclic_modes", "sector_fields", "clamp_cell_group", "build_on_rank0", "CyclicOperators",
+    "RepeatingSectors", "solve_repeating_newmark", "sector_harmonic_load",
 ]

@@ -1,0 +1,180 @@
+"""Bladed disk without contact (paper §3.3, Figs. 16-22): the reduced models' forced response against the full-order
+reference, cost and error side by side.
+
+Load: 400 N along e_z at node LE of every sector, travelling with N_d nodal diameters, from rest, ``--periods``
+periods. Reference: the full-order model of N / gcd(N, N_d) sectors closed on themselves (``fem.periodic``; implicit
+Newmark, exact SVK tangent), linear for every case and GNL for the cases of ``--gnl-reference`` (the expensive part:
+checkpointed under the output directory, resumed when run again). Reduced models: ``disk_builder.build_disk_model``
+(r_b = 3, LE only, as the paper's §3.3 models) for each criterion and r_MD, integrated by the same Newmark at the
+same step, so the error is the reduction's. Each pair is scored by the performance indicator I
+(``disk.performance_indicator``: loaded node, tip nodes, field and strain-energy criteria).
+
+    python benchmarks/bench_disk_forced.py [--preset ci] [--cases 0:4000 9:4000 ...] [--criteria MI2b MMI ...]
+        [--r-md 0 5 10 20] [--periods 10] [--steps-per-period 100] [--gnl-reference 0:4000]
+
+Results: results/disk_forced_<preset>.json; reference histories and models cached under results/disk_forced/<preset>/.
+"""
+from __future__ import annotations
+
+import argparse
+import resource
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import write_results  # noqa: E402
+
+from rotor37_rom import fem  # noqa: E402
+from rotor37_rom.disk import harmonic_node_load, performance_indicator, repeat_count  # noqa: E402
+from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
+from rotor37_rom.fem.periodic import RepeatingSectors, sector_harmonic_load, solve_repeating_newmark  # noqa: E402
+from rotor37_rom.reduction import CRITERIA, simulate_newmark  # noqa: E402
+
+AMPLITUDE = 400.0
+
+
+def parse_case(text: str) -> tuple[int, float]:
+    nd, _, omega = text.partition(":")
+    try:
+        return int(nd), float(omega)
+    except ValueError:
+        raise ValueError(f"a case reads '<N_d>:<omega rad/s>', e.g. 9:13000; got {text!r}") from None
+
+
+def reference(sector, system, case, nonlinear, periods, spp, ramp, out: Path) -> dict:
+    """The full-order history of one case (cached as .npz; GNL runs checkpoint)."""
+    nd, omega = case
+    n_rep = repeat_count(sector.cyclic.n_sectors, nd)
+    tag = f"fom_nd{nd}_w{omega:g}_{'gnl' if nonlinear else 'lin'}_p{periods:g}_s{spp}_r{ramp:g}"
+    path = out / f"{tag}.npz"
+    if path.is_file():
+        with np.load(path) as d:
+            return {k: d[k] for k in d.files}
+    le_z = int(sector.tip_dofs[sector.tip_names.index("LE"), 2])
+    T = 2 * np.pi / omega
+    steps = int(round(periods * spp))
+    t0 = time.perf_counter()
+    res = solve_repeating_newmark(sector, n_rep, le_z,
+                                  sector_harmonic_load(n_rep, sector.cyclic.n_sectors, nd, AMPLITUDE, omega, ramp * T),
+                                  T / spp, steps, nonlinear=nonlinear, rtol=1e-7, atol=1e-8 * AMPLITUDE,
+                                  snapshot_every=max(spp // 10, 1),
+                                  checkpoint=out / f"{tag}.checkpoint.npz", ops=system.ops)
+    data = {"t": res.t, "tip": res.tip, "fields": res.fields, "snapshots": res.snapshots,
+            "wall": np.float64(time.perf_counter() - t0), "iterations": res.iterations}
+    np.savez(path, **data)
+    (out / f"{tag}.checkpoint.npz").unlink(missing_ok=True)
+    return data
+
+
+def reduced(model, sector, case, nonlinear, periods, spp, ramp, ref) -> dict:
+    nd, omega = case
+    T = 2 * np.pi / omega
+    steps = int(round(periods * spp))
+    load = harmonic_node_load(model.nodes, model.r, AMPLITUDE, omega, nd, ramp=ramp * T)
+    t0 = time.perf_counter()
+    _, Q = simulate_newmark(model.M, np.zeros_like(model.M), model.K, load, T / spp, steps,
+                            forces=model.forces if nonlinear else None)
+    wall = time.perf_counter() - t0
+    n_rep = ref["tip"].shape[1]
+    tip_dofs = np.asarray(sector.tip_dofs)
+    basis = model.sectors
+    tip = np.stack([basis.sector_field(Q, s, tip_dofs.ravel()).T.reshape(-1, *tip_dofs.shape)
+                    for s in range(n_rep)], axis=1)
+    fields = np.stack([np.stack([basis.sector_field(Q[:, k], s) for s in range(n_rep)])
+                       for k in ref["snapshots"]])
+    return {"tip": tip, "fields": fields, "wall": wall, "steps": steps}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--preset", default="ci", choices=["ci", "coarse", "paper"])
+    parser.add_argument("--cases", nargs="+", default=["0:4000", "0:13000", "0:17000", "9:4000", "9:13000",
+                                                       "9:17000"], help="N_d:omega pairs")
+    parser.add_argument("--criteria", nargs="+", default=["MI2b"], help=f"selection criteria {CRITERIA}")
+    parser.add_argument("--r-md", nargs="+", type=int, default=[0, 5, 10, 20])
+    parser.add_argument("--r-c", type=int, default=10)
+    parser.add_argument("--r-cyclic", type=int, default=144)
+    parser.add_argument("--interface", nargs="+", default=["closest"], choices=["closest", "per_k"],
+                        help="interface-mode selection(s): eq. 51's closest frequencies or equal shares per harmonic")
+    parser.add_argument("--periods", type=float, default=10.0)
+    parser.add_argument("--steps-per-period", type=int, default=100)
+    parser.add_argument("--gnl-reference", nargs="*", default=["0:4000"],
+                        help="cases that also get the (expensive) GNL full-order reference")
+    parser.add_argument("--ramp", type=float, default=1.0,
+                        help="periods over which the load rises smoothly from 0 (0: a step where the phase is not 0)")
+    parser.add_argument("--out", default="results/disk_forced")
+    args = parser.parse_args(argv)
+    try:
+        cases = [parse_case(c) for c in args.cases]
+        gnl_cases = {parse_case(c) for c in args.gnl_reference}
+        for nd, omega in cases:
+            repeat_count(36, nd)
+            if not 100.0 <= omega <= 1e5:
+                raise ValueError(f"omega must be in [100, 1e5] rad/s, got {omega}")
+        bad = [c for c in args.criteria if c not in CRITERIA]
+        if bad:
+            raise ValueError(f"criteria must be among {CRITERIA}, got {bad}")
+        if not (args.periods > 0 and args.steps_per_period >= 20 and 0 <= args.ramp < args.periods):
+            raise ValueError("periods must be > 0, steps-per-period >= 20 and ramp in [0, periods)")
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    out = Path(args.out) / args.preset
+    out.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    sector = fem.create_disk_sector(preset=args.preset)
+    system = RepeatingSectors(sector, 1)
+    ops = system.ops
+    K_s = fem.petsc_to_scipy(fem.assemble_stiffness(sector, ops, clamped=False))
+    M_s = fem.petsc_to_scipy(fem.assemble_mass(sector, ops, clamped=False))
+    setup = time.perf_counter() - t0
+    refs = {}
+    for case in cases:
+        for nonlinear in (False, True):
+            if nonlinear and case not in gnl_cases:
+                continue
+            refs[case, nonlinear] = reference(sector, system, case, nonlinear, args.periods,
+                                              args.steps_per_period, args.ramp, out)
+            print(f"reference N_d = {case[0]}, omega = {case[1]:g}, {'GNL' if nonlinear else 'linear'}: "
+                  f"{float(refs[case, nonlinear]['wall']):.1f} s", flush=True)
+    rows = []
+    configs = [(c, r, i) for i in args.interface for c in args.criteria for r in args.r_md]
+    for criterion, r_md, interface in configs:
+        config = DiskReductionConfig(tip_nodes="LE", r_c=args.r_c, r_md=r_md, criterion=criterion,
+                                     r_cyclic=args.r_cyclic, interface=interface,
+                                     forces="intrusive" if r_md else "none")
+        tb = time.perf_counter()
+        model, report = build_disk_model(sector, config, ops=ops, cache_dir=out / "models")
+        build = time.perf_counter() - tb
+        for (case, nonlinear), ref in refs.items():
+            if nonlinear and model.forces is None and r_md:
+                continue
+            rom = reduced(model, sector, case, nonlinear and model.forces is not None, args.periods,
+                          args.steps_per_period, args.ramp, ref)
+            score = performance_indicator(ref["tip"], rom["tip"], ref["fields"], rom["fields"], K_s, M_s,
+                                          loaded=(sector.tip_names.index("LE"), 2))
+            row = {"ramp_periods": args.ramp, "criterion": criterion, "r_md": r_md, "interface": interface,
+                   "r": model.r, "N_d": case[0], "omega": case[1],
+                   "gnl": nonlinear, "rom_gnl": bool(nonlinear and model.forces is not None),
+                   "I": score["I"], "errors": score["errors"], "rom_wall_s": rom["wall"],
+                   "rom_us_per_step": 1e6 * rom["wall"] / rom["steps"], "build_s": build,
+                   "build_cached": bool(report.get("cached")), "fom_wall_s": float(ref["wall"]),
+                   "max_le_z_mm": 1e3 * float(np.abs(ref["tip"][:, :, sector.tip_names.index("LE"), 2]).max())}
+            rows.append(row)
+            print(f"{interface:7s} {criterion:6s} r_md {r_md:3d} r {model.r:5d}  N_d {case[0]:2d} omega {case[1]:7g} "
+                  f"{'GNL' if nonlinear else 'lin'}  I = {score['I']:.4f}  "
+                  + " ".join(f"{k}: {v:.2e}" for k, v in score["errors"].items())
+                  + f"  ROM {rom['wall']:.2f} s, FOM {float(ref['wall']):.0f} s", flush=True)
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    name = f"disk_forced_{args.preset}"
+    machine = write_results(name, rows, preset=args.preset, dofs_per_sector=sector.n_dofs, periods=args.periods,
+                            steps_per_period=args.steps_per_period, setup_s=setup, peak_rss_mb=peak)
+    print(f"{machine}; peak RSS {peak:.0f} MB; results in results/{name}.json")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

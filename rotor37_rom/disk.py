@@ -1,0 +1,300 @@
+"""Component mode synthesis of N sectors (paper §3.1, eqs. 40-61), pure NumPy/SciPy: the disk's reduced model from
+one sector's Craig-Bampton data.
+
+Each sector n keeps q^n = [u_b^n; eta^n] (its tip DOFs, fixed-interface modes and modal derivatives: the columns
+Phi_s, as a blade's reduced model) and its left cyclic DOFs u_L^n; its right face carries the next sector's left DOFs
+turned into its frame, u_R^n = R u_L^{n+1} (eq. 43), so with B = [Phi_s, Psi_L, Psi_R R] the sector's matrices are
+k = B^T K B, m = B^T M B (eqs. 45-49). The cyclic DOFs of all sectors are then reduced on r_cyclic interface modes
+Pi (eq. 50), the eigenvectors of the cyclic block of the assembled matrices whose frequencies are closest to the
+sector's fixed-interface modes (eq. 51). For a tuned disk that block is block-circulant, so its modes are computed per
+harmonic index k from an n_L-size Hermitian problem (in the real cos/sin form of ``rotor37_rom.cyclic``) instead of
+one of size N n_L: 19 problems of 2 n_L instead of one of 36 n_L. The reduced model has r = N r_s + r_cyclic (eq. 53).
+
+Nonlinear forces (eq. 61): the cyclic DOFs stay linear and each sector's reduced force depends on its own q^n only,
+g~^n(q^n) = Phi_s^T g_s(Phi_s q^n): one sector's reduced force (exact tensors or quadrature) evaluated with the
+sectors as batch columns (``SectorForces``). A mistuned disk scales each sector's stiffness and force by its own
+factor (SVK forces are linear in E); the interface modes stay those of the tuned disk, a basis for any scatter.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import scipy.linalg
+
+from rotor37_rom.cyclic import harmonic_indices
+
+__all__ = ["SectorForces", "SectorMatrices", "DiskBasis", "interface_modes", "assemble_disk_matrices", "disk_node_map",
+           "sector_harmonics", "harmonic_node_load", "repeat_count", "performance_indicator", "INDICATOR_CRITERIA"]
+
+
+@dataclasses.dataclass(frozen=True)
+class SectorForces:
+    """The disk's reduced nonlinear force: one sector's reduced force ``forces`` (r_s in, r_s out; PolynomialForces
+    or QuadratureForces) applied to every sector's block of q, the sectors as batch columns (eq. 61).
+
+    Attributes:
+        forces: the sector's reduced force; blocks: (N, r_s) entries of q of each sector's q^n; r: size of q;
+        scales: (N,) factor of each sector's force (mistuning: a sector's E; 1 for a tuned disk).
+    """
+
+    forces: object
+    blocks: np.ndarray
+    r: int
+    scales: np.ndarray
+
+    def evaluate(self, Q: np.ndarray) -> np.ndarray:
+        """g~(q) for Q (r,) or (r, P): (r, P); entries outside the sector blocks (interface modes) are 0."""
+        Q = np.asarray(Q, float).reshape(self.r, -1)
+        N, rs = self.blocks.shape
+        P = Q.shape[1]
+        cols = Q[self.blocks.ravel()].reshape(N, rs, P).transpose(1, 0, 2).reshape(rs, N * P)
+        g = self.forces.evaluate(cols).reshape(rs, N, P) * self.scales[None, :, None]
+        out = np.zeros((self.r, P))
+        out[self.blocks.ravel()] = g.transpose(1, 0, 2).reshape(N * rs, P)
+        return out
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        """dg~/dq (r, r) at one state: block-diagonal over the sectors."""
+        q = np.asarray(q, float).ravel()
+        J = np.zeros((self.r, self.r))
+        for n, block in enumerate(self.blocks):                # N small Jacobians, one per sector
+            J[np.ix_(block, block)] = self.scales[n] * self.forces.jacobian(q[block])
+        return J
+
+
+@dataclasses.dataclass(frozen=True)
+class SectorMatrices:
+    """A sector's reduced matrices on [q (r_s); u_L (n_L); u_L of the next sector (n_L)] (eqs. 45-49), dense.
+
+    Attributes:
+        K, M: (r_s + 2 n_L) square; r_s: size of q^n; n_L: cyclic DOFs per face; omega_c: the sector's fixed-interface
+        frequencies (rad/s), the targets of the interface-mode selection (eq. 51).
+    """
+
+    K: np.ndarray
+    M: np.ndarray
+    r_s: int
+    n_L: int
+    omega_c: np.ndarray
+
+    def part(self, A: np.ndarray, a: str, b: str) -> np.ndarray:
+        """Block of K or M: a, b in 'q', 'L' (this sector's left face), 'R' (the next sector's left face)."""
+        sl = {"q": slice(0, self.r_s), "L": slice(self.r_s, self.r_s + self.n_L),
+              "R": slice(self.r_s + self.n_L, self.r_s + 2 * self.n_L)}
+        return A[sl[a], sl[b]]
+
+
+@dataclasses.dataclass(frozen=True)
+class DiskBasis:
+    """What rebuilds sector n's field from the disk's q (no reassembly): u^n = Phi_s q^n + Psi_L u_L^n +
+    Psi_R' u_L^{n+1}, u_L = Pi eta (each sector's frame, free DOFs lifted to the full vector).
+
+    Attributes: Phi_s (n, r_s), Psi_L (n, n_L), Psi_Rr (n, n_L): the right-face constraint modes times the rotation
+    R, Pi (N n_L, r_cyclic), blocks (N, r_s) sector blocks of q, n_sectors."""
+
+    Phi_s: np.ndarray
+    Psi_L: np.ndarray
+    Psi_Rr: np.ndarray
+    Pi: np.ndarray
+    blocks: np.ndarray
+    n_sectors: int
+
+    def __post_init__(self):
+        object.__setattr__(self, "n_sectors", int(self.n_sectors))
+
+    def sector_field(self, q: np.ndarray, n: int, dofs: np.ndarray | None = None) -> np.ndarray:
+        """Sector n's displacement in its own frame for the disk state q (r,) or states (r, T): the full DOF vector,
+        or only the DOFs ``dofs`` (cheap: only those rows of the basis are used)."""
+        N, nL = self.n_sectors, self.Psi_L.shape[1]
+        rows = slice(None) if dofs is None else np.asarray(dofs)
+        uL = self.Pi @ q[self.blocks.size:]
+        return (self.Phi_s[rows] @ q[self.blocks[n]] + self.Psi_L[rows] @ uL[n * nL:(n + 1) * nL]
+                + self.Psi_Rr[rows] @ uL[((n + 1) % N) * nL:((n + 1) % N + 1) * nL])
+
+
+def _harmonic_blocks(s: SectorMatrices, A: np.ndarray, k: int, n_sectors: int) -> np.ndarray:
+    """The cyclic block of the assembled matrix for harmonic index k, in real form (n_L, or 2 n_L for 0 < k < N/2):
+    H_k = C0 + C1 e^{i k alpha} + C1^T e^{-i k alpha}, C0 = A_LL + A_RR, C1 = A_LR."""
+    C0 = s.part(A, "L", "L") + s.part(A, "R", "R")
+    C1 = s.part(A, "L", "R")
+    phase = 2 * np.pi * k / n_sectors
+    re = C0 + (C1 + C1.T) * np.cos(phase)
+    if k == 0 or 2 * k == n_sectors:
+        return re
+    im = (C1 - C1.T) * np.sin(phase)               # H = re + i im, im antisymmetric
+    return np.block([[re, -im], [im, re]])
+
+
+def interface_modes(s: SectorMatrices, n_sectors: int, r_cyclic: int, per_k: int = 12, selection: str = "closest"
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The r_cyclic interface modes Pi (eq. 50-51) of a tuned disk, per harmonic index.
+
+    For every k the lowest ``per_k`` modes of the cyclic block are computed (a cos/sin pair counts as two); the
+    r_cyclic of all of them whose frequencies are closest to the sector's fixed-interface frequencies are kept, a pair
+    never split (``selection='closest'``, eq. 51), or the lowest modes of every harmonic in equal shares, r_cyclic / N
+    per harmonic (``selection='per_k'``: a pair for each 0 < k < N/2; every travelling-wave pattern gets the same
+    interface richness). Returns (Pi (N n_L, r_cyclic) with the rows of sector n's left face at n n_L ...,
+    M^-orthonormal;
+    omega (r_cyclic,) rad/s; k (r_cyclic,) harmonic index of each mode)."""
+    N, nL = n_sectors, s.n_L
+    candidates = []                                # (distance to the targets, omega, k, (a, b))
+    for k in harmonic_indices(N):
+        Kk, Mk = _harmonic_blocks(s, s.K, k, N), _harmonic_blocks(s, s.M, k, N)
+        m = Kk.shape[0] // nL
+        count = min(per_k * m, Kk.shape[0])
+        lam, V = scipy.linalg.eigh(Kk, Mk, subset_by_index=[0, count - 1])
+        w = np.sqrt(np.maximum(lam, 0.0))
+        for j in range(0, count, m):               # pairs (m = 2) enter together
+            dist = np.min(np.abs(s.omega_c - w[j]))
+            vecs = [(V[:nL, i], V[nL:, i] if m == 2 else None) for i in range(j, min(j + m, count))]
+            candidates.append((dist, w[j], k, vecs))
+    if selection == "per_k":                       # rank within each harmonic first, then by frequency
+        rank = {}
+        for c in sorted(candidates, key=lambda c: c[1]):
+            rank[id(c)] = sum(1 for d in candidates if d[2] == c[2] and d[1] < c[1])
+        candidates.sort(key=lambda c: (rank[id(c)], c[1]))
+    elif selection == "closest":
+        candidates.sort(key=lambda c: (c[0], c[1]))
+    else:
+        raise ValueError(f"selection must be 'closest' or 'per_k', got {selection!r}")
+    total = sum(len(c[3]) for c in candidates)
+    if not (1 <= r_cyclic <= total):
+        raise ValueError(f"r_cyclic must be in [1, {total}] (interface modes computed: {per_k} per nodal diameter), "
+                         f"got {r_cyclic}")
+    cols, omega, ks = [], [], []
+    phase = 2 * np.pi * np.arange(N) / N
+    for dist, w, k, vecs in candidates:
+        if len(cols) + len(vecs) > r_cyclic:
+            if len(cols) < r_cyclic:
+                continue                           # a pair that does not fit: look for a single mode further on
+            break
+        for a, b in vecs:
+            u = np.cos(k * phase)[:, None] * a[None, :]
+            if b is not None:
+                u = u - np.sin(k * phase)[:, None] * b[None, :]
+            cols.append(u.ravel())
+            omega.append(w)
+            ks.append(k)
+    Pi = np.column_stack(cols)
+    return Pi, np.array(omega), np.array(ks)
+
+
+def assemble_disk_matrices(s: SectorMatrices, Pi: np.ndarray, n_sectors: int,
+                           scales: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """K and M of the disk's reduced model (eqs. 48-52): q = [q^0 .. q^{N-1}, eta_cyclic], u_L = Pi eta_cyclic.
+    ``scales`` (N,): each sector's stiffness factor (mistuning), 1 if None. Returns (K, M), dense (r, r)."""
+    N, rs, nL = n_sectors, s.r_s, s.n_L
+    scales = np.ones(N) if scales is None else np.asarray(scales, float)
+    rc = Pi.shape[1]
+    r = N * rs + rc
+    out = []
+    for A, factor in ((s.K, scales), (s.M, np.ones(N))):
+        X = np.zeros((r, r))
+        Aqq, Aqc = s.part(A, "q", "q"), np.hstack([s.part(A, "q", "L"), s.part(A, "q", "R")])
+        Acc = np.block([[s.part(A, "L", "L"), s.part(A, "L", "R")], [s.part(A, "R", "L"), s.part(A, "R", "R")]])
+        for n in range(N):                         # N sector blocks (dense products of the sector's size)
+            q = slice(n * rs, (n + 1) * rs)
+            Pn = np.vstack([Pi[n * nL:(n + 1) * nL], Pi[((n + 1) % N) * nL:((n + 1) % N + 1) * nL]])
+            X[q, q] += factor[n] * Aqq
+            coupling = factor[n] * (Aqc @ Pn)
+            X[q, N * rs:] += coupling
+            X[N * rs:, q] += coupling.T
+            X[N * rs:, N * rs:] += factor[n] * (Pn.T @ Acc @ Pn)
+        out.append(0.5 * (X + X.T))
+    return out[0], out[1]
+
+
+def disk_node_map(sector_nodes, n_sectors: int, r_s: int):
+    """The disk's NodeMap: sector n's copy of the sector map's nodes, at entries n r_s + (their q indices)."""
+    from rotor37_rom.reduction import NodeMap
+
+    n = len(sector_nodes)
+    return NodeMap(tuple(sector_nodes.names) * n_sectors, np.repeat(np.arange(n_sectors), n),
+                   np.tile(sector_nodes.coordinates, (n_sectors, 1)),
+                   np.concatenate([sector_nodes.q_index + s * r_s for s in range(n_sectors)]),
+                   2 * np.pi / n_sectors)
+
+
+def sector_harmonics(V: np.ndarray, blocks: np.ndarray) -> np.ndarray:
+    """The harmonic index k (nodal diameters) carrying most of each column of V (r, m) across the sectors' q blocks
+    (N, r_s): the DFT over the sector index of each block's entries, its energy summed over the entries."""
+    N = blocks.shape[0]
+    X = V[blocks.ravel()].reshape(N, blocks.shape[1], -1)          # (N, r_s, m)
+    spectrum = (np.abs(np.fft.fft(X, axis=0)) ** 2).sum(axis=1)      # (N, m)
+    folded = spectrum[: N // 2 + 1].copy()
+    folded[1:(N + 1) // 2] += spectrum[N - 1:N // 2:-1]             # k and N - k are the same pattern
+    return np.argmax(folded, axis=0)
+
+
+def repeat_count(n_sectors: int, n_diameters: int) -> int:
+    """Sectors over which a tuned disk's response to an N_d-diameter load repeats: N / gcd(N, N_d)."""
+    if not (0 <= n_diameters <= n_sectors // 2):
+        raise ValueError(f"N_d (nodal diameters) must be in [0, {n_sectors // 2}], got {n_diameters}")
+    return n_sectors // int(np.gcd(n_sectors, n_diameters))
+
+
+def harmonic_node_load(nodes, r: int, amplitude: float, omega: float, n_diameters: int, name: str = "LE",
+                       component: int = 2, ramp: float = 0.0):
+    """The reduced force of a travelling N_d-diameter load: A sin(omega t - s N_d 2 pi / N) on component
+    ``component`` (sector frame: 0 x, 1 y, 2 z) of node ``name`` of every sector s. The node must be kept physical in
+    q (a boundary node of the model's NodeMap): its row of the basis is the unit vector of its entry of q, so the
+    reduced force is the nodal force itself. ``ramp`` (s): the envelope (1 - cos(pi t / ramp)) / 2 up to t = ramp
+    (0: none; sectors whose phase is not 0 then start with a step). Returns t -> (r,)."""
+    if not ramp >= 0:
+        raise ValueError(f"ramp must be >= 0 s, got {ramp}")
+    N = max(nodes.n_sectors, 1)
+    repeat_count(N, n_diameters)
+    if name not in nodes.names:
+        raise ValueError(f"load node {name!r} is not in the model's boundary set {sorted(set(nodes.names))}")
+    if component not in (0, 1, 2):
+        raise ValueError(f"component must be 0, 1 or 2 (x, y, z), got {component}")
+    entries = np.array([nodes.q_index[nodes.row(name, s), component] for s in range(N)])
+    phase = np.arange(N) * n_diameters * 2 * np.pi / N
+
+    def load(t: float) -> np.ndarray:
+        f = np.zeros(r)
+        envelope = 1.0 if t >= ramp else 0.5 * (1.0 - np.cos(np.pi * t / ramp))
+        f[entries] = amplitude * envelope * np.sin(omega * t - phase)
+        return f
+
+    return load
+
+
+INDICATOR_CRITERIA = ("loaded node", "tip nodes", "field", "strain energy")
+
+
+def performance_indicator(tip_ref: np.ndarray, tip_rom: np.ndarray, field_ref: np.ndarray, field_rom: np.ndarray,
+                          K, M, loaded: tuple = (0, 2)) -> dict:
+    """The performance indicator I in [0, 1] of a reduced model's transient against a full-order reference, in the
+    spirit of the paper's (its ref. [28]): two tip-local and two global criteria, each e_i >= 0 a relative error,
+    I = mean_i max(0, 1 - e_i) (1: exact).
+
+    - loaded node: max_t |u - u_ref| / max_t |u_ref| of the loaded DOF (``loaded`` = (tip node, component)) of
+      every sector carried, the largest over sectors;
+    - tip nodes: || u - u_ref || / || u_ref || over all tip nodes, components, sectors and instants (RMS);
+    - field: max over snapshots of || u - u_ref ||_M / max over snapshots of || u_ref ||_M (whole sectors);
+    - strain energy: the same in the K norm (the linear strain energy of the error).
+
+    Args: tip_*: (n_t, n_s, n_tip, 3) tip histories (same instants, sectors in their frames); field_*: (n_snap, n_s,
+    n_dofs) snapshots; K, M: the sector's stiffness and mass (n_dofs square, clamped rows and columns zero or
+    identity-free). Returns {'I': ..., 'errors': {criterion: e}}."""
+    tip_ref, tip_rom = np.asarray(tip_ref, float), np.asarray(tip_rom, float)
+    field_ref, field_rom = np.asarray(field_ref, float), np.asarray(field_rom, float)
+    if tip_ref.shape != tip_rom.shape or field_ref.shape != field_rom.shape:
+        raise ValueError(f"reference and reduced histories must have the same shape: tips {tip_ref.shape} vs "
+                         f"{tip_rom.shape}, fields {field_ref.shape} vs {field_rom.shape}")
+    node, comp = loaded
+    d_ref, d_rom = tip_ref[:, :, node, comp], tip_rom[:, :, node, comp]
+    e_loaded = np.max(np.abs(d_rom - d_ref).max(axis=0) / np.maximum(np.abs(d_ref).max(axis=0), 1e-300))
+    e_tip = np.linalg.norm(tip_rom - tip_ref) / max(np.linalg.norm(tip_ref), 1e-300)
+
+    def norms(A, X):
+        X2 = X.reshape(-1, X.shape[-1])
+        return np.sqrt(np.maximum(np.einsum("ij,ij->i", X2, (A @ X2.T).T), 0.0))
+
+    err = field_rom - field_ref
+    e_field = norms(M, err).max() / max(norms(M, field_ref).max(), 1e-300)
+    e_energy = norms(K, err).max() / max(norms(K, field_ref).max(), 1e-300)
+    errors = dict(zip(INDICATOR_CRITERIA, map(float, (e_loaded, e_tip, e_field, e_energy))))
+    return {"I": float(np.mean([max(0.0, 1.0 - e) for e in errors.values()])), "errors": errors}

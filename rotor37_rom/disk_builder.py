@@ -1,0 +1,185 @@
+"""Build the reduced model of a bladed disk from one cyclic sector (paper §3.1): the sector's Craig-Bampton basis
+with its tip and both cyclic faces as boundary, modal derivatives of the sector clamped on that boundary, the
+sector's matrices on [q, u_L, u_L of the next sector], the interface reduction and the disk's matrices
+(``rotor37_rom.disk``), and the sector's reduced nonlinear force evaluated with the sectors as batch columns.
+
+The FE work goes through ``rotor37_rom.fem`` and the steps the blade's builder already has (Craig-Bampton, the
+selection criteria, exact modal derivatives with the fixed-interface correction, quadrature forces and tensors).
+"""
+from __future__ import annotations
+
+import dataclasses
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from rotor37_rom import __version__, fem
+from rotor37_rom.builder import (Laps, _m_normalise, boundary_node_map, cached_model, compute_modal_derivatives,
+                                 mesh_signature)
+from rotor37_rom.cyclic import rotation_z
+from rotor37_rom.disk import (DiskBasis, SectorForces, SectorMatrices, assemble_disk_matrices, disk_node_map,
+                              interface_modes)
+from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces
+from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, ReducedModel, craig_bampton, modal_damping,
+                                   save_reduced_model, select_pairs, selection_weights, simulate_linear_newmark)
+
+__all__ = ["DiskReductionConfig", "build_disk_model"]
+
+LOG = logging.getLogger(__name__)
+
+
+@dataclasses.dataclass(frozen=True)
+class DiskReductionConfig:
+    """Parameters of the disk's reduced model (SI units).
+
+    Attributes:
+        tip_nodes: the sector's tip nodes kept physical in q ('all': the 8 contact nodes, r_b = 24; 'LE': node LE
+            only, r_b = 3, the paper's §3.3 models).
+        r_c: fixed-interface modes per sector (>= 1).
+        r_md: modal derivatives per sector, selected by ``criterion`` on the training response.
+        criterion: 'MMI', 'MI2a', 'MI2b', 'SMVW' or 'random' (§3.1.2).
+        r_cyclic: interface modes of the whole disk (eq. 51; the paper: 144).
+        interface: 'closest' (eq. 51: the interface modes closest in frequency to the sector's fixed-interface
+            modes) or 'per_k' (the lowest modes of every harmonic in equal shares).
+        forces: 'intrusive' (exact tensors), 'quadrature' (exact, tensor-free) or 'none' (linear).
+        training_force, training_omega: the training load (§3.3.1: 400 N along e_z at node LE of every sector,
+            4000 rad/s, one period, a 0-diameter load: the training runs on the sector with its faces tied for k = 0).
+        mistuning: None (tuned) or one stiffness factor per sector (e.g. 1 + scatter), each > 0.
+        seed: of the 'random' criterion.
+    """
+
+    tip_nodes: str = "all"
+    r_c: int = 10
+    r_md: int = 10
+    criterion: str = "MI2b"
+    r_cyclic: int = 144
+    interface: str = "closest"
+    forces: str = "intrusive"
+    training_force: float = 400.0
+    training_omega: float = 4000.0
+    mistuning: tuple | None = None
+    seed: int = 0
+
+    def __post_init__(self):
+        if self.tip_nodes not in ("all", "LE"):
+            raise ValueError(f"tip_nodes must be 'all' or 'LE', got {self.tip_nodes!r}")
+        if self.r_c < 1 or self.r_md < 0 or self.r_cyclic < 1:
+            raise ValueError(f"r_c >= 1, r_md >= 0 and r_cyclic >= 1 are required, got {self.r_c}, {self.r_md}, "
+                             f"{self.r_cyclic}")
+        if self.criterion not in CRITERIA:
+            raise ValueError(f"criterion must be one of {CRITERIA}, got {self.criterion!r}")
+        if self.interface not in ("closest", "per_k"):
+            raise ValueError(f"interface must be 'closest' or 'per_k', got {self.interface!r}")
+        if self.forces not in ("intrusive", "quadrature", "none"):
+            raise ValueError(f"forces must be 'intrusive', 'quadrature' or 'none', got {self.forces!r}")
+        if self.mistuning is not None and (len(self.mistuning) == 0 or min(self.mistuning) <= 0):
+            raise ValueError("mistuning: one stiffness factor > 0 per sector")
+
+
+def _positions(free: np.ndarray, dofs: np.ndarray, what: str) -> np.ndarray:
+    pos = np.searchsorted(free, dofs)
+    if dofs.size == 0 or np.any(pos >= free.size) or not np.array_equal(free[np.minimum(pos, free.size - 1)], dofs):
+        raise ValueError(f"{what}: DOFs must be on the mesh and not clamped")
+    return pos
+
+
+def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig(), ops=None,
+                     cache_dir: str | Path | None = None) -> tuple[ReducedModel, dict]:
+    """The disk's reduced model (r = N (r_b + r_c + r_MD) + r_cyclic, eq. 53) from a cyclic sector (serial).
+
+    Returns (model, report): the model is a ReducedModel like a blade's (its ``nodes`` cover all sectors' tip
+    nodes, its forces are ``disk.SectorForces``, ``model.sectors`` the DiskBasis); the report has the timings, the
+    selection weights and pairs, the interface modes' frequencies and nodal diameters, the sector frequencies."""
+    if sector.cyclic is None:
+        raise ValueError(f"{sector.source} is not a cyclic sector: build a disk model from fem.create_disk_sector")
+    pairs = sector.cyclic
+    N = pairs.n_sectors
+    if config.mistuning is not None and len(config.mistuning) != N:
+        raise ValueError(f"mistuning: give one factor per sector ({N}), got {len(config.mistuning)}")
+    if config.r_cyclic > N * pairs.left.size:
+        raise ValueError(f"r_cyclic must be in [1, {N * pairs.left.size}] (the disk's cyclic DOFs), got "
+                         f"{config.r_cyclic}")
+    ops = ops or fem.create_svk_operators(sector)
+    tip_rows = [sector.tip_names.index("LE")] if config.tip_nodes == "LE" else list(range(len(sector.tip_names)))
+    tip_dofs = np.asarray(sector.tip_dofs)[tip_rows].ravel()
+    metadata = {"config": dataclasses.asdict(config), "mesh": mesh_signature(sector), "source": sector.source,
+                "version": __version__, "kind": "disk", "n_sectors": N}
+    cache, cached = cached_model(metadata, cache_dir, "disk")
+    if cached is not None:
+        return cached, {"cached": True}
+    report: dict = {"cached": False}
+    lap = Laps(report)
+    K_f, M_f, free = fem.assemble_free_operators(sector, ops)
+    n_full = sector.n_dofs
+    left, right = pairs.left.ravel(), pairs.right.ravel()
+    boundary = np.concatenate([tip_dofs, left, right])
+    pos = _positions(free, boundary, "tip and cyclic DOFs")
+    Psi_f, Theta_f, omega_c = craig_bampton(K_f, M_f, pos, config.r_c, solve=fem.mumps_solver,
+                                            eigensolve=fem.slepc_eigenpairs)
+    nb, nL = tip_dofs.size, left.size
+    R_blk = np.kron(np.eye(nL // 3), rotation_z(pairs.angle))          # u_R = R u_L of the next sector, per node
+    Psi_tip, Psi_L, Psi_Rr = Psi_f[:, :nb], Psi_f[:, nb:nb + nL], Psi_f[:, nb + nL:] @ R_blk
+    lap("craig_bampton")
+    # training (§3.3.1): the 0-diameter load at node LE along e_z, on the sector with its faces tied for k = 0
+    lin = np.hstack([Psi_tip, Theta_f])
+    tied = np.hstack([lin, Psi_L + Psi_Rr])
+    K0, M0 = tied.T @ (K_f @ tied), tied.T @ (M_f @ tied)
+    C0, _ = modal_damping(K0, M0)
+    le_z = np.flatnonzero(boundary == sector.tip_dofs[sector.tip_names.index("LE"), 2])[0]
+    f_shape = config.training_force * tied[le_z]
+    period = 2 * np.pi / config.training_omega
+    t, q_train = simulate_linear_newmark(M0, C0, K0, lambda tt: f_shape * np.sin(config.training_omega * tt),
+                                         period / 400, 400)
+    q_train = q_train[:lin.shape[1]]
+    lin_full = np.zeros((n_full, lin.shape[1]))
+    lin_full[free] = lin
+    lin_forces = None
+    if config.criterion == "SMVW":
+        H, w, _ = fem.quadrature_gradients(sector, lin_full.T)
+        lin_forces = QuadratureForces(H, w, *sector.material.lame)
+    W = selection_weights(config.criterion, q_train, t, lin_full, lin_forces, seed=config.seed)
+    chosen = select_pairs(W, config.r_md)
+    report["weights"], report["pairs"] = W, chosen
+    lap("selection")
+    # modal derivatives of [Psi_tip, Theta], made zero on the tip and both faces by all constraint modes (eq. 20)
+    Psi_full, Theta_full = np.zeros((n_full, Psi_f.shape[1])), np.zeros((n_full, Theta_f.shape[1]))
+    Psi_full[free], Theta_full[free] = Psi_f, Theta_f
+    basis = CraigBamptonBasis(Psi=Psi_full, Theta=Theta_full, omega_c=omega_c, boundary_dofs=boundary)
+    index = np.r_[np.arange(nb), Psi_f.shape[1] + np.arange(Theta_f.shape[1])]   # lin's columns in basis.linear
+    Z = compute_modal_derivatives(sector, ops, basis, index[chosen] if len(chosen) else chosen, "exact",
+                                  solve=fem.mumps_solver(K_f))
+    Z, md_scale = _m_normalise(Z, M_f, free) if Z.shape[1] else (Z, np.zeros(0))
+    Phi_s = np.hstack([Psi_full[:, :nb], Theta_full, Z])
+    r_s = Phi_s.shape[1]
+    lap("modal_derivatives")
+    B = np.hstack([Phi_s[free], Psi_L, Psi_Rr])
+    s = SectorMatrices(K=B.T @ (K_f @ B), M=B.T @ (M_f @ B), r_s=r_s, n_L=nL, omega_c=omega_c)
+    Pi, omega_pi, k_pi = interface_modes(s, N, config.r_cyclic, selection=config.interface)
+    scales = np.ones(N) if config.mistuning is None else np.asarray(config.mistuning, float)
+    K, M = assemble_disk_matrices(s, Pi, N, scales)
+    C, omega = modal_damping(K, M)
+    report.update(omega=omega, omega_c=omega_c, interface_omega=omega_pi, interface_k=k_pi, q_train=q_train,
+                  md_scale=md_scale, sector_matrices=s)
+    lap("assembly")
+    blocks = np.arange(N * r_s).reshape(N, r_s)
+    forces = None
+    if config.forces != "none":
+        H, w, _ = fem.quadrature_gradients(sector, Phi_s.T)
+        exact = QuadratureForces(H, w, *sector.material.lame)
+        sector_forces = compute_polynomial_forces(exact) if config.forces == "intrusive" else exact
+        forces = SectorForces(sector_forces, blocks, K.shape[0], scales)
+        lap("forces")
+    sector_nodes = boundary_node_map(sector, tip_dofs)
+    Psi_L_full, Psi_Rr_full = np.zeros((n_full, nL)), np.zeros((n_full, nL))
+    Psi_L_full[free], Psi_Rr_full[free] = Psi_L, Psi_Rr
+    model = ReducedModel(M=M, C=C, K=K, forces=forces, boundary_dofs=tip_dofs,
+                         nodes=disk_node_map(sector_nodes, N, r_s),
+                         sizes={"r_b": nb, "r_c": config.r_c, "r_md": Z.shape[1], "n_sectors": N,
+                                "r_cyclic": Pi.shape[1]},
+                         md_pairs=chosen, Phi=None, metadata=metadata,
+                         sectors=DiskBasis(Phi_s, Psi_L_full, Psi_Rr_full, Pi, blocks, N))
+    if cache is not None:
+        save_reduced_model(model, cache)
+    LOG.info("disk model r = %d (N = %d x r_s = %d + r_cyclic = %d)", model.r, N, r_s, Pi.shape[1])
+    return model, report
