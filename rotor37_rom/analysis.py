@@ -1,11 +1,12 @@
-"""Analyses that combine the FE adapter with the pure modules: stress at the worst instant of a simulation."""
+"""Analyses that combine the FE adapter with the pure modules: stress at the worst instant of a simulation, and the
+stress of every sector of a bladed disk from a disk model's state."""
 from __future__ import annotations
 
 import numpy as np
 
 from rotor37_rom import fem
 
-__all__ = ["stress_at_peak", "TIP_BAND"]
+__all__ = ["stress_at_peak", "disk_stress", "TIP_BAND"]
 
 TIP_BAND = 0.1     # cells closer to a contact node than this fraction of the span are reported apart
 
@@ -40,3 +41,25 @@ def stress_at_peak(sector, model, recovery, result, nonlinear: bool, sim: int = 
             "vm_max_at_contact_nodes": float(cell_max[singular].max()), "cell_max": cell_max,
             "vm_max_tip_band": float(cell_max[band].max()),
             "clim": [0.0, float(np.percentile(cell_max[~band], 99.5))]}
+
+
+def disk_stress(sector, model, q: np.ndarray, nonlinear: bool = True, sectors=None) -> tuple[np.ndarray, np.ndarray]:
+    """von Mises per cell (Pa, DG0: the value at the cell's midpoint) of every sector of a disk model's state q,
+    each sector's field rebuilt from q by the model's ``DiskBasis`` (no reassembly of the disk) and evaluated by the
+    sector's UFL stress (SVK, second Piola-Kirchhoff pushed to Cauchy with ``nonlinear``, else linear).
+    Returns (fields (n_s, n_dofs) in each sector's frame, cell values (n_s, n_cells)) for ``sectors`` (default all)."""
+    basis = getattr(model, "sectors", None)
+    if basis is None:
+        raise ValueError("disk_stress needs a disk model (model.sectors is None: a single blade's model)")
+    q = np.asarray(q, float).ravel()
+    if q.size != model.r:
+        raise ValueError(f"q has {q.size} entries; the model has r = {model.r}")
+    sectors = range(basis.n_sectors) if sectors is None else list(sectors)
+    fields, values = [], []
+    u = fem.displacement_function(sector, np.eye(sector.n_dofs, 1), np.zeros(1))
+    for s in sectors:
+        field = basis.sector_field(q, s)
+        u.x.array[:] = field
+        fields.append(field)
+        values.append(fem.von_mises_function(sector, u, nonlinear, degree=0).x.array.copy())
+    return np.array(fields), np.array(values)

@@ -87,9 +87,10 @@ def _rotate_z(x: np.ndarray, angle: float) -> np.ndarray:
 
 def render_stress(sector, u, cell_values: np.ndarray, path: str | Path, title: str, n_sectors: int = 1,
                   factor: float = 1.0, clim=None, sector_displacements: Sequence | None = None) -> Path:
-    """PNG of a cell field (von Mises, MPa) on the deformed blade; with n_sectors > 1, the whole disk made of
-    rotated copies (sector k turned by 2 pi k / n_sectors about e_z; its displacement from
-    ``sector_displacements[k]`` (n_dofs,) or, if None, the same u rotated: a tuned, in-phase response).
+    """PNG of a cell field (von Mises, Pa; drawn in MPa) on the deformed blade; with n_sectors > 1, the whole disk
+    made of rotated copies (sector k turned by 2 pi k / n_sectors about e_z; its displacement from
+    ``sector_displacements[k]`` (n_dofs,) or, if None, the same u rotated: a tuned, in-phase response; its cell
+    values from ``cell_values[k]`` when cell_values is (n_sectors, n_cells), else the same for all).
     Writes ``path`` and ``path.json`` (the scalar range drawn). Serial only."""
     _check_serial(sector)
     path = Path(path)
@@ -98,8 +99,9 @@ def render_stress(sector, u, cell_values: np.ndarray, path: str | Path, title: s
     # the vtk mesh of V has one point per DOF node: the displacement reshapes directly
     u_nodes = np.asarray(u.x.array if hasattr(u, "x") else u).reshape(-1, 3)
     values = np.asarray(cell_values, float)
-    if values.size != len(cell_types):
-        raise ValueError(f"cell_values has {values.size} entries; the mesh has {len(cell_types)} cells")
+    if values.shape[-1] != len(cell_types) or values.ndim > 2 or (values.ndim == 2 and len(values) != n_sectors):
+        raise ValueError(f"cell_values has shape {values.shape}; the mesh has {len(cell_types)} cells "
+                         f"(give (n_cells,) or (n_sectors, n_cells))")
     if n_sectors < 1 or n_sectors > 360:
         raise ValueError(f"n_sectors must be in [1, 360], got {n_sectors}")
     tops, pts, us, vals = [], [], [], []
@@ -112,7 +114,7 @@ def render_stress(sector, u, cell_values: np.ndarray, path: str | Path, title: s
         tops.append(top.ravel())
         pts.append(_rotate_z(x, angle))
         us.append(_rotate_z(uk, angle))
-        vals.append(values)
+        vals.append(values if values.ndim == 1 else values[k])
     scene = {"topology": np.concatenate(tops), "cell_types": np.tile(cell_types, n_sectors),
              "points": np.vstack(pts), "n_frames": 1, "scalar_name": "von Mises (MPa)", "cell_scalars": True,
              "cmap": "jet", "u_0": np.vstack(us), "s_0": np.concatenate(vals) / 1e6, "title_0": title,

@@ -164,3 +164,34 @@ def test_disk_bad_input(ci_disk, disk_model):
                                                       forces="none"))
     with pytest.raises(ValueError, match="tip_nodes"):
         DiskReductionConfig(tip_nodes="mid")
+
+
+def test_disk_stress_of_a_tuned_state(ci_disk, disk_model):
+    """A 0-diameter state (every sector's block alike, interface modes of k = 0 only) gives every sector the same
+    field and the same von Mises stress, sector by sector through the DiskBasis (the interface rows of sector n and
+    n + 1, the last wrapping to the first), to round-off; a sector at rest in a state that moves only sector 3 has
+    no stress, and GNL changes the stress (Green-Lagrange's quadratic term at ~2 mm)."""
+    from rotor37_rom.analysis import disk_stress
+
+    model, report = disk_model
+    basis = model.sectors
+    rng = np.random.default_rng(5)
+    block = rng.standard_normal(basis.blocks.shape[1])
+    block *= 2e-3 / np.abs(basis.Phi_s @ block).max()
+    q = np.zeros(model.r)
+    q[basis.blocks] = block
+    k0 = np.flatnonzero(report["interface_k"] == 0)
+    assert k0.size > 0
+    q[basis.blocks.size + k0] = 1e-4 * rng.standard_normal(k0.size)
+    fields, vm = disk_stress(ci_disk, model, q, nonlinear=True, sectors=(0, 17, 35))
+    assert np.abs(fields).max() > 1e-3
+    np.testing.assert_allclose(fields[1:], fields[[0, 0]], atol=1e-12 * np.abs(fields).max(), rtol=0)
+    np.testing.assert_allclose(vm[1:], vm[[0, 0]], atol=1e-9 * vm.max(), rtol=0)
+    _, vm_lin = disk_stress(ci_disk, model, q, nonlinear=False, sectors=(0,))
+    assert np.abs(vm_lin[0] - vm[0]).max() > 1e-3 * vm.max()
+    q_one = np.zeros(model.r)
+    q_one[basis.blocks[3]] = block
+    _, vm_one = disk_stress(ci_disk, model, q_one, sectors=(3, 10))
+    assert vm_one[0].max() > 0 and vm_one[1].max() == 0.0
+    with pytest.raises(ValueError, match="entries"):
+        disk_stress(ci_disk, model, q[:-1])
