@@ -106,6 +106,7 @@ def main(argv=None) -> int:
     parser.add_argument("--ramp", type=float, default=1.0,
                         help="periods over which the load rises smoothly from 0 (0: a step where the phase is not 0)")
     parser.add_argument("--out", default="results/disk_forced")
+    parser.add_argument("--name", default="", help="results file suffix: results/disk_forced_<preset><name>.json")
     args = parser.parse_args(argv)
     try:
         cases = [parse_case(c) for c in args.cases]
@@ -152,8 +153,14 @@ def main(argv=None) -> int:
         for (case, nonlinear), ref in refs.items():
             if nonlinear and model.forces is None and r_md:
                 continue
-            rom = reduced(model, sector, case, nonlinear and model.forces is not None, args.periods,
-                          args.steps_per_period, args.ramp, ref)
+            try:
+                rom = reduced(model, sector, case, nonlinear and model.forces is not None, args.periods,
+                              args.steps_per_period, args.ramp, ref)
+            except RuntimeError as exc:                   # Newton failed even at dt / 32: a failure, reported
+                rows.append({"criterion": criterion, "r_md": r_md, "interface": interface, "r": model.r,
+                             "N_d": case[0], "omega": case[1], "gnl": nonlinear, "failed": str(exc)})
+                print(f"{criterion} r_md {r_md} N_d {case[0]} omega {case[1]:g}: failed ({exc})", flush=True)
+                continue
             score = performance_indicator(ref["tip"], rom["tip"], ref["fields"], rom["fields"], K_s, M_s,
                                           loaded=(sector.tip_names.index("LE"), 2))
             row = {"ramp_periods": args.ramp, "criterion": criterion, "r_md": r_md, "interface": interface,
@@ -169,7 +176,7 @@ def main(argv=None) -> int:
                   + " ".join(f"{k}: {v:.2e}" for k, v in score["errors"].items())
                   + f"  ROM {rom['wall']:.2f} s, FOM {float(ref['wall']):.0f} s", flush=True)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    name = f"disk_forced_{args.preset}"
+    name = f"disk_forced_{args.preset}{args.name}"
     machine = write_results(name, rows, preset=args.preset, dofs_per_sector=sector.n_dofs, periods=args.periods,
                             steps_per_period=args.steps_per_period, setup_s=setup, peak_rss_mb=peak)
     print(f"{machine}; peak RSS {peak:.0f} MB; results in results/{name}.json")
