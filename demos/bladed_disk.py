@@ -12,7 +12,6 @@
 # +
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 import logging
@@ -24,8 +23,8 @@ import numpy as np
 from mpi4py import MPI
 
 from rotor37_rom import fem
+from rotor37_rom.cli import TABLE_HELP, ArgumentParser, resolve_table, run_main
 from rotor37_rom.geometry.blade import MESH_PRESETS
-from rotor37_rom.geometry.tables import default_data_dir
 from rotor37_rom.modes import classify_blade_modes
 
 LOG = logging.getLogger("bladed_disk")
@@ -56,8 +55,8 @@ class BladedDiskConfig:
             raise ValueError(f"--modes must be in [1, 20], got {self.n_modes}")
         if any(not 0 <= int(k) <= 18 for k in self.pictures):
             raise ValueError(f"--pictures: nodal diameters must be in [0, 18], got {list(self.pictures)}")
-        if self.table is not None and not Path(self.table).is_file():
-            raise ValueError(f"--table: file {self.table} does not exist")
+        if self.table is not None:
+            resolve_table(self.table)                   # reads the file: ValueError naming --table
 
 
 @dataclasses.dataclass
@@ -146,23 +145,17 @@ def print_report(r: BladedDiskResult) -> None:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description="Rotor 37 bladed-disk sector: cyclic modes and SAFE diagram")
+    parser = ArgumentParser(description="Rotor 37 bladed-disk sector: cyclic modes and SAFE diagram")
     parser.add_argument("--preset", default="coarse", help=f"mesh preset: {', '.join(MESH_PRESETS)}")
-    parser.add_argument("--table", default="none", help="Table IV file, 'auto' (../shared if present) or 'none'")
+    parser.add_argument("--table", default="none", help=TABLE_HELP + " (default none)")
     parser.add_argument("--modes", type=int, default=6, help="distinct modes per nodal diameter (1..20)")
     parser.add_argument("--pictures", type=int, nargs="*", default=[0, 3, 18],
                         help="nodal diameters of the 1B pictures (0..18; none: no pictures)")
     parser.add_argument("--out", default="results/bladed_disk", help="output folder")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s", force=True)
-    table = None
-    if args.table == "auto":
-        data = default_data_dir()
-        table = None if data is None else data / "rotor37geometry.dat"
-    elif args.table != "none":
-        table = Path(args.table)
-    config = BladedDiskConfig(preset=args.preset, table=table, n_modes=args.modes, pictures=tuple(args.pictures),
-                              out=Path(args.out))
+    config = BladedDiskConfig(preset=args.preset, table=resolve_table(args.table), n_modes=args.modes,
+                              pictures=tuple(args.pictures), out=Path(args.out))
     result = run_bladed_disk(config)
     if MPI.COMM_WORLD.rank == 0:
         print_report(result)
@@ -170,9 +163,5 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    try:
-        sys.exit(main())
-    except ValueError as exc:  # bad input: one line, no traceback
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2)
+    sys.exit(run_main(main))
 # -

@@ -10,7 +10,7 @@
 #     mpirun -n 2 python demos/contact_map.py --model results/contact_map/rom.npz --speeds 1200 1600 21
 #     OPENBLAS_NUM_THREADS=1 mpirun -n 2 python demos/contact_map.py --model results/contact_map/rom.npz --gnl on \
 #         --cubature 1e-4 --precision single --frequency-cap 120 --mu 0 --speeds 1200 1600 100 --revolutions 200 \
-#         --batch 50 --out results/headline     # the GNL headline map on 2 cores (README: measured wall time)
+#         --batch 50 --out results/headline     # the GNL headline map on 2 cores (docs/performance.md)
 #
 # The whole study is one function, `run_contact_map(ContactMapConfig(...))`, which returns a `ContactMapResult`; the
 # command line only turns its options into that configuration. A bad option is one line on stderr and exit status 2.
@@ -33,6 +33,7 @@ import numpy as np
 import scipy.linalg
 
 from rotor37_rom.casing import Casing, contact_matrices
+from rotor37_rom.cli import ArgumentParser, run_main
 from rotor37_rom.charts import plot_interaction_map, plot_nfrc, plot_time_history
 from rotor37_rom.friction import sprag_slip_friction
 from rotor37_rom.geometry.blade import MESH_PRESETS
@@ -653,7 +654,7 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None) -> C
     if rank == 0 and not config.quiet:
         print(f"sustained sliding diverges (sprag-slip) from mu = {onset['weakest_node']:.3f} on one contact node, "
               f"{onset['all_nodes']:.3f} on all of them; this run: mu = {config.mu:g} (growth can start below: "
-              f"README, 'Why mu = 0.15 grows')")
+              f"docs/results.md, 'Friction')")
     runs = {}
     for gnl in GNL_SETTINGS[config.gnl]:
         scheme = time_scheme(config, model, gnl, comm)
@@ -680,10 +681,10 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None) -> C
 # that is not a reduced model, a step the library refuses) is one line on stderr and exit status 2.
 
 # +
-def build_parser() -> argparse.ArgumentParser:
+def build_parser() -> ArgumentParser:
     """The command line: one option per ContactMapConfig field (defaults: the dataclass's)."""
-    parser = argparse.ArgumentParser(description="interaction maps of the reduced blade with casing contact",
-                                     argument_default=argparse.SUPPRESS)
+    parser = ArgumentParser(description="interaction maps of the reduced blade with casing contact",
+                            argument_default=argparse.SUPPRESS)
     parser.add_argument("--preset", help=f"mesh preset: {', '.join(MESH_PRESETS)} (default ci)")
     parser.add_argument("--model", type=Path, help="load this reduced model (.npz) instead of building one")
     parser.add_argument("--r-c", type=int, help="fixed-interface modes of the model built (default 15)")
@@ -763,9 +764,5 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    try:
-        sys.exit(main())
-    except ValueError as exc:  # bad input: one line, no traceback
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2)
+    sys.exit(run_main(main))
 # -

@@ -1,79 +1,253 @@
 # # Reduced blade: Craig-Bampton + modal derivatives, and clearance consumption (paper §2.1, §2.3.2)
 #
 # Builds reduced models of the clamped blade (r_b = 24 boundary DOFs at the 8 tip nodes, r_c fixed-interface modes,
-# r_MD modal derivatives selected by a criterion of §3.1.2), draws the modal-derivative weights (Fig. 5 analogue),
-# and computes the clearance consumption at node LE along 1B (zeta = 1 mm) and 1T (zeta = 0.5 mm) with the full-order
-# model (linear and nonlinear statics) and with each reduced model (Figs. 9-10 analogues), cost next to error.
+# r_MD modal derivatives selected by a criterion of §3.1.2, and optionally the modal derivatives of the first clamped
+# modes), draws the modal-derivative weights (Fig. 5 analogue), and computes the clearance consumption at node LE along
+# 1B (zeta = 1 mm) and 1T (zeta = 0.5 mm) with the full-order model (linear and nonlinear statics) and with each
+# reduced model (Figs. 9-10 analogues), cost next to error.
 #
-#     python demos/reduced_blade.py --preset ci --r-md 20 80      # quick
-#     python demos/reduced_blade.py --preset coarse --r-md 40 150  # closer to the paper (minutes)
+#     python demos/reduced_blade.py --preset ci                     # r_MD = 20, 80 and the 6 global MDs (minutes)
+#     python demos/reduced_blade.py --preset ci --r-md --r-c 25      # the contact studies' r = 55 model only
+#     python demos/reduced_blade.py --preset coarse --r-md 40 150    # closer to the paper's selection
+#
+# The study is one function, `run_reduced_blade(ReducedBladeConfig(...))`, returning a `ReducedBladeResult`; a bad
+# option is one line on stderr and exit status 2.
 
 # +
 from __future__ import annotations
 
-import argparse
+import dataclasses
 import logging
 import sys
 import time
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
-import scipy.linalg
 
-from rotor37_rom import fem
-from rotor37_rom.builder import ReductionConfig, build_reduced_model, clearance_consumption_study
-from rotor37_rom.charts import (plot_clearance_consumption, plot_indicator_vs_rmd, plot_md_weights,
-                                plot_speed_accuracy)
-from rotor37_rom.clearance import delta_range_within, relative_error
+from rotor37_rom.cli import TABLE_HELP, ArgumentParser, resolve_table, run_main
+from rotor37_rom.clearance import ClearanceCurves, delta_range_within, relative_error
+from rotor37_rom.geometry.blade import MESH_PRESETS
+from rotor37_rom.reduction import CRITERIA, ReducedModel
 
-PAPER_LINEAR_RANGE = {"1B": (-0.25, 0.2), "1T": (-0.1, 0.1)}
+PAPER_LINEAR_RANGE = {"1B": (-0.25, 0.2), "1T": (-0.1, 0.1)}   # §2.3.2: linear within 10 % of GNL for delta in
+AMPLITUDES = {"1B": 1e-3, "1T": 0.5e-3}                       # zeta (m): LE displacement of the scaled mode
+FORCES = ("intrusive", "quadrature", "step", "ecsw")
 # -
 
 
+# ## What to compute
+
 # +
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--preset", default="ci")
-    parser.add_argument("--r-c", type=int, default=15)
-    parser.add_argument("--r-md", type=int, nargs="+", default=[20, 80])
-    parser.add_argument("--criterion", default="MI2b")
-    parser.add_argument("--forces", default="quadrature", help="intrusive, quadrature, ecsw, step")
-    parser.add_argument("--levels", type=int, default=10, help="load levels on each side of delta = 0")
-    parser.add_argument("--global-md", type=int, default=3,
-                        help="also build r_MD = 0 + the MDs of the first N clamped normal modes (0: skip)")
-    parser.add_argument("--out", default="results/reduced_blade")
-    args = parser.parse_args(argv)
-    logging.basicConfig(level=logging.WARNING, force=True)
-    logging.getLogger().handlers[0].setLevel(logging.WARNING)
-    out = Path(args.out)
-    sector = fem.create_blade_sector(preset=args.preset)
-    ops = fem.create_svk_operators(sector)
-    exact = fem.compute_clamped_modes(sector, 3, ops).omega
-    print(f"blade: {args.preset} preset, {sector.n_dofs} DOF; clamped 1B/1T/2B {np.round(exact, 1)} rad/s")
-    roms = {}
-    print(f"\n{'ROM':>20} {'r':>4} {'offline (s)':>11} {'omega_1..3 error':>22}")
-    variants = [(r_md, 0) for r_md in args.r_md] + ([(0, args.global_md)] if args.global_md else [])
-    for r_md, n_global in variants:
-        config = ReductionConfig(r_c=args.r_c, r_md=r_md, criterion=args.criterion, forces=args.forces,
-                                 global_md_modes=n_global)
+@dataclasses.dataclass(frozen=True)
+class ReducedBladeConfig:
+    """The blade, the reduced models and the clearance study.
+
+    Attributes:
+        preset: mesh preset: ci, coarse or paper.
+        table: 'none' (the built-in parametric blade), 'auto' (the shared NASA Table IV) or a Table IV file.
+        r_c: fixed-interface modes of every model (>= 1).
+        r_md: one model per entry, with that many modal derivatives selected by ``criterion`` (each >= 0).
+        criterion: modal-derivative selection: MMI, MI2a, MI2b, SMVW or random.
+        forces: reduced nonlinear forces: intrusive (exact cubic tensors), quadrature (exact, tensor-free), step
+            or ecsw.
+        levels: load levels on each side of delta = 0 (1..50).
+        global_md: also a model with r_MD = 0 and the modal derivatives of the first N clamped modes (0: none; 0..10).
+        out: output folder (charts; the models are cached in <out>/cache).
+    """
+
+    preset: str = "ci"
+    table: str = "none"
+    r_c: int = 15
+    r_md: tuple[int, ...] = (20, 80)
+    criterion: str = "MI2b"
+    forces: str = "quadrature"
+    levels: int = 10
+    global_md: int = 3
+    out: Path = Path("results/reduced_blade")
+
+    def __post_init__(self):
+        if self.preset not in MESH_PRESETS:
+            raise ValueError(f"--preset must be one of {', '.join(MESH_PRESETS)}, got {self.preset!r}")
+        if not self.r_c >= 1:
+            raise ValueError(f"--r-c must be >= 1, got {self.r_c}")
+        object.__setattr__(self, "r_md", tuple(int(r) for r in self.r_md))
+        if any(r < 0 for r in self.r_md):
+            raise ValueError(f"--r-md: each value must be >= 0, got {list(self.r_md)}")
+        if self.criterion not in CRITERIA:
+            raise ValueError(f"--criterion must be one of {', '.join(CRITERIA)}, got {self.criterion!r}")
+        if self.forces not in FORCES:
+            raise ValueError(f"--forces must be one of {', '.join(FORCES)}, got {self.forces!r}")
+        if not 1 <= self.levels <= 50:
+            raise ValueError(f"--levels must be in [1, 50], got {self.levels}")
+        if not 0 <= self.global_md <= 10:
+            raise ValueError(f"--global-md must be in [0, 10], got {self.global_md}")
+        if not self.r_md and not self.global_md:
+            raise ValueError("--r-md and --global-md: no model to build (give an --r-md value or --global-md >= 1)")
+        object.__setattr__(self, "table", str(self.table))
+        object.__setattr__(self, "out", Path(self.out))
+        resolve_table(self.table)
+
+    def variants(self) -> list[tuple[str, int, int]]:
+        """(name, r_MD, number of clamped modes whose MDs are added) of every model."""
+        rows = [(f"ROM r_MD={r_md}", r_md, 0) for r_md in self.r_md]
+        if self.global_md:
+            n = self.global_md
+            rows.append((f"ROM {n * (n + 1) // 2} global MDs", 0, n))
+        return rows
+# -
+
+
+# ## Results
+#
+# One `ClearanceStudy` per mode: the curves Delta(delta) of the full-order model (linear and nonlinear) and of each
+# reduced model, with the two numbers the paper quotes: where the linear model stays within 10 % of the nonlinear one,
+# and each reduced model's largest error.
+
+# +
+@dataclasses.dataclass(frozen=True)
+class ClearanceStudy:
+    """Clearance consumption along one mode (curves in m, deltas in [-1, 1])."""
+
+    curves: ClearanceCurves
+
+    @property
+    def reference(self) -> np.ndarray:
+        """The full-order nonlinear curve."""
+        return self.curves.curves["FOM nonlinear"]
+
+    def error(self, name: str) -> np.ndarray:
+        """Relative error of curve ``name`` against the full-order nonlinear one at every delta (NaN at 0)."""
+        return relative_error(self.curves.curves[name], self.reference)
+
+    def max_error(self, name: str) -> float:
+        """Largest relative error of curve ``name`` over delta in [-1, 1] (NaN if its statics failed)."""
+        err = self.error(name)
+        return float(np.nanmax(err)) if np.isfinite(self.curves.curves[name]).any() else float("nan")
+
+    @property
+    def linear_range(self) -> tuple[float, float]:
+        """The interval of delta around 0 where the linear model is within 10 % of the nonlinear one."""
+        return delta_range_within(self.curves.deltas, self.error("FOM linear"))
+
+
+@dataclasses.dataclass(frozen=True)
+class ReducedBladeResult:
+    """What ``run_reduced_blade`` produced.
+
+    Attributes:
+        sector: the blade (rotor37_rom.fem.Sector) the models were built on.
+        omega: its first three clamped frequencies (rad/s).
+        models: {name: ReducedModel}; seconds: {name: offline wall time (s)}.
+        clearance: {'1B' | '1T': ClearanceStudy}.
+        files: the charts written.
+    """
+
+    sector: object
+    omega: np.ndarray
+    models: dict[str, ReducedModel]
+    seconds: dict[str, float]
+    clearance: dict[str, ClearanceStudy]
+    files: list[Path]
+
+    def frequency_errors(self, name: str) -> np.ndarray:
+        """Relative error of the model's first three frequencies against the full-order ones."""
+        import scipy.linalg
+
+        model = self.models[name]
+        return np.sqrt(scipy.linalg.eigh(model.K, model.M, eigvals_only=True)[:3]) / self.omega - 1.0
+# -
+
+
+# ## The models
+#
+# Built through `rotor37_rom.builder` (Craig-Bampton, modal derivatives, reduced forces) and cached under a key of
+# their parameters and mesh: a second run loads them.
+
+# +
+def build_models(config: ReducedBladeConfig, sector, ops) -> tuple[dict, dict, list[Path]]:
+    """Every model of ``config``: ({name: model}, {name: seconds}, the weight charts)."""
+    from rotor37_rom.builder import ReductionConfig, build_reduced_model
+    from rotor37_rom.charts import plot_md_weights
+
+    models, seconds, files = {}, {}, []
+    for name, r_md, n_global in config.variants():
+        reduction = ReductionConfig(r_c=config.r_c, r_md=r_md, criterion=config.criterion, forces=config.forces,
+                                    global_md_modes=n_global)
         t0 = time.perf_counter()
-        model, report = build_reduced_model(sector, config, ops=ops, cache_dir=out / "cache")
-        wall = time.perf_counter() - t0
-        name = f"ROM r_MD={r_md}" if not n_global else f"ROM {n_global * (n_global + 1) // 2} global MDs"
-        roms[name] = model
-        lam = scipy.linalg.eigh(model.K, model.M, eigvals_only=True)
-        err = np.sqrt(lam[:3]) / exact - 1.0
-        print(f"{name:>20} {model.r:>4} {wall:>11.1f} {np.array2string(err, precision=1, floatmode='fixed')}")
+        model, report = build_reduced_model(sector, reduction, ops=ops, cache_dir=config.out / "cache")
+        models[name], seconds[name] = model, time.perf_counter() - t0
         if "weights" in report and r_md:
-            plot_md_weights(report["weights"], report["pairs"], model.sizes["r_b"],
-                            out / f"md_weights_{args.criterion}_{r_md}.png",
-                            f"{args.criterion} weights, r_MD = {r_md} selected")
-    for mode, zeta in (("1B", 1e-3), ("1T", 0.5e-3)):
-        curves = clearance_consumption_study(sector, mode, zeta, args.levels, roms, ops)
-        plot_clearance_consumption(curves, out / f"clearance_{mode}.png")
-        ref = curves.curves["FOM nonlinear"]
-        accuracy = []
-        print(f"\nclearance consumption at node LE along {mode} (zeta = {zeta * 1e3:g} mm along e_x)")
+            files.append(plot_md_weights(report["weights"], report["pairs"], model.sizes["r_b"],
+                                         config.out / f"md_weights_{config.criterion}_{r_md}.png",
+                                         f"{config.criterion} weights, r_MD = {r_md} selected"))
+    return models, seconds, files
+# -
+
+
+# ## Clearance consumption
+#
+# Static analyses under delta f^X, delta in [-1, 1], with f^X = K phi^X and phi^X scaled to move node LE by zeta
+# along e_x: full order linear and nonlinear, and each reduced model (nonlinear).
+
+# +
+def study_clearance(config: ReducedBladeConfig, sector, ops, models: dict) -> tuple[dict, list[Path]]:
+    """The clearance studies of 1B and 1T and their charts."""
+    from rotor37_rom.builder import clearance_consumption_study
+    from rotor37_rom.charts import plot_clearance_consumption, plot_indicator_vs_rmd, plot_speed_accuracy
+
+    studies, files = {}, []
+    for mode, zeta in AMPLITUDES.items():
+        study = ClearanceStudy(clearance_consumption_study(sector, mode, zeta, config.levels, models, ops))
+        studies[mode] = study
+        files.append(plot_clearance_consumption(study.curves, config.out / f"clearance_{mode}.png"))
+        accuracy = [(name, study.curves.costs[name], study.max_error(name)) for name in study.curves.curves
+                    if name in study.curves.costs and name != "FOM nonlinear" and np.isfinite(study.max_error(name))]
+        files.append(plot_speed_accuracy(accuracy, config.out / f"speed_accuracy_{mode}.png",
+                                         f"clearance consumption {mode}: cost vs max relative error "
+                                         "(FOM nonlinear = reference)"))
+        md_rows = [(models[n].sizes["r_md"], e) for n, _, e in accuracy if n.startswith("ROM r_MD=")]
+        if md_rows:
+            files.append(plot_indicator_vs_rmd(md_rows, config.out / f"error_vs_rmd_{mode}.png",
+                                               f"{mode}: max clearance error vs r_MD"))
+    return studies, files
+# -
+
+
+# ## The study
+
+# +
+def run_reduced_blade(config: ReducedBladeConfig) -> ReducedBladeResult:
+    """Mesh the blade, build the models, run both clearance studies (serial)."""
+    from mpi4py import MPI
+
+    from rotor37_rom import fem
+
+    if MPI.COMM_WORLD.size > 1:
+        raise ValueError("demos/reduced_blade.py runs serially")
+    sector = fem.create_blade_sector(MPI.COMM_SELF, table=resolve_table(config.table), preset=config.preset)
+    ops = fem.create_svk_operators(sector)
+    omega = np.asarray(fem.compute_clamped_modes(sector, 3, ops).omega)
+    models, seconds, files = build_models(config, sector, ops)
+    studies, charts = study_clearance(config, sector, ops, models)
+    return ReducedBladeResult(sector, omega, models, seconds, studies, files + charts)
+# -
+
+
+# ## Command line
+
+# +
+def print_report(config: ReducedBladeConfig, result: ReducedBladeResult) -> None:
+    """Each model's size, cost and frequency error; each curve's end values, error and cost."""
+    print(f"blade: {config.preset} preset, {result.sector.n_dofs} DOF; clamped 1B/1T/2B {np.round(result.omega, 1)} "
+          "rad/s")
+    print(f"\n{'ROM':>20} {'r':>4} {'offline (s)':>11} {'omega_1..3 error':>22}")
+    for name, model in result.models.items():
+        err = np.array2string(result.frequency_errors(name), precision=1, floatmode="fixed")
+        print(f"{name:>20} {model.r:>4} {result.seconds[name]:>11.1f} {err}")
+    for mode, study in result.clearance.items():
+        curves = study.curves
+        print(f"\nclearance consumption at node LE along {mode} (zeta = {curves.zeta * 1e3:g} mm along e_x)")
         print(f"{'model':>20} {'Delta(-1) mm':>12} {'Delta(+1) mm':>12} {'max rel. err':>12} "
               f"{'<=10 % for delta in':>20} {'cost (s)':>9}")
         for name, values in curves.curves.items():
@@ -81,26 +255,41 @@ def main(argv=None) -> int:
             if not np.isfinite(values).any():
                 print(f"{name:>20} {'no equilibrium: the reduced Newton lost it (poor basis)':>57} {cost:>9.1f}")
                 continue
-            err = relative_error(values, ref)
-            lo, hi = delta_range_within(curves.deltas, err)
-            print(f"{name:>20} {values[0] * 1e3:>12.4f} {values[-1] * 1e3:>12.4f} {np.nanmax(err):>12.3f} "
+            lo, hi = delta_range_within(curves.deltas, study.error(name))
+            print(f"{name:>20} {values[0] * 1e3:>12.4f} {values[-1] * 1e3:>12.4f} {study.max_error(name):>12.3f} "
                   f"{f'[{lo:+.2f}, {hi:+.2f}]':>20} {cost:>9.1f}")
-            if name != "FOM nonlinear" and np.isfinite(cost):
-                accuracy.append((name, cost, float(np.nanmax(err))))
         print(f"paper: the linear model's error exceeds 10 % outside {list(PAPER_LINEAR_RANGE[mode])}")
-        plot_speed_accuracy(accuracy, out / f"speed_accuracy_{mode}.png",
-                            f"clearance consumption {mode}: cost vs max relative error (FOM nonlinear = reference)")
-        md_rows = [(roms[n].sizes["r_md"], e) for n, _, e in accuracy if n.startswith("ROM r_MD=")]
-        if md_rows:
-            plot_indicator_vs_rmd(md_rows, out / f"error_vs_rmd_{mode}.png", f"{mode}: max clearance error vs r_MD")
-    print(f"\ncharts in {out}/")
+    print(f"\ncharts in {config.out}/")
+
+
+def build_parser() -> ArgumentParser:
+    parser = ArgumentParser(description="reduced models of the blade and their clearance consumption")
+    parser.add_argument("--preset", default="ci", help=f"mesh preset: {', '.join(MESH_PRESETS)} (default ci)")
+    parser.add_argument("--table", default="none", help=TABLE_HELP + " (default none)")
+    parser.add_argument("--r-c", type=int, default=15, help="fixed-interface modes (>= 1, default 15)")
+    parser.add_argument("--r-md", type=int, nargs="*", default=[20, 80],
+                        help="one model per value, with that many selected modal derivatives (default 20 80)")
+    parser.add_argument("--criterion", default="MI2b", help=f"MD selection: {', '.join(CRITERIA)} (default MI2b)")
+    parser.add_argument("--forces", default="quadrature", help=f"reduced forces: {', '.join(FORCES)}")
+    parser.add_argument("--levels", type=int, default=10, help="load levels on each side of delta = 0 (1..50)")
+    parser.add_argument("--global-md", type=int, default=3,
+                        help="also build r_MD = 0 + the MDs of the first N clamped normal modes (0: skip; 0..10)")
+    parser.add_argument("--out", type=Path, default=Path("results/reduced_blade"), help="output folder")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Parse the options, run the study, print the tables; raises ValueError for a bad input."""
+    args = build_parser().parse_args(argv)
+    config = ReducedBladeConfig(preset=args.preset, table=args.table, r_c=args.r_c, r_md=tuple(args.r_md),
+                                criterion=args.criterion, forces=args.forces, levels=args.levels,
+                                global_md=args.global_md, out=args.out)
+    logging.basicConfig(level=logging.WARNING, force=True)
+    logging.getLogger().handlers[0].setLevel(logging.WARNING)
+    print_report(config, run_reduced_blade(config))
     return 0
 
 
 if __name__ == "__main__":
-    try:
-        sys.exit(main())
-    except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2)
+    sys.exit(run_main(main))
 # -

@@ -11,11 +11,12 @@ __all__ = ["stress_at_peak", "disk_stress", "TIP_BAND"]
 TIP_BAND = 0.1     # cells closer to a contact node than this fraction of the span are reported apart
 
 
-def stress_at_peak(sector, model, recovery, result, nonlinear: bool, sim: int = 0) -> dict:
-    """t_max (largest radial displacement of node LE toward the casing) and von Mises there: the maximum over the
-    blade except the cells within 10 % of the span of a contact node, and apart, the maximum in that tip band and in
-    the cells touching a contact node (point contact forces make the FE stress singular there: it grows under mesh
-    refinement)."""
+def stress_at_peak(sector, model, recovery, result, nonlinear: bool, sim: int = 0, magnitude: bool = False) -> dict:
+    """t_max (largest radial displacement of node LE toward the casing; with ``magnitude``, largest in either sense,
+    the NFRC's max |u_LE|: in the paper's Fig. 25 the blade swings away from the casing there, free of contact
+    forces) and von Mises there: the maximum over the blade except the cells within 10 % of the span of a contact node,
+    and apart, the maximum in that tip band and in the cells touching a contact node (point contact forces make the FE
+    stress singular there: it grows under mesh refinement)."""
     if result is None or result.records_q is None:
         raise ValueError("no simulation with recorded states yet: run the contact simulation first (record_q=True)")
     if not 0 <= sim < len(result.t):
@@ -23,7 +24,7 @@ def stress_at_peak(sector, model, recovery, result, nonlinear: bool, sim: int = 
     t, u_le = result.t[sim], result.u_r[sim][result.row("0:LE")]
     if not np.isfinite(u_le).any():
         raise ValueError("the simulation has no finite record of node LE (diverged?)")
-    k = int(np.nanargmax(u_le))
+    k = int(np.nanargmax(np.abs(u_le) if magnitude else u_le))
     q = result.records_q[sim][:, k]
     cell_max = recovery.cell_max(q, nonlinear)
     nodes = model.nodes.coordinates[model.nodes.sector == 0]        # the contact nodes on this sector's mesh

@@ -20,8 +20,8 @@ import numpy as np
 from rotor37_rom.casing import Casing
 from rotor37_rom.integrator import CentralDifference, simulate
 
-__all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "interaction_map", "InteractionMap", "record_row",
-           "last_revolution_max",
+__all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "load_speed", "sweep_folder", "interaction_map",
+           "InteractionMap", "engine_order_resonance", "record_row", "last_revolution_max",
            "continuation", "ContinuationPoint", "is_steady"]
 
 LOG = logging.getLogger(__name__)
@@ -63,6 +63,17 @@ def _speed_file(folder: Path, omega: float) -> Path:
     return folder / f"omega_{omega:012.4f}.npz"
 
 
+def sweep_folder(scheme: CentralDifference, spec: SweepSpec, out: str | Path) -> Path:
+    """The folder under ``out`` where ``run_sweep`` writes the speeds of ``scheme`` and ``spec``."""
+    return Path(out) / _key(scheme, spec)
+
+
+def load_speed(folder: str | Path, omega: float) -> dict | None:
+    """The record of one speed of a sweep folder (as ``load_sweep`` gives it); None if it is absent or unreadable."""
+    path = _speed_file(Path(folder), float(omega))
+    return _load_result(path) if path.exists() else None
+
+
 def _atomic_savez(path: Path, **arrays) -> None:
     tmp = path.with_name(path.name + f".tmp{os.getpid()}.npz")
     np.savez(tmp, **arrays)
@@ -88,7 +99,7 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
     if speeds.size == 0 or speeds.min() <= 0:
         raise ValueError("speeds: give at least one angular speed Omega > 0 rad/s")
     rank, size = (comm.rank, comm.size) if comm is not None else (0, 1)
-    folder = Path(out) / _key(scheme, spec)
+    folder = sweep_folder(scheme, spec, out)
     if rank == 0:
         folder.mkdir(parents=True, exist_ok=True)
         (folder / "spec.json").write_text(json.dumps({"h": scheme.h, "nonlinear": scheme.nonlinear,
@@ -271,6 +282,29 @@ def interaction_map(results: Sequence[dict], node: str = LE, f_max: float = 3000
         amp.append(np.interp(freqs, w, spec))
         nfrc.append(last_revolution_max(t, u, om))
     return InteractionMap(np.array(speeds), freqs, np.array(amp), np.array(nfrc), np.array(div))
+
+
+def engine_order_resonance(imap: InteractionMap, order: int, revolutions: float) -> float:
+    """The resonance of an engine-order interaction in a zero-IC map (paper §2.3.1: the 1B/EO4 resonance is
+    ``order`` = 4): the speed of largest NFRC among the bounded speeds whose response is dominated by that engine
+    order, i.e. whose largest spectral peak above Omega / 2 lies within the spectrum's resolution of order x Omega:
+    one bin of the transform of the run's second half (2 Omega / ``revolutions``) or two steps of the map's frequency
+    grid, whichever is larger. NaN when no bounded speed is dominated by that order.
+
+    In 1200-1600 rad/s only 1B is near 4 Omega (omega_1 = 5414 rad/s on the ci blade); the largest response of a
+    short map can be a higher mode's crossing instead (e.g. 1T near 10 Omega), which this leaves out."""
+    if not order >= 1 or not revolutions > 0:
+        raise ValueError(f"need order >= 1 and revolutions > 0, got {order}, {revolutions}")
+    grid = imap.frequencies[1] - imap.frequencies[0]
+    best, speed = -np.inf, np.nan
+    for omega, spectrum, amplitude in zip(imap.speeds, imap.amplitude, imap.nfrc):
+        if not np.isfinite(amplitude):
+            continue
+        above = imap.frequencies > omega / 2
+        dominant = imap.frequencies[above][np.argmax(spectrum[above])]
+        if abs(dominant - order * omega) <= max(2 * omega / revolutions, 2 * grid) and amplitude > best:
+            best, speed = amplitude, float(omega)
+    return speed
 
 
 def is_steady(t: np.ndarray, u: np.ndarray, omega: float, tol: float = 0.02, window: int = 1) -> bool:

@@ -100,3 +100,18 @@ def ci_rom(ci_blade, ci_ops, tmp_path_factory):
     config = ReductionConfig(r_c=15, r_md=0, global_md_modes=3, forces="intrusive")
     model, _ = build_reduced_model(ci_blade, config, ops=ci_ops, cache_dir=tmp_path_factory.mktemp("rom"))
     return model
+
+
+def load_demo(name: str):
+    """Import demos/<name>.py as a module (demos/ is not a package); tests import it with
+    ``from conftest import load_demo``."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "demos" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"demo_{name}", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module

@@ -1,7 +1,6 @@
 """Importable demos (#18): demos/contact_map.py's work is run_contact_map(ContactMapConfig) -> ContactMapResult, which
 a test calls in-process; its command line is that configuration, and a bad input is one line on stderr naming the
 option, with exit status 2."""
-import importlib.util
 import json
 import os
 import subprocess
@@ -13,17 +12,11 @@ import pytest
 
 from rotor37_rom import sweep
 from rotor37_rom.reduction import save_reduced_model
+from conftest import load_demo  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def load_demo(name: str):
-    """Import demos/<name>.py as a module (demos/ is not a package)."""
-    spec = importlib.util.spec_from_file_location(f"demo_{name}", ROOT / "demos" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module          # dataclasses look their module up while creating the classes
-    spec.loader.exec_module(module)
-    return module
 
 
 @pytest.fixture(scope="module")

@@ -140,6 +140,27 @@ def test_interaction_map_spectrum_and_steady_state():
         is_steady(t, u, omega, window=0)
 
 
+def test_engine_order_resonance_picks_the_1b_eo4_speeds():
+    """Synthetic maps of 8 revolutions: at 1300 and 1400 rad/s the response is a 4 Omega tone (1B/EO4), at 1560 a
+    larger 10 Omega tone (a higher mode's crossing) over a smaller 4 Omega one, at 1500 the run diverged. The 1B/EO4
+    resonance is the largest of the EO4-dominated speeds (1400), not the largest response (1560); with order 10 it is
+    1560; a map without EO4-dominated bounded speed has none (NaN)."""
+    revolutions, records = 8, []
+    for omega, a4, a10, diverged in ((1300.0, 2e-4, 1e-5, -1), (1400.0, 5e-4, 1e-5, -1), (1500.0, 9e-4, 0.0, 100),
+                                     (1560.0, 1e-4, 8e-4, -1)):
+        t = np.arange(0, revolutions * 2 * np.pi / omega, 1e-5)
+        u = a4 * np.sin(4 * omega * t) + a10 * np.sin(10 * omega * t)
+        records.append({"t": t, "u_r": u[None, :], "omega": omega, "diverged_step": diverged,
+                        "labels": np.array(["0:LE"])})
+    imap = interaction_map(records)
+    assert imap.speeds[np.nanargmax(imap.nfrc)] == 1560.0
+    assert sweep_mod.engine_order_resonance(imap, 4, revolutions) == 1400.0
+    assert sweep_mod.engine_order_resonance(imap, 10, revolutions) == 1560.0
+    assert np.isnan(sweep_mod.engine_order_resonance(interaction_map(records[3:]), 4, revolutions))
+    with pytest.raises(ValueError, match="revolutions > 0"):
+        sweep_mod.engine_order_resonance(imap, 4, 0)
+
+
 def test_diverged_runs_are_reported_as_results(ci_rom):
     """A run that blows up is a result: on_finish receives it with its step (run_sweep saves it, so a resumed sweep
     does not redo it), and the map draws it as NaN."""
