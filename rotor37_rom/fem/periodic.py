@@ -209,7 +209,7 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int, load: 
     for k in range(start, n_steps + 1):
         x, v, a, it = advance_adaptive(x, v, a, k * dt, dt)
         its.append(it)
-        per_sector = np.array([P @ x for P in maps])
+        per_sector = system.fields(x)
         tips.append(per_sector[:, tip])
         if k % snapshot_every == 0:
             fields.append(per_sector)
