@@ -24,7 +24,7 @@ $(STAMP): pyproject.toml /usr/lib/x86_64-linux-gnu/openblas-pthread/libblas.so.3
 	  (apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q $(APT_PKGS))
 	test -x $(PY) || /usr/bin/python3 -m venv --system-site-packages $(VENV)
 	/usr/bin/python3 -c "import numpy; print('numpy==' + numpy.__version__)" > $(VENV)/constraints.txt
-	$(PY) -m pip install -q -c $(VENV)/constraints.txt pyvista matplotlib tqdm pytest
+	$(PY) -m pip install -q -c $(VENV)/constraints.txt pyvista matplotlib tqdm "meshio>=5.3,<6" pytest
 	$(PY) -m pip install -q -c $(VENV)/constraints.txt --no-build-isolation --no-deps -e .
 	$(PY) -c "import numpy, dolfinx; assert numpy.__version__ == '$$(/usr/bin/python3 -c 'import numpy; print(numpy.__version__)')'"
 	# OpenBLAS 0.3.21 falls back to SSE3 kernels on CPUs it does not know (6x slower dgemm here): see blas_check.py

@@ -99,6 +99,7 @@ class BladeModel:
         tip_nodes: coordinates (n_tip, 3) of the tip contact nodes, LE first, TE last (m).
         preset: the mesh preset used.
         n_nodes: mesh nodes (order-1 mesh).
+        summary: one line on what was read or meshed (imported files), with the bounding box.
     """
 
     source: str
@@ -106,6 +107,7 @@ class BladeModel:
     tip_nodes: np.ndarray
     preset: MeshPreset
     n_nodes: int
+    summary: str = ""
 
 
 _SESSION_DEPTH = [0]
@@ -410,47 +412,82 @@ def _faces_in_box(box: Sequence[float], what: str, path: Path) -> list[int]:
     return faces
 
 
+def _scale_for(scale: float, units: str | None) -> float:
+    from .mesh_import import UNITS
+
+    if units is not None:
+        if units not in UNITS:
+            raise ValueError(f"units must be one of {', '.join(UNITS)}, got {units!r}")
+        if scale != 1.0 and scale != UNITS[units]:
+            raise ValueError(f"scale = {scale} and units = {units!r} disagree: give one of them")
+        scale = UNITS[units]
+    if not (np.isfinite(scale) and scale > 0):
+        raise ValueError(f"scale must be > 0 (file units to metres, e.g. 1e-3 for mm), got {scale}")
+    return float(scale)
+
+
 def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], tip: str | Sequence[float] | None = None,
-                       preset: str | MeshPreset = "coarse", scale: float = 1.0) -> BladeModel:
-    """Load a user's blade: a CAD file (STEP, BREP: meshed with the preset) or a gmsh mesh file (.msh: used as is).
+                       preset: str | MeshPreset = "coarse", scale: float = 1.0, units: str | None = None,
+                       contact=None) -> BladeModel:
+    """Load a user's blade into the current gmsh model: a CAD file (STEP, BREP: meshed with the preset) or a mesh
+    from another FE code (gmsh .msh, Abaqus/CalculiX .inp, NASTRAN .bdf/.nas, VTK .vtk/.vtu; wedges, hexahedra and
+    pyramids are split into conforming tetrahedra, see geometry.mesh_import).
 
     Args:
         path: the file.
-        clamp: for .msh, the name of a surface physical group; for CAD, a box (xmin, ymin, zmin, xmax, ymax, zmax)
-            in metres (after scaling) enclosing the clamped faces.
-        tip: the tip faces, given the same way (optional; the tip contact nodes are then the tip face's vertices).
+        clamp: the name of any group of a mesh file (node set, element set, physical group), or a box
+            (xmin, ymin, zmin, xmax, ymax, zmax) in metres (after scaling) enclosing the clamped faces (CAD: only a
+            box; formats without groups, such as .bdf or .vtu as meshio reads them: a box).
+        tip: the tip, given the same way (optional).
         preset: mesh preset for CAD files.
-        scale: factor from file units to metres (e.g. 1e-3 for mm).
+        scale: factor from file units to metres (e.g. 1e-3 for mm), applied to every kind of input.
+        units: 'm', 'mm', 'cm' or 'in' instead of scale.
+        contact: the contact nodes, always ordered LE -> TE along the tip chord: a number N (N nodes along the tip
+            camber line; default 8 when a tip is given), a group name, an (n, 3) array of coordinates (m, after
+            scaling; the nearest nodes) or a 1-D sequence of node indices (0-based, the mesh file's node order).
     """
     import gmsh
+
+    from . import mesh_import
 
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"blade file {path} does not exist")
     suffix = path.suffix.lower()
-    if suffix not in (".step", ".stp", ".brep", ".msh"):
-        raise ValueError(f"blade file {path}: unsupported type {suffix!r}; allowed: .step, .stp, .brep, .msh")
-    if not scale > 0:
-        raise ValueError(f"scale must be > 0, got {scale}")
+    cad = (".step", ".stp", ".brep")
+    if suffix not in cad + mesh_import.MESH_SUFFIXES:
+        raise ValueError(f"blade file {path}: unsupported type {suffix!r}; allowed: "
+                         f"{', '.join(cad + mesh_import.MESH_SUFFIXES)}")
+    scale = _scale_for(scale, units)
     preset = get_mesh_preset(preset)
+    if contact is None and tip is not None:
+        contact = N_TIP_NODES
+    if contact is not None and tip is None and isinstance(contact, (int, np.integer)):
+        raise ValueError("contact: a number of nodes along the tip camber line needs the tip (tip=...)")
     gmsh.model.add("user_blade")
-    if suffix == ".msh":
-        try:
-            gmsh.merge(str(path))
-        except Exception as exc:  # gmsh raises a bare Exception with its log line
-            raise ValueError(f"blade file {path} could not be read by gmsh ({str(exc).splitlines()[0]})") from None
-        names = {gmsh.model.getPhysicalName(d, t): (d, t) for d, t in gmsh.model.getPhysicalGroups()}
-        for what, name in (("clamp", clamp), ("tip", tip)):
-            if name is not None and (not isinstance(name, str) or name not in names or names[name][0] != 2):
-                raise ValueError(f"{what}: mesh file {path} has no surface physical group named {name!r}; "
-                                 f"it has {sorted(n for n in names if n)}")
-        vols = gmsh.model.getEntities(3)
-        volume = sum(gmsh.model.occ.getMass(3, t) for _, t in vols) if gmsh.model.occ.getEntities(3) else float("nan")
+    if suffix in mesh_import.MESH_SUFFIXES:
+        mesh = mesh_import.read_mesh(path, scale)
+        facets = mesh_import.boundary_facets(mesh.tets)
+        groups = {}
+        for tag, what, name in ((BladeGroup.CLAMP, "clamp", clamp), (BladeGroup.TIP, "tip", tip)):
+            if name is None:
+                continue
+            nodes = mesh.nodes_of(name, what)
+            inside = np.isin(facets[:, :3], nodes).all(axis=1)
+            if not inside.any():
+                raise ValueError(f"{what}: {name!r} of {path} covers no boundary facet (all three corners of a "
+                                 f"facet must be in it)")
+            groups[(int(tag), what)] = facets[inside]
+        tip_group = np.unique(groups[(int(BladeGroup.TIP), "tip")]) if tip is not None else np.zeros(0, np.int64)
         tip_nodes = np.zeros((0, 3))
-        if tip is not None:
-            tip_nodes = gmsh.model.mesh.getNodesForPhysicalGroup(2, names[tip][1])[1].reshape(-1, 3)
-        return BladeModel(source=f"file:{path}", volume=volume, tip_nodes=tip_nodes, preset=preset,
-                          n_nodes=len(gmsh.model.mesh.getNodes()[0]))
+        if contact is not None:
+            if isinstance(contact, str):
+                contact = mesh.group(contact, "contact")
+            nodes, _ = mesh_import.select_contact_nodes(mesh.points, tip_group, contact)
+            tip_nodes = mesh.points[nodes]
+        mesh_import.add_to_gmsh(mesh, groups, int(BladeGroup.BLADE))
+        return BladeModel(source=f"file:{path}", volume=mesh.volume() if not mesh.quadratic else float("nan"),
+                          tip_nodes=tip_nodes, preset=preset, n_nodes=len(mesh.points), summary=mesh.summary())
     try:
         entities = gmsh.model.occ.importShapes(str(path))
     except Exception as exc:
@@ -472,7 +509,19 @@ def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], ti
     _apply_mesh_preset(preset)
     gmsh.model.mesh.generate(3)
     tip_nodes = np.zeros((0, 3))
-    if tip is not None:
-        tip_nodes = gmsh.model.mesh.getNodesForPhysicalGroup(2, BladeGroup.TIP)[1].reshape(-1, 3)
+    if contact is not None:
+        if isinstance(contact, str):
+            raise ValueError("contact: a CAD file has no named node groups; give a number of nodes along the tip "
+                             "camber line, coordinates or node indices")
+        tags, x, _ = gmsh.model.mesh.getNodes()
+        x = x.reshape(-1, 3)
+        tip_tags = gmsh.model.mesh.getNodesForPhysicalGroup(2, BladeGroup.TIP)[0] if tip is not None else []
+        index = {int(t): k for k, t in enumerate(tags)}
+        nodes, _ = mesh_import.select_contact_nodes(x, np.array([index[int(t)] for t in tip_tags], np.int64),
+                                                    contact)
+        tip_nodes = x[nodes]
+    lo, hi = np.array(gmsh.model.getBoundingBox(-1, -1)).reshape(2, 3)
+    summary = (f"{path}: meshed with preset {preset.name}, {len(gmsh.model.mesh.getNodes()[0]):,} nodes; bounding box "
+               f"[{lo[0]:.4g}, {hi[0]:.4g}] x [{lo[1]:.4g}, {hi[1]:.4g}] x [{lo[2]:.4g}, {hi[2]:.4g}] m")
     return BladeModel(source=f"file:{path}", volume=sum(gmsh.model.occ.getMass(3, v) for v in volumes),
-                      tip_nodes=tip_nodes, preset=preset, n_nodes=len(gmsh.model.mesh.getNodes()[0]))
+                      tip_nodes=tip_nodes, preset=preset, n_nodes=len(gmsh.model.mesh.getNodes()[0]), summary=summary)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +25,8 @@ from rotor37_rom.geometry.tables import read_blade_table
 from .operators import assemble_scalar
 
 __all__ = ["Sector", "create_blade_sector", "create_sector_from_file", "create_sector_from_gmsh",
-           "create_sector_from_mesh", "tip_node_names", "clamp_cell_group", "build_on_rank0", "locate_cyclic_pairs"]
+           "create_sector_from_mesh", "tip_node_names", "clamp_cell_group", "build_on_rank0", "locate_cyclic_pairs",
+           "write_sector_mesh"]
 
 LOG = logging.getLogger(__name__)
 
@@ -52,6 +54,7 @@ class Sector:
             left[i] turned by 2 pi / N), None for a single blade.
         volume: CAD volume (m^3).
         source: where the geometry came from; preset: mesh preset name.
+        summary: one line on what was read or meshed (files brought in from elsewhere), else ''.
     """
 
     mesh: object
@@ -68,6 +71,7 @@ class Sector:
     volume: float
     source: str
     preset: str
+    summary: str = ""
 
     @property
     def comm(self) -> MPI.Comm:
@@ -121,6 +125,8 @@ def create_sector_from_gmsh(comm: MPI.Comm, model_info, material: Material, degr
     sector = create_sector_from_mesh(mesh, cell_tags, facet_tags, names, material, degree,
                                      np.asarray(model_info.tip_nodes, dtype=float).reshape(-1, 3),
                                      float(model_info.volume), model_info.source, preset)
+    if getattr(model_info, "summary", ""):
+        sector = dataclasses.replace(sector, summary=model_info.summary)
     n_sectors = getattr(model_info, "n_sectors", 0)
     if n_sectors:                            # a cyclic sector: pair its faces now
         sector = dataclasses.replace(sector, cyclic=locate_cyclic_pairs(sector, n_sectors))
@@ -196,10 +202,25 @@ def create_blade_sector(comm: MPI.Comm = MPI.COMM_WORLD, table: str | Path | Non
 
 def create_sector_from_file(path: str | Path, clamp, tip=None, comm: MPI.Comm = MPI.COMM_WORLD,
                             preset="coarse", material: Material | None = None, degree: int = 2,
-                            scale: float = 1.0) -> Sector:
-    """A user's blade from a STEP/BREP/MSH file (see geometry.blade.import_blade_model for clamp/tip)."""
-    return build_on_rank0(comm, lambda: blade_geometry.import_blade_model(path, clamp, tip, preset, scale),
-                          material or Material(), degree, str(preset), str(path))
+                            scale: float = 1.0, units: str | None = None, contact=None,
+                            verbose: bool = True) -> Sector:
+    """A user's blade from a CAD file (STEP/BREP) or a mesh from another FE code (.msh, .inp, .bdf/.nas, .vtk/.vtu);
+    see geometry.blade.import_blade_model for clamp, tip, scale/units and contact (the contact nodes, ordered
+    LE -> TE). With ``verbose``, rank 0 prints what was read, the bounding box and the mass, so that a unit slip
+    shows; a mass outside 1 g - 100 kg (a blade) gives a warning with the number."""
+    sector = build_on_rank0(comm, lambda: blade_geometry.import_blade_model(path, clamp, tip, preset, scale, units,
+                                                                           contact),
+                            material or Material(), degree, str(preset), str(path))
+    if not np.isfinite(sector.volume):                 # a mesh file: its volume from the mesh (curved P2 cells too)
+        sector = dataclasses.replace(sector, volume=assemble_scalar(1.0 * ufl.dx(domain=sector.mesh), sector.comm))
+    mass = sector.volume * sector.material.rho
+    if comm.rank == 0 and verbose:
+        print(f"{sector.summary}; mass {mass:.4g} kg (rho = {sector.material.rho:g} kg/m^3); "
+              f"{len(sector.tip_nodes)} contact nodes", flush=True)
+    if not 1e-3 <= mass <= 100.0:
+        warnings.warn(f"{path}: the blade's mass is {mass:.3g} kg, outside 1 g - 100 kg: are the units right "
+                      f"(scale / units=)?", stacklevel=2)
+    return sector
 
 
 def clamp_cell_group(sector: Sector, group: str) -> Sector:
@@ -280,3 +301,43 @@ def locate_cyclic_pairs(sector: Sector, n_sectors: int, rel_tol: float = 1e-6) -
              dist.max() if dist.size else 0.0)
     return CyclicPairs(int(n_sectors), triples(left), triples(right), triples(axis),
                        float(dist.max()) if dist.size else 0.0)
+
+
+def write_sector_mesh(sector: Sector, path: str | Path, units: str = "m") -> Path:
+    """Write a sector's mesh as an Abaqus/CalculiX input deck (serial; meshio): coordinates in ``units``, its
+    tetrahedra (C3D4 / C3D10), each named facet group as a node set of its facets' corners (upper-case name: CLAMP,
+    TIP, ...) and the contact nodes as the node set CONTACT.
+    ``create_sector_from_file(path, clamp='CLAMP', tip='TIP', units=units, contact='CONTACT')`` reads it back."""
+    import meshio
+    from dolfinx.cpp.io import perm_vtk
+    from dolfinx.cpp.mesh import entities_to_geometry
+
+    from rotor37_rom.geometry.mesh_import import UNITS
+
+    if sector.comm.size != 1:
+        raise ValueError("write_sector_mesh runs on one process (the mesh is distributed here)")
+    if units not in UNITS:
+        raise ValueError(f"units must be one of {', '.join(UNITS)}, got {units!r}")
+    path = Path(path)
+    if path.suffix.lower() != ".inp":
+        raise ValueError(f"write_sector_mesh writes an Abaqus/CalculiX .inp deck (the exchange format that keeps named "
+                         f"node sets), got {path.name}")
+    mesh = sector.mesh
+    x = mesh.geometry.x / UNITS[units]
+    nodes_per_cell = mesh.geometry.dofmap.offsets[1]
+    cells = mesh.geometry.dofmap.array.reshape(-1, nodes_per_cell)
+    to_vtk = np.argsort(perm_vtk(mesh.topology.cell_type, nodes_per_cell))
+    cells = cells[:, to_vtk]
+    mesh.topology.create_connectivity(mesh.topology.dim - 1, mesh.topology.dim)
+    point_sets = {}
+    for name in sorted(sector.groups):
+        facets = sector.facet_tags.find(sector.groups[name])
+        if facets.size:
+            geometry_nodes = entities_to_geometry(getattr(mesh, "_mesh", mesh),
+                                                  mesh.topology.dim - 1, facets, False)   # corners: enough
+            point_sets[name.upper()] = np.unique(geometry_nodes).astype(np.int64)
+    if len(sector.tip_nodes):
+        point_sets["CONTACT"] = cKDTree(mesh.geometry.x).query(sector.tip_nodes)[1].astype(np.int64)
+    kind = "tetra10" if nodes_per_cell == 10 else "tetra"
+    meshio.write(path, meshio.Mesh(x, [(kind, cells)], point_sets=point_sets))
+    return path

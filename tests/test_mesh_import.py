@@ -1,0 +1,328 @@
+"""Meshes from other FE codes (geometry.mesh_import, fem.create_sector_from_file): wedges, hexahedra and tetrahedra
+of one cantilever agree with each other and with beam theory; units, an Abaqus .inp round trip, group names,
+contact nodes ordered LE -> TE whatever the boundary DOFs' order, and one-line refusals."""
+import itertools
+
+import numpy as np
+import pytest
+
+from rotor37_rom import fem
+from rotor37_rom.geometry import blade as geo
+from rotor37_rom.geometry import mesh_import as mi
+
+pytestmark = pytest.mark.fe
+
+L, H = 0.05, 0.01                                   # the 50 x 10 x 10 mm steel cantilever of test_inputs_and_demo
+
+
+def _one_line(exc_info, *words):
+    msg = str(exc_info.value)
+    assert "\n" not in msg, msg
+    for w in words:
+        assert w in msg, msg
+
+
+def _bar(path, kind, n=(10, 2), unit=1.0, order=2, incomplete=True):
+    """The cantilever as gmsh makes it from another code's point of view: the h x h section at x = 0 meshed with
+    triangles or quadrangles and extruded along x in n[0] layers into tetrahedra, wedges or hexahedra (second order:
+    the serendipity 15- and 20-node cells of Abaqus' C3D15 / C3D20). Groups ROOT (x = 0), END (x = L), bar."""
+    with geo.gmsh_session() as gmsh:
+        gmsh.model.add("bar")
+        g = gmsh.model.geo
+        p = [g.addPoint(0, y * unit, z * unit) for y, z in ((0, 0), (H, 0), (H, H), (0, H))]
+        lines = [g.addLine(p[k], p[(k + 1) % 4]) for k in range(4)]
+        s = g.addPlaneSurface([g.addCurveLoop(lines)])
+        for c in lines:
+            g.mesh.setTransfiniteCurve(c, n[1] + 1)
+        g.mesh.setTransfiniteSurface(s)
+        if kind == "hex":
+            g.mesh.setRecombine(2, s)
+        out = g.extrude([(2, s)], L * unit, 0, 0, numElements=[n[0]], recombine=(kind != "tet"))
+        g.synchronize()
+        for dim, tags, tag, name in ((2, [s], 1, "ROOT"), (2, [out[0][1]], 2, "END"), (3, [out[1][1]], 3, "bar")):
+            gmsh.model.addPhysicalGroup(dim, tags, tag)
+            gmsh.model.setPhysicalName(dim, tag, name)
+        gmsh.option.setNumber("Mesh.SecondOrderIncomplete", int(incomplete))
+        gmsh.model.mesh.generate(3)
+        gmsh.model.mesh.setOrder(order)
+        gmsh.write(str(path))
+    return path
+
+
+def _omega(path, n=2, **kwargs):
+    sector = fem.create_sector_from_file(path, clamp="ROOT", preset="ci", verbose=False, **kwargs)
+    return fem.compute_clamped_modes(sector, n).omega, sector
+
+
+def test_the_smallest_node_rule_always_fills_wedges_and_hexahedra():
+    """Every order of the global node numbers gives face diagonals that 3 (wedge) or 5-6 (hexahedron) tetrahedra
+    fill exactly (volume checked inside _filling): all 6! and 8! orders."""
+    for kind, n in (("wedge", 6), ("hexahedron", 8)):
+        counts = set()
+        for perm in itertools.permutations(range(n)):
+            nodes = np.array(perm)
+            pattern = tuple(mi._diagonal(q, nodes) for q in mi._REF[kind]["quads"])
+            counts.add(len(mi._filling(kind, pattern)))
+        assert counts == ({3} if kind == "wedge" else {5, 6}), (kind, counts)
+
+
+def test_wedges_hexahedra_and_tetrahedra_give_the_cantilever(tmp_path):
+    """One cantilever meshed three ways (10 x 2 x 2 layers; wedges -> 3 tetrahedra, hexahedra -> 5 or 6, quadratic
+    cells with their own mid-nodes) and a 2x finer tetrahedral mesh. P2 eigenvalues converge as h^4, so the fine
+    mesh carries ~1/16 of a coarse mesh's error: every coarse value must lie above the fine one (Rayleigh-Ritz, all
+    conforming on the exact box) and within 1 % of it (the accuracy asked of a blade model's frequencies; each is
+    an estimate of its own discretisation error times 15/16). The fine value against beam theory with the bound of
+    test_inputs_and_demo.test_user_file_errors_and_a_cantilever: 0.99 omega_T <= omega <= 1.03 omega_T."""
+    from test_inputs_and_demo import _timoshenko_first_bending
+
+    fine, _ = _omega(_bar(tmp_path / "fine.msh", "tet", n=(20, 4)))
+    values = {kind: _omega(_bar(tmp_path / f"{kind}.msh", kind))[0] for kind in ("tet", "wedge", "hex")}
+    print({k: v[0] for k, v in values.items()}, fine[0])
+    for kind, omega in values.items():
+        assert fine[0] <= omega[0] <= 1.01 * fine[0], (kind, omega[0], fine[0])
+    E, rho = 180e9, 8000.0
+    beam = 1.8751**2 * np.sqrt(E * H**2 / 12.0 / rho / L**4)
+    omega_t = _timoshenko_first_bending(E, 0.3, rho, L, H, 5.0 / 6.0, beam)
+    assert 0.99 * omega_t <= fine[0] <= 1.03 * omega_t, (fine[0], omega_t)
+
+
+def test_linear_and_quadratic_hexahedra_of_a_box_agree_to_round_off(tmp_path):
+    """On a box every edge is straight, so the quadratic cells' mid-nodes (the file's and the new face/body
+    diagonal ones placed by the serendipity map) sit at the chord midpoints: the 8- and the 20-node hexahedral
+    meshes give the same P2 problem, the same frequencies to the eigen-solver's round-off (tolerance 1e-12)."""
+    linear, _ = _omega(_bar(tmp_path / "h8.msh", "hex", order=1))
+    quadratic, _ = _omega(_bar(tmp_path / "h20.msh", "hex", order=2))
+    np.testing.assert_allclose(linear, quadratic, rtol=1e-9)
+
+
+def test_curved_quadratic_hexahedra_keep_their_geometry(tmp_path):
+    """A 60-degree ring sector (radii 40-50 mm, 10 mm high, 4 cells along the arcs) in 20-node hexahedra, split into
+    10-node tetrahedra. The ring is an extrusion, so its exact P2 geometry is the annulus whose arcs are replaced by
+    their quadratic interpolants through the file's nodes: the mesh volume must equal that area (integrated here)
+    times the height to round-off (1e-9) - which holds only if every new face-diagonal mid-node lies on the curved
+    face's serendipity map. The 8-node mesh gives the chords' polygon the same way."""
+    from scipy.integrate import quad
+
+    def arc_area(R, n, quadratic):                  # area swept from the axis by the interpolated arc, 60 degrees
+        e = np.pi / 3 / n
+        if not quadratic:
+            return 0.5 * n * R * R * np.sin(e)
+        total = 0.0
+        for k in range(n):
+            P = np.array([[R * np.cos((k + s) * e), R * np.sin((k + s) * e)] for s in (0.0, 0.5, 1.0)])
+            shape = lambda t: np.array([2 * (t - 0.5) * (t - 1), -4 * t * (t - 1), 2 * t * (t - 0.5)])   # noqa
+            slope = lambda t: np.array([4 * t - 3, 4 - 8 * t, 4 * t - 1])                               # noqa
+            total += quad(lambda t: 0.5 * np.cross(shape(t) @ P, slope(t) @ P), 0, 1, epsabs=1e-16)[0]
+        return total
+
+    def ring(path, order):
+        with geo.gmsh_session() as gmsh:
+            gmsh.model.add("ring")
+            g = gmsh.model.geo
+            c = g.addPoint(0, 0, 0)
+            a = np.pi / 3
+            pts = [g.addPoint(r * np.cos(t), r * np.sin(t), 0) for r, t in ((0.04, 0), (0.05, 0), (0.05, a),
+                                                                           (0.04, a))]
+            lines = [g.addLine(pts[0], pts[1]), g.addCircleArc(pts[1], c, pts[2]), g.addLine(pts[2], pts[3]),
+                     g.addCircleArc(pts[3], c, pts[0])]
+            s = g.addPlaneSurface([g.addCurveLoop(lines)])
+            for k, cl in enumerate(lines):
+                g.mesh.setTransfiniteCurve(cl, 3 if k % 2 == 0 else 5)
+            g.mesh.setTransfiniteSurface(s)
+            g.mesh.setRecombine(2, s)
+            out = g.extrude([(2, s)], 0, 0, 0.01, numElements=[2], recombine=True)
+            g.synchronize()
+            gmsh.model.addPhysicalGroup(2, [s], 1)
+            gmsh.model.setPhysicalName(2, 1, "ROOT")
+            gmsh.model.addPhysicalGroup(3, [out[1][1]], 2)
+            gmsh.model.setPhysicalName(3, 2, "ring")
+            gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 1)
+            gmsh.model.mesh.generate(3)
+            gmsh.model.mesh.setOrder(order)
+            gmsh.write(str(path))
+        return fem.create_sector_from_file(path, clamp="ROOT", verbose=False)
+
+    for order in (2, 1):
+        volume = ring(tmp_path / f"ring{order}.msh", order).volume
+        expected = 0.01 * (arc_area(0.05, 4, order == 2) - arc_area(0.04, 4, order == 2))
+        exact = np.pi / 6 * (0.05**2 - 0.04**2) * 0.01
+        print(order, volume / exact - 1, expected / exact - 1)
+        np.testing.assert_allclose(volume, expected, rtol=1e-9)
+
+
+def test_millimetres_with_scale_equal_metres(tmp_path):
+    """The same mesh written in mm and loaded with units='mm' (or scale=1e-3) is the metre mesh: coordinates
+    equal to round-off, so the frequencies agree to the eigen-solver's tolerance; without the scale the mass is
+    1e9 times too large and a warning says so with the number."""
+    metres, _ = _omega(_bar(tmp_path / "m.msh", "wedge"))
+    mm_path = _bar(tmp_path / "mm.msh", "wedge", unit=1000.0)
+    mm, sector = _omega(mm_path, units="mm")
+    np.testing.assert_allclose(mm, metres, rtol=1e-9)
+    np.testing.assert_allclose(sector.volume, L * H * H, rtol=1e-12)
+    scaled, _ = _omega(mm_path, scale=1e-3)
+    np.testing.assert_allclose(scaled, metres, rtol=1e-9)
+    with pytest.warns(UserWarning, match=r"mass is 4e\+0?7 kg"):
+        fem.create_sector_from_file(mm_path, clamp="ROOT", verbose=False)
+    with pytest.raises(ValueError) as e:
+        fem.create_sector_from_file(mm_path, clamp="ROOT", scale=2.0, units="mm")
+    _one_line(e, "scale", "units", "disagree")
+
+
+def _write_inp(path, mesh, extra_sets=None):
+    """An Abaqus/CalculiX input deck as a user receives it: 1-based node labels, C3D15 wedges (same node order as
+    meshio's wedge15), node sets."""
+    with open(path, "w") as f:
+        f.write("*HEADING\ncantilever\n*NODE\n")
+        for k, x in enumerate(mesh.points, start=1):
+            f.write(f"{k}, {x[0]!r}, {x[1]!r}, {x[2]!r}\n")
+        wedges = mesh.get_cells_type("wedge15")
+        f.write("*ELEMENT, TYPE=C3D15, ELSET=BAR\n")
+        for k, c in enumerate(wedges, start=1):
+            f.write(f"{k}, " + ", ".join(str(i + 1) for i in c[:10]) + ",\n" + ", ".join(str(i + 1) for i in c[10:])
+                    + "\n")
+        for name in ("ROOT", "END"):
+            nodes = np.unique(np.concatenate([mesh.cells[b].data[idx].ravel()
+                                              for b, idx in enumerate(mesh.cell_sets[name]) if len(idx)]))
+            f.write(f"*NSET, NSET={name}\n")
+            for chunk in range(0, nodes.size, 16):
+                f.write(", ".join(str(i + 1) for i in nodes[chunk:chunk + 16]) + "\n")
+        for name, nodes in (extra_sets or {}).items():
+            f.write(f"*NSET, NSET={name}\n" + ", ".join(str(i + 1) for i in nodes) + "\n")
+
+
+def test_abaqus_inp_round_trip(tmp_path):
+    """A .inp deck written from the .msh (same nodes, same C3D15 cells, the groups as node sets) gives the same
+    frequencies to round-off; the clamp named in lower case finds the NSET ROOT (a unique case-insensitive match)."""
+    import meshio
+
+    msh = _bar(tmp_path / "bar.msh", "wedge")
+    from_msh, _ = _omega(msh)
+    inp = tmp_path / "bar.inp"
+    _write_inp(inp, meshio.read(msh))
+    sector = fem.create_sector_from_file(inp, clamp="root", tip="END", contact=3, verbose=False)
+    from_inp = fem.compute_clamped_modes(sector, 2).omega
+    np.testing.assert_allclose(from_inp, from_msh, rtol=1e-9)
+    assert "80 wedge15 -> 240 tetrahedra" in sector.summary, sector.summary
+    assert sector.tip_names == ("LE", "tip1", "TE") and np.allclose(sector.tip_nodes[:, 0], L)
+
+
+def test_contact_nodes_along_the_camber_line_and_ordered_le_to_te():
+    """An airfoil-like tip (chord along +z from LE at z = 0 to TE at z = 0.05, thickness along y, camber
+    y = 0.1 z (1 - z / c)) sampled on its two sides: 5 nodes 'along the camber line' are the chord's two ends and the
+    nodes nearest to mid-thickness at 3 stations; coordinates given in any order come back LE -> TE."""
+    c = 0.05
+    z = np.linspace(0, c, 21)
+    camber = 0.1 * z * (1 - z / c)
+    half = 0.004 * np.sin(np.pi * z / c)
+    sides = np.vstack([np.column_stack([np.full(21, 0.2), camber + half, z]),
+                       np.column_stack([np.full(21, 0.2), camber - half, z])[1:-1],
+                       np.column_stack([np.full(19, 0.2), camber[1:-1], z[1:-1]])])     # nodes on the camber line
+    tip = np.arange(len(sides))
+    nodes, how = mi.select_contact_nodes(sides, tip, 5)
+    assert "camber" in how
+    np.testing.assert_allclose(sides[nodes[[0, -1]], 2], [0.0, c])
+    on_camber = np.abs(sides[nodes, 1] - 0.1 * sides[nodes, 2] * (1 - sides[nodes, 2] / c))
+    assert on_camber.max() < 1e-12                                 # the camber-line nodes are chosen
+    np.testing.assert_allclose(sides[nodes, 2], np.linspace(0, c, 5), atol=c / 20 / 2 + 1e-12)
+    shuffled = sides[nodes][[3, 0, 4, 2, 1]] + 1e-7
+    again, _ = mi.select_contact_nodes(sides, tip, shuffled)
+    np.testing.assert_array_equal(again, nodes)
+    with pytest.raises(ValueError) as e:
+        mi.select_contact_nodes(sides, tip, sides[nodes] * 1000.0)
+    _one_line(e, "contact point", "units")
+    with pytest.raises(ValueError) as e:
+        mi.select_contact_nodes(sides, tip, 1)
+    _one_line(e, "contact must be in [2,")
+
+
+def test_boundary_map_follows_the_boundary_dofs_in_any_order(tmp_path):
+    """The reduced model's node map and contact rows follow the boundary DOFs whatever their order and number
+    (issue 24: 24 boundary DOFs used to meet 134 tip nodes): with the TE's DOFs first and only 3 of 4 contact nodes,
+    q[q_index of LE] is node LE's displacement (Phi's rows at LE's DOFs are the identity there) and the contact
+    matrices pick those entries."""
+    from rotor37_rom import casing
+    from rotor37_rom.builder import ReductionConfig, build_reduced_model
+
+    sector = fem.create_sector_from_file(_bar(tmp_path / "bar.msh", "hex"), clamp="ROOT", tip="END", contact=4,
+                                         verbose=False)
+    dofs = sector.tip_dofs
+    boundary = np.concatenate([dofs[3], dofs[0], dofs[1]])           # TE, LE, tip1 (tip2 left out)
+    model, _ = build_reduced_model(sector, ReductionConfig(r_c=4, r_md=2, forces="none", keep_basis=True),
+                                   boundary_dofs=boundary)
+    assert sorted(model.nodes.names) == ["LE", "TE", "tip1"]
+    for name, row in (("LE", 0), ("TE", 3), ("tip1", 1)):
+        k = model.nodes.row(name)
+        np.testing.assert_allclose(model.nodes.coordinates[k], sector.tip_nodes[row], atol=1e-12)
+        np.testing.assert_allclose(model.Phi[np.ix_(dofs[row], model.nodes.q_index[k])], np.eye(3), atol=1e-12)
+    N, _, _, rows = casing.contact_matrices(model.nodes, model.r, None)
+    assert N.shape == (3, model.r) and np.count_nonzero(N) == 3
+
+
+def test_refusals_are_one_line(tmp_path):
+    """Unsupported cells, unknown groups, a group that covers no boundary facet, bad units, an unknown file type,
+    an unreadable deck, contact nodes along a tip that was not given: one line each, naming the culprit and what is
+    allowed."""
+    import meshio
+
+    bad = _bar(tmp_path / "wedge18.msh", "wedge", incomplete=False)   # gmsh's complete Prism18: not accepted
+    with pytest.raises(ValueError) as e:
+        fem.create_sector_from_file(bad, clamp="ROOT")
+    _one_line(e, "wedge18", "accepted", "hexahedron20", "wedge15")
+    msh = _bar(tmp_path / "bar.msh", "wedge")
+    with pytest.raises(ValueError) as e:
+        fem.create_sector_from_file(msh, clamp="clamp")
+    _one_line(e, "clamp", "no group named 'clamp'", "ROOT", "END")
+    inp = tmp_path / "bar.inp"
+    _write_inp(inp, meshio.read(msh), {"ONE": [0, 1]})                # two nodes: no facet has 3 corners in it
+    with pytest.raises(ValueError) as e:
+        fem.create_sector_from_file(inp, clamp="ONE")
+    _one_line(e, "clamp", "ONE", "covers no boundary facet")
+    with pytest.raises(ValueError) as e:
+        fem.create_sector_from_file(msh, clamp="ROOT", units="furlong")
+    _one_line(e, "units", "mm")
+    with pytest.raises(ValueError) as e:
+        fem.create_sector_from_file(tmp_path / "bar.stl", clamp="ROOT")
+    _one_line(e, "bar.stl")
+    (tmp_path / "garbage.inp").write_text("*NODE\n1, 0, 0\n*ELEMENT, TYPE=C3D99\n1, 1, 2\n")
+    with pytest.raises(ValueError) as e:
+        fem.create_sector_from_file(tmp_path / "garbage.inp", clamp="ROOT")
+    _one_line(e, "garbage.inp")
+    with pytest.raises(ValueError) as e:
+        fem.create_sector_from_file(msh, clamp="ROOT", contact=3)
+    _one_line(e, "contact", "tip")
+
+
+def test_the_project_blade_round_trips_through_an_abaqus_deck(ci_blade, tmp_path):
+    """fem.write_sector_mesh -> create_sector_from_file: the ci blade as a millimetre deck comes back with the same
+    frequencies (same nodes and cells: round-off, 1e-9) and, with 8 nodes chosen along the tip camber line, exactly
+    the project's 8 contact nodes in the same LE -> TE order (they are mesh vertices on the camber line)."""
+    omega = fem.compute_clamped_modes(ci_blade, 4).omega
+    deck = fem.write_sector_mesh(ci_blade, tmp_path / "blade_mm.inp", units="mm")
+    for contact in (8, "CONTACT"):
+        back = fem.create_sector_from_file(deck, clamp="CLAMP", tip="TIP", units="mm", contact=contact,
+                                           verbose=False)
+        np.testing.assert_allclose(fem.compute_clamped_modes(back, 4).omega, omega, rtol=1e-9)
+        np.testing.assert_allclose(back.tip_nodes, ci_blade.tip_nodes, atol=1e-12)
+        assert back.tip_names == ci_blade.tip_names
+    with pytest.raises(ValueError) as e:
+        fem.write_sector_mesh(ci_blade, tmp_path / "blade.msh")
+    _one_line(e, "blade.msh", ".inp")
+
+
+@pytest.mark.slow
+def test_own_blade_demo(tmp_path, capsys):
+    """demos/own_blade.py without --mesh: the ci blade as a mm deck through modes, the r = 45 model, the sprag-slip
+    onsets and a 1-revolution rub; its summary holds the round-tripped blade (the ci mesh's mass to 1e-9, 8
+    contact nodes) and the onsets of the LE half and per node; a bad --units is one line, exit 2."""
+    from conftest import load_demo
+
+    demo = load_demo("own_blade")
+    assert demo.run_main(demo.main, ["--units", "furlong"]) == 2
+    assert "--units must be one of" in capsys.readouterr().err
+    summary = demo.run_own_blade(demo.OwnBladeConfig(revolutions=1.0, out=str(tmp_path)))
+    blade = fem.create_blade_sector(preset="ci")
+    np.testing.assert_allclose(summary["mass_kg"], blade.total_mass(), rtol=1e-9)
+    np.testing.assert_allclose(summary["contact_nodes_m"], blade.tip_nodes, atol=1e-12)
+    assert summary["r"] == 45 and len(summary["mu_star_per_node"]) == 8
+    assert summary["mu_star_le_half"] is not None and 0 < summary["mu_star_le_half"] < 1
+    assert not summary["diverged"] and summary["le_max_radial_mm"] > 0
