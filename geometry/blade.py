@@ -486,7 +486,7 @@ def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], ti
             nodes, _ = mesh_import.select_contact_nodes(mesh.points, tip_group, contact)
             tip_nodes = mesh.points[nodes]
         mesh_import.add_to_gmsh(mesh, groups, int(BladeGroup.BLADE))
-        return BladeModel(source=f"file:{path}", volume=mesh.volume() if not mesh.quadratic else float("nan"),
+        return BladeModel(source=f"file:{path}", volume=float("nan"),        # assembled on the mesh (fem)
                           tip_nodes=tip_nodes, preset=preset, n_nodes=len(mesh.points), summary=mesh.summary())
     try:
         entities = gmsh.model.occ.importShapes(str(path))

@@ -92,12 +92,6 @@ class ImportedMesh:
     def quadratic(self) -> bool:
         return self.tets.shape[1] == 10
 
-    def volume(self) -> float:
-        """Sum of the straight-sided tetrahedra's volumes (m^3): the mesh volume up to the curvature of P2 edges."""
-        x = self.points[self.tets[:, :4]]
-        return float(np.abs(np.einsum("ij,ij->i", np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]),
-                                      x[:, 3] - x[:, 0])).sum() / 6.0)
-
     def bounding_box(self) -> tuple[np.ndarray, np.ndarray]:
         used = np.unique(self.tets)
         return self.points[used].min(axis=0), self.points[used].max(axis=0)
@@ -348,7 +342,7 @@ def split_to_tetrahedra(points: np.ndarray, blocks: list) -> tuple[np.ndarray, n
                         if slot is not None:
                             row.append(int(cell[slot]))
                         else:
-                            row.append(_mid_node(kind, cell_index, cell, la, lb, n_corner, x0, new_node))
+                            row.append(_mid_node(kind, cell_index, cell, la, lb, edge_slot, x0, new_node))
                 tets.append(row)
             made += len(filling)
         converted[kind_name] = (converted.get(kind_name, (0, 0))[0] + len(cells),
@@ -357,13 +351,11 @@ def split_to_tetrahedra(points: np.ndarray, blocks: list) -> tuple[np.ndarray, n
     return np.vstack(points), tets, converted
 
 
-def _mid_node(kind, cell_index, cell, la, lb, n_corner, x0, new_node) -> int:
+def _mid_node(kind, cell_index, cell, la, lb, edge_slot, x0, new_node) -> int:
     """The mid-node of a new edge (la, lb) of a quadratic cell: a face diagonal's (the serendipity face centre,
     shared with the neighbour through the diagonal's global corners) or a hexahedron's body diagonal's (its centre,
     the serendipity map at the reference centre: -1/4 of the corners plus 1/4 of the mid-edge nodes)."""
-    ref = _REF[kind]
-    edge_slot = {frozenset(e): n_corner + k for k, e in enumerate(ref["edges"])}
-    for quad in ref["quads"]:
+    for quad in _REF[kind]["quads"]:
         if la in quad and lb in quad:                  # a diagonal of this quadrilateral face
             mids = [edge_slot[frozenset((quad[k], quad[(k + 1) % 4]))] for k in range(4)]
             centre = -0.25 * x0[cell[list(quad)]].sum(axis=0) + 0.5 * x0[cell[mids]].sum(axis=0)

@@ -52,7 +52,7 @@ class Sector:
         tip_names: the contact nodes' names, 'LE', 'tip1', ..., 'TE' in the order of tip_nodes.
         cyclic: the cyclic faces as global DOF indices paired node for node (``cyclic.CyclicPairs``: right[i] is
             left[i] turned by 2 pi / N), None for a single blade.
-        volume: CAD volume (m^3).
+        volume: CAD volume (m^3); for a mesh file, the mesh's own (assembled).
         source: where the geometry came from; preset: mesh preset name.
         summary: one line on what was read or meshed (files brought in from elsewhere), else ''.
     """
