@@ -32,7 +32,8 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
 
-__all__ = ["CyclicPairs", "rotation_z", "harmonic_indices", "cyclic_projection", "project_cyclic",
+__all__ = ["CyclicPairs", "rotation_z", "harmonic_indices", "cyclic_projection", "cyclic_projection_parts",
+           "project_cyclic",
            "expand_sector_mode", "assemble_full_structure", "to_global_frame", "repeating_sector_maps"]
 
 
@@ -124,15 +125,7 @@ def cyclic_projection(n_dofs: int, pairs: CyclicPairs, k: int) -> tuple[sp.csr_m
         cols.append(copy * n + identity)
         vals.append(np.ones(identity.size))
         kept[copy * n + right] = False
-    # right face: a_R = R (c a_L - s b_L), b_R = R (s a_L + c b_L)   (m = 1: a_R = c R a_L, c = +-1)
-    blocks = {(0, 0): c * R} if m == 1 else {(0, 0): c * R, (0, 1): -s * R, (1, 0): s * R, (1, 1): c * R}
-    for (out_copy, in_copy), B in blocks.items():
-        for i in range(3):
-            for j in range(3):
-                if B[i, j] != 0.0:
-                    rows.append(out_copy * n + pairs.right[:, i])
-                    cols.append(in_copy * n + pairs.left[:, j])
-                    vals.append(np.full(len(pairs.right), B[i, j]))
+    _right_face_entries(pairs, n, m, c, s, rows, cols, vals)
     # axis nodes: x on the axis belongs to both faces: (I - e^{i k alpha} R) u = 0, in real form on (a, b)
     if len(pairs.axis):
         if m == 1:
@@ -150,6 +143,41 @@ def cyclic_projection(n_dofs: int, pairs: CyclicPairs, k: int) -> tuple[sp.csr_m
                 vals.append(basis[nz, j])
     T = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(m * n, m * n))
     return T, kept
+
+
+def _right_face_entries(pairs: CyclicPairs, n: int, m: int, c: float, s: float, rows, cols, vals) -> None:
+    """Append T's right-face entries: a_R = R (c a_L - s b_L), b_R = R (s a_L + c b_L) (m = 1: a_R = c R a_L)."""
+    R = rotation_z(pairs.angle)
+    blocks = {(0, 0): c * R} if m == 1 else {(0, 0): c * R, (0, 1): -s * R, (1, 0): s * R, (1, 1): c * R}
+    for (out_copy, in_copy), B in blocks.items():
+        for i in range(3):
+            for j in range(3):
+                if B[i, j] != 0.0:
+                    rows.append(out_copy * n + pairs.right[:, i])
+                    cols.append(in_copy * n + pairs.left[:, j])
+                    vals.append(np.full(len(pairs.right), B[i, j]))
+
+
+def cyclic_projection_parts(n_dofs: int, pairs: CyclicPairs) -> tuple[sp.csr_matrix, sp.csr_matrix, sp.csr_matrix]:
+    """(T_0, T_c, T_s) with T_k = T_0 + cos(k alpha) T_c + sin(k alpha) T_s (``cyclic_projection``) for every
+    0 < k < N/2, on a sector without axis nodes (their null space is not linear in cos and sin).
+
+    With K2 = diag(K, K), T_s^T K2 T_s = T_c^T K2 T_c and the cos-sin cross terms cancel, so
+    K_k = T_k^T K2 T_k = B_0 + cos(k alpha) B_c + sin(k alpha) B_s with three k-free matrices: the projection of
+    every harmonic index is a linear combination of matrices computed once."""
+    if len(pairs.axis):
+        raise ValueError("cyclic_projection_parts: a sector with axis nodes has no k-free parts")
+    n = int(n_dofs)
+    unit = np.ones(n)
+    unit[pairs.right.ravel()] = 0.0                     # T_0: the unit columns of every slot but the right face
+    out = [sp.diags(np.concatenate([unit, unit]), format="csr")]
+    out[0].eliminate_zeros()
+    for c, s in ((1.0, 0.0), (0.0, 1.0)):
+        rows, cols, vals = [], [], []
+        _right_face_entries(pairs, n, 2, c, s, rows, cols, vals)
+        out.append(sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                                 shape=(2 * n, 2 * n)))
+    return tuple(out)
 
 
 def project_cyclic(K, M, pairs: CyclicPairs, k: int) -> tuple[sp.csr_matrix, sp.csr_matrix, sp.csr_matrix]:

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from rotor37_rom.cyclic import (CyclicPairs, assemble_full_structure, cyclic_projection, expand_sector_mode,
-                                harmonic_indices, project_cyclic, rotation_z, to_global_frame)
+from rotor37_rom.cyclic import (CyclicPairs, assemble_full_structure, cyclic_projection, cyclic_projection_parts,
+                                expand_sector_mode, harmonic_indices, project_cyclic, rotation_z, to_global_frame)
 
 
 def _truss_sector(n_sectors: int, seed: int = 0, with_axis: bool = True):
@@ -35,7 +35,7 @@ def _truss_sector(n_sectors: int, seed: int = 0, with_axis: bool = True):
     K += 1e4 * np.diag(rng.uniform(0.5, 1.5, 3 * n_nodes))              # ground springs: no rigid motion
     M += np.diag(np.repeat(rng.uniform(0.5, 2.0, n_nodes), 3))
     dofs = np.arange(3 * n_nodes).reshape(-1, 3)
-    pairs = CyclicPairs(n_sectors, left=dofs[:3], right=dofs[7:10], axis=dofs[10:] if with_axis else None)
+    pairs = CyclicPairs(n_sectors, left=dofs[:3], right=dofs[7:10], axis=dofs[10:] if with_axis else np.zeros((0, 3), int))
     return K, M, pairs, dofs
 
 
@@ -87,6 +87,32 @@ def test_expanded_modes_are_modes_of_the_whole_ring():
         if b is not None:
             amp = local ** 2 + expand_sector_mode(b, -a, k, N) ** 2
             np.testing.assert_allclose(amp, np.broadcast_to(a ** 2 + b ** 2, amp.shape), rtol=1e-10, atol=1e-14)
+
+
+def test_projection_is_linear_in_cos_and_sin():
+    """T_k = T_0 + c T_c + s T_s exactly (c, s = cos, sin k alpha) for every 0 < k < N/2, and the projected stiffness
+    is B_0 + c B_c + s B_s with three k-free matrices (T_s^T K2 T_s = T_c^T K2 T_c, the c s cross terms cancel):
+    equal to T_k^T K2 T_k to round-off (1e-13 of |K|). The same real form commutes with J: (a, b) -> (-b, a)."""
+    N = 12
+    K, M, pairs, _ = _truss_sector(N, with_axis=False)
+    n = K.shape[0]
+    T0, Tc, Ts = cyclic_projection_parts(n, pairs)
+    K2 = scipy.linalg.block_diag(K, K)
+    P = [(T0 + Tc).toarray(), (T0 - Tc).toarray(), (T0 + Ts).toarray()]
+    plus, minus, sine = (A.T @ K2 @ A for A in P)
+    B0, Bc = 0.5 * (plus + minus), 0.5 * (plus - minus)
+    Bs = sine - B0
+    J = np.block([[np.zeros((n, n)), -np.eye(n)], [np.eye(n), np.zeros((n, n))]])
+    for k in range(1, N // 2):
+        c, s = np.cos(2 * np.pi * k / N), np.sin(2 * np.pi * k / N)
+        T, _ = cyclic_projection(n, pairs, k)
+        assert abs(T - (T0 + c * Tc + s * Ts)).max() <= 1e-15
+        Kk = T.toarray().T @ K2 @ T.toarray()
+        np.testing.assert_allclose(B0 + c * Bc + s * Bs, Kk, rtol=0, atol=1e-13 * np.abs(K).max())
+        np.testing.assert_allclose(Kk @ J, J @ Kk, rtol=0, atol=1e-13 * np.abs(K).max())
+    _, _, with_axis, _ = _truss_sector(N)
+    with pytest.raises(ValueError, match="axis nodes"):
+        cyclic_projection_parts(n + 3, with_axis)
 
 
 def test_projection_identities_and_bad_input():

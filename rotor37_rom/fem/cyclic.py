@@ -20,7 +20,7 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from rotor37_rom.cyclic import cyclic_projection
+from rotor37_rom.cyclic import cyclic_projection, cyclic_projection_parts
 from rotor37_rom.forms import Material
 from rotor37_rom.geometry import blade as blade_geometry
 from rotor37_rom.geometry import disk as disk_geometry
@@ -28,7 +28,7 @@ from rotor37_rom.geometry.tables import read_blade_table
 
 from .operators import MASS_DIAGONAL, SvkOperators, assemble_mass, assemble_stiffness, create_svk_operators
 from .sector import Sector, build_on_rank0
-from .solvers import solve_eigenproblem
+from .solvers import shift_invert_solver, solve_eigenproblem
 
 __all__ = ["create_disk_sector", "create_annular_sector", "CyclicOperators", "assemble_cyclic_operators",
            "CyclicModes", "solve_cyclic_modes", "sector_fields"]
@@ -87,6 +87,23 @@ def _petsc_from_rows(comm, rows_csr, perm_cols, local_rows: int, size: int) -> P
     return out
 
 
+def _same_pattern(mats: list) -> list:
+    """The matrices on the union of their nonzero patterns (new matrices; the inputs are destroyed), so that
+    combinations of them are AXPYs of equal-length value arrays."""
+    DIFFERENT, SUBSET = PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN
+    union = mats[0].duplicate(copy=True)
+    for A in mats[1:]:
+        union.axpy(1.0, A, DIFFERENT)
+    out = []
+    for A in mats:
+        B = union.duplicate(copy=False)                          # the union's pattern, zero values
+        B.axpy(1.0, A, SUBSET)
+        out.append(B)
+        A.destroy()
+    union.destroy()
+    return out
+
+
 def _block_diagonal(A: PETSc.Mat, sector: Sector, m: int, perm: np.ndarray, local_rows: int) -> PETSc.Mat:
     """diag(A, ..., A) (m copies) in the PETSc layout of ``_layout``."""
     import scipy.sparse as sp
@@ -104,8 +121,11 @@ def _block_diagonal(A: PETSc.Mat, sector: Sector, m: int, perm: np.ndarray, loca
 
 class CyclicOperators:
     """A cyclic sector's K and M, their block-diagonal copies (one per number of copies m) and the layout, reused
-    over the harmonic indices: each k costs one projection T_k, two PtAP and one eigen-solve, nothing is assembled
-    again (pitfall 6 of the cyclic notes: re-assembling per k is what makes tools slow).
+    over the harmonic indices; nothing is assembled again (pitfall 6 of the cyclic notes: re-assembling per k is
+    what makes tools slow). For 0 < k < N/2 (no axis nodes) the projected operators are A_0 + cos A_c + sin A_s of
+    three matrices computed once (three PtAP each), written into one pair of matrices whose solver is kept: each k
+    costs two AXPY, a numeric MUMPS refactorisation and the Krylov-Schur iterations. k = 0 and N/2 (one copy, and
+    any k of a sector with axis nodes) are projected by PtAP each.
 
     Args:
         sector: a cyclic Sector; K, M: its clamped operators (assembled from ``ops`` if None).
@@ -120,6 +140,8 @@ class CyclicOperators:
             K, M = assemble_stiffness(sector, ops), assemble_mass(sector, ops)
         self.sector, self.K, self.M = sector, K, M
         self._blocks: dict = {}
+        self._parts = None
+        self._work = None
 
     def _copies(self, m: int):
         """(diag(K..), diag(M..), perm, first row, local rows) for m copies, built once."""
@@ -129,28 +151,87 @@ class CyclicOperators:
                                _block_diagonal(self.M, self.sector, m, perm, local_rows), perm, first, local_rows)
         return self._blocks[m]
 
+    def _mine(self, m: int) -> np.ndarray:
+        """This rank's canonical slots c n + g (its own DOFs g, each copy c) in layout order."""
+        im, bs, n = self.sector.V.dofmap.index_map, self.sector.V.dofmap.index_map_bs, self.sector.n_dofs
+        g0, g1 = im.local_range[0] * bs, im.local_range[1] * bs
+        return np.concatenate([c * n + np.arange(g0, g1) for c in range(m)])
+
+    def _eliminated_diagonal(self, rows: np.ndarray, m: int, value: float) -> PETSc.Mat:
+        """``value`` on the diagonal of the eliminated slots (layout rows), for their empty rows in K_k and M_k."""
+        _, _, _, _, local_rows = self._copies(m)
+        size = m * self.sector.n_dofs
+        D = PETSc.Mat().createAIJ(size=((local_rows, size), (local_rows, size)), nnz=1, comm=self.sector.comm)
+        for r in rows:                                           # one face's slots, not the mesh
+            D.setValue(int(r), int(r), value)
+        D.assemble()
+        return D
+
+    def _harmonic_parts(self) -> list:
+        """For 0 < k < N/2 without axis nodes: [(K_0, K_c, K_s), (M_0, M_c, M_s), (T_0, T_c, T_s)], each three
+        matrices of one nonzero pattern with A_k = A_0 + cos(k alpha) A_c + sin(k alpha) A_s
+        (``cyclic.cyclic_projection_parts``): three PtAP per operator once, then every k is two AXPY of values."""
+        if self._parts is None:
+            sector, pairs = self.sector, self.sector.cyclic
+            K2, M2, perm, first, local_rows = self._copies(2)
+            n, mine, SAME = sector.n_dofs, self._mine(2), PETSc.Mat.Structure.SAME_NONZERO_PATTERN
+
+            def petsc(A):
+                return _petsc_from_rows(sector.comm, A.tocsr()[mine], perm, local_rows, 2 * n)
+
+            T0, Tc, Ts = cyclic_projection_parts(n, pairs)
+            eliminated = first + np.flatnonzero(T0.diagonal()[mine] == 0.0)   # the right face, both copies
+            parts = []
+            for A2, diag in ((K2, 1.0), (M2, MASS_DIAGONAL)):
+                plus, minus, sine = (A2.PtAP(P) for P in (petsc(T0 + Tc), petsc(T0 - Tc), petsc(T0 + Ts)))
+                plus, minus, sine, D = _same_pattern([plus, minus, sine,
+                                                      self._eliminated_diagonal(eliminated, 2, diag)])
+                A0 = plus.duplicate(copy=True)                   # (T0 + Tc)^T A2 (T0 + Tc) = B0 + Bc, minus: B0 - Bc
+                A0.axpy(1.0, minus, SAME)
+                A0.scale(0.5)
+                Ac = plus
+                Ac.axpy(-1.0, A0, SAME)
+                As = sine
+                As.axpy(-1.0, A0, SAME)
+                A0.axpy(1.0, D, SAME)
+                for A in (minus, D):
+                    A.destroy()
+                parts.append((A0, Ac, As))
+            parts.append(tuple(_same_pattern([petsc(T0), petsc(Tc), petsc(Ts)])))
+            self._parts = parts
+        return self._parts
+
+    def _combine(self, k: int, out) -> None:
+        """(K_k, M_k, T_k) = A_0 + cos(k alpha) A_c + sin(k alpha) A_s written into ``out`` (matrices of the parts'
+        pattern: their objects and patterns stay, only values change)."""
+        SAME = PETSc.Mat.Structure.SAME_NONZERO_PATTERN
+        c, s = np.cos(k * self.sector.cyclic.angle), np.sin(k * self.sector.cyclic.angle)
+        for (A0, Ac, As), A in zip(self._harmonic_parts(), out):
+            A0.copy(A, SAME)
+            A.axpy(c, Ac, SAME)
+            A.axpy(s, As, SAME)
+
     def project(self, k: int) -> tuple[PETSc.Mat, PETSc.Mat, PETSc.Mat]:
         """(K_k, M_k, T_k) for harmonic index k: K_k = T_k^T diag(K, K) T_k and likewise M_k (one copy for k = 0 and
         N/2), with 1 / MASS_DIAGONAL on the eliminated slots' diagonal."""
         sector, pairs = self.sector, self.sector.cyclic
         k = pairs.check_k(k)
         m = pairs.n_copies(k)
+        if m == 2 and not len(pairs.axis):
+            out = tuple(A0.duplicate(copy=False) for A0, _, _ in self._harmonic_parts())
+            self._combine(k, out)
+            return out
         K2, M2, perm, first, local_rows = self._copies(m)
         n = sector.n_dofs
         T, kept = cyclic_projection(n, pairs, k)
-        im, bs = sector.V.dofmap.index_map, sector.V.dofmap.index_map_bs
-        g0, g1 = im.local_range[0] * bs, im.local_range[1] * bs
-        mine = np.concatenate([c * n + np.arange(g0, g1) for c in range(m)])      # in layout order
+        mine = self._mine(m)
         T_p = _petsc_from_rows(sector.comm, T[mine], perm, local_rows, m * n)
         eliminated = first + np.flatnonzero(~kept[mine])
         operators = []
         for A2, diag in ((K2, 1.0), (M2, MASS_DIAGONAL)):
             Ak = A2.PtAP(T_p)
             # the eliminated slots' empty rows get a diagonal: one merge of patterns (not one insertion per entry)
-            D = PETSc.Mat().createAIJ(size=((local_rows, m * n), (local_rows, m * n)), nnz=1, comm=sector.comm)
-            for r in eliminated:                                 # one face's slots, not the mesh
-                D.setValue(int(r), int(r), diag)
-            D.assemble()
+            D = self._eliminated_diagonal(eliminated, m, diag)
             Ak.axpy(1.0, D, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
             D.destroy()
             operators.append(Ak)
@@ -162,16 +243,30 @@ class CyclicOperators:
         neighbouring k with as many copies (``CyclicModes.x``), a good start for Krylov-Schur."""
         if n_modes < 1:
             raise ValueError(f"n_modes must be >= 1, got {n_modes}")
-        Kk, Mk, T = self.project(k)
-        m = self.sector.cyclic.n_copies(k)
-        omega, vecs = solve_eigenproblem(Kk, Mk, m * n_modes, sigma=sigma, prefix="cyclic_", initial=initial)
+        pairs = self.sector.cyclic
+        m = pairs.n_copies(k)
+        reuse = m == 2 and not len(pairs.axis)
+        if reuse:            # one K_k object and one solver for all 0 < k < N/2: MUMPS refactors, no new analysis
+            if self._work is None:
+                self._work = (*(A0.duplicate(copy=False) for A0, _, _ in self._harmonic_parts()),
+                              shift_invert_solver(self.sector.comm, sigma, prefix="cyclic_"))
+            Kk, Mk, T, eps = self._work
+            if eps.getTarget() != sigma:
+                raise ValueError(f"sigma must stay {eps.getTarget()} over one CyclicOperators' harmonic indices, "
+                                 f"got {sigma}")
+            self._combine(k, (Kk, Mk, T))
+        else:
+            (Kk, Mk, T), eps = self.project(k), None
+        omega, vecs = solve_eigenproblem(Kk, Mk, m * n_modes, sigma=sigma, prefix="cyclic_", initial=initial,
+                                         eps=eps)
         a, b = [], []
         for x in vecs:
             fa, fb = sector_fields(self.sector, T, x, m)
             a.append(fa)
             b.append(fb)
-        for A in (Kk, Mk, T):
-            A.destroy()
+        if not reuse:
+            for A in (Kk, Mk, T):
+                A.destroy()
         return CyclicModes(int(k), omega, a, b, vecs)
 
     def destroy(self) -> None:
@@ -179,6 +274,12 @@ class CyclicOperators:
             K2.destroy()
             M2.destroy()
         self._blocks.clear()
+        for part in self._parts or []:
+            for A in part:
+                A.destroy()
+        for A in self._work or ():
+            A.destroy()
+        self._parts = self._work = None
 
 
 def assemble_cyclic_operators(sector: Sector, k: int, K: PETSc.Mat | None = None, M: PETSc.Mat | None = None,

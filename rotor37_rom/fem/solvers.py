@@ -22,7 +22,8 @@ from .operators import (JIT_PARAMS, SvkOperators, _require_serial, assemble_mass
 from .sector import Sector
 
 __all__ = ["ModalResult", "StaticResult", "TransientResult", "solve_eigenproblem", "compute_clamped_modes",
-           "solve_static", "solve_newmark", "solve_clamped_static", "mumps_solver", "slepc_eigenpairs"]
+           "solve_static", "solve_newmark", "solve_clamped_static", "mumps_solver", "slepc_eigenpairs",
+           "shift_invert_solver", "static_compliance"]
 
 LOG = logging.getLogger(__name__)
 
@@ -47,27 +48,23 @@ class ModalResult:
     tip_displacements: np.ndarray
 
 
-def solve_eigenproblem(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float = 0.0, tol: float = 1e-12,
-                       prefix: str = "modes_", initial: Sequence[PETSc.Vec] | None = None) -> tuple[np.ndarray, list]:
-    """Lowest ``n_modes`` eigenpairs of K x = lambda M x by SLEPc Krylov-Schur with shift-invert (MUMPS LU).
-
-    Returns:
-        (omega, vectors): omega = sqrt(lambda) in rad/s ascending, vectors M-normalised (x^T M x = 1).
-    """
+def shift_invert_solver(comm, sigma: float = 0.0, tol: float = 1e-12, prefix: str = "modes_"):
+    """A SLEPc Krylov-Schur eigen-solver for the eigenvalues of K x = lambda M x nearest ``sigma`` (shift-invert,
+    MUMPS LU), the one ``solve_eigenproblem`` uses. Kept by a caller for a sequence of problems whose K keeps its
+    object and nonzero pattern while its values change (the harmonic indices of a cyclic sector), SLEPc keeps its
+    factorisation object and MUMPS refactors numerically, without a new analysis. M is never singular here
+    (clamped and eliminated DOFs carry a mass on the diagonal), so eigenvector purification (one more solve per
+    vector, for a singular M) is off."""
     from slepc4py import SLEPc
 
-    n_global = K.getSize()[0]
-    if not (1 <= n_modes < n_global):
-        raise ValueError(f"n_modes must be in [1, {n_global - 1}], got {n_modes}")
-    eps = SLEPc.EPS().create(K.getComm())
+    eps = SLEPc.EPS().create(comm)
     eps.setOptionsPrefix(prefix)
-    eps.setOperators(K, M)
     eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
     eps.setType(SLEPc.EPS.Type.KRYLOVSCHUR)
-    eps.setDimensions(n_modes, max(2 * n_modes, n_modes + 15))
     eps.setTolerances(tol, 500)
     eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
     eps.setTarget(sigma)
+    eps.setPurify(False)
     st = eps.getST()
     st.setType(SLEPc.ST.Type.SINVERT)
     st.setShift(sigma)
@@ -75,6 +72,28 @@ def solve_eigenproblem(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float = 
     ksp.setType("preonly")
     ksp.getPC().setType("lu")
     ksp.getPC().setFactorSolverType("mumps")
+    return eps
+
+
+def solve_eigenproblem(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float = 0.0, tol: float = 1e-12,
+                       prefix: str = "modes_", initial: Sequence[PETSc.Vec] | None = None,
+                       eps=None) -> tuple[np.ndarray, list]:
+    """Lowest ``n_modes`` eigenpairs of K x = lambda M x by SLEPc Krylov-Schur with shift-invert (MUMPS LU).
+
+    ``eps``: a ``shift_invert_solver`` kept by the caller (then ``sigma``, ``tol`` and ``prefix`` are its own);
+    None: one made for this call.
+
+    Returns:
+        (omega, vectors): omega = sqrt(lambda) in rad/s ascending, vectors M-normalised (x^T M x = 1).
+    """
+    n_global = K.getSize()[0]
+    if not (1 <= n_modes < n_global):
+        raise ValueError(f"n_modes must be in [1, {n_global - 1}], got {n_modes}")
+    own = eps is None
+    if own:
+        eps = shift_invert_solver(K.getComm(), sigma, tol, prefix)
+    eps.setOperators(K, M)
+    eps.setDimensions(n_modes, max(2 * n_modes, n_modes + 15))
     eps.setFromOptions()
     if initial:                       # e.g. the modes of a neighbouring problem: fewer Krylov-Schur restarts
         eps.setInitialSpace(list(initial))
@@ -82,17 +101,16 @@ def solve_eigenproblem(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float = 
     n_conv = eps.getConverged()
     if n_conv < n_modes:
         raise RuntimeError(f"SLEPc converged {n_conv} of {n_modes} eigenpairs")
-    lams, vecs = [], []
-    for i in range(n_conv):
-        x = K.createVecRight()
-        lam = eps.getEigenpair(i, x).real
-        lams.append(lam)
-        vecs.append(x)
+    lams = np.array([eps.getEigenvalue(i).real for i in range(n_conv)])
     order = np.argsort(lams)[:n_modes]
-    lam = np.array(lams)[order]
+    lam = lams[order]
     if np.any(lam <= 0):
         raise ValueError("K is not positive definite on the free DOFs (non-positive eigenvalue): check the clamp")
-    vecs = [vecs[i] for i in order]
+    vecs = []
+    for i in order:
+        x = K.createVecRight()
+        eps.getEigenvector(int(i), x)
+        vecs.append(x)
     comm = K.getComm().tompi4py()
     for x in vecs:  # M-normalise (SLEPc already does for GHEP; make it explicit), then fix the sign
         Mx = M.createVecLeft()
@@ -105,8 +123,36 @@ def solve_eigenproblem(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float = 
         candidates = comm.allgather((abs(local[k]), local[k]) if k >= 0 else (-1.0, 0.0))
         if max(candidates)[1] < 0:
             x.scale(-1.0)
-    eps.destroy()
+    if own:
+        eps.destroy()
     return np.sqrt(lam), vecs
+
+
+def static_compliance(sector: Sector, dofs, K: PETSc.Mat | None = None, ops: SvkOperators | None = None
+                      ) -> np.ndarray:
+    """G = E^T K^-1 E (m/N): the static displacement of each DOF of ``dofs`` under a unit force on each, clamped.
+
+    ``dofs``: per-rank local DOF indices, -1 where not owned here (``sector.tip_dofs``, any shape; G follows its
+    flattened order). ``K``: the clamped stiffness (assembled if None), or any operator in the sector's layout (a
+    cyclic K_k of k = 0 or N/2). Symmetric, identical on every rank. Craig-Bampton keeps these DOFs with exact static
+    constraint modes, so a reduced model's compliance at them is this one."""
+    dofs = np.asarray(dofs).ravel()
+    own = K is None
+    if own:
+        K = assemble_stiffness(sector, ops)
+    ksp = _lu_solver(sector.comm, K, "compliance_")
+    b, x = K.createVecRight(), K.createVecLeft()
+    G = np.zeros((dofs.size, dofs.size))
+    for j, d in enumerate(dofs):
+        b.set(0.0)
+        if d >= 0:
+            b.array[d] = 1.0
+        ksp.solve(b, x)
+        G[:, j] = gather_dof_values(sector, x.array, dofs)
+    ksp.destroy()
+    if own:
+        K.destroy()
+    return 0.5 * (G + G.T)
 
 
 def compute_clamped_modes(sector: Sector, n_modes: int = 6, ops: SvkOperators | None = None) -> ModalResult:
