@@ -89,7 +89,8 @@ class ContactMapConfig:
         mu: Coulomb friction coefficient of the casing contact (paper 0.15).
         c0: clearance at rest (m).
         hb: height h_b of the casing's two bumps (m).
-        direction: contact normal: 'x' (the paper's e_x) or 'radial'.
+        direction: contact normal: 'x' (the paper's e_x), 'radial' or 'cone' (the conical casing's normal, 15.3 deg
+            from radial: no sprag-slip divergence at any mu on this blade, docs/results.md).
         batch: speeds integrated together in one batch (>= 1).
         continuation: speed step (rad/s) of a continuation up and down (0: none).
         continuation_range: (LOW, HIGH) speeds (rad/s) of the continuation; None: the map's range.
@@ -717,7 +718,8 @@ def build_parser() -> ArgumentParser:
     parser.add_argument("--mu", type=float, help="friction coefficient (default 0.15)")
     parser.add_argument("--c0", type=float, help="clearance at rest (m, default 0.5e-3)")
     parser.add_argument("--hb", type=float, help="height of the casing's bumps (m, default 0.625e-3)")
-    parser.add_argument("--direction", choices=["x", "radial"], help="contact normal (default x)")
+    parser.add_argument("--direction", choices=["x", "radial", "cone"],
+                        help="contact normal: x (the paper's e_x, default), radial, cone (the casing cone's normal)")
     parser.add_argument("--batch", type=int, help="speeds integrated together (default 16)")
     parser.add_argument("--continuation", type=float,
                         help="speed step (rad/s) of a continuation up and down over the map's range (0: none, the "

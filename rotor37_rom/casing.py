@@ -10,7 +10,8 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["Casing", "casing_profile", "casing_clearance", "contact_frames", "contact_matrices", "ramp_rate"]
+__all__ = ["Casing", "casing_profile", "casing_clearance", "contact_frames", "contact_matrices", "ramp_rate",
+           "CONE_SLOPE", "DIRECTIONS"]
 
 
 def casing_profile(theta: np.ndarray, c0: float, p0: float, width: float = 0.15) -> np.ndarray:
@@ -31,24 +32,33 @@ def ramp_rate(duration: np.ndarray, fraction: float = 0.2, level: float = 0.99) 
     return -np.log(1.0 - level) / (fraction * np.asarray(duration, float))
 
 
-def contact_frames(nodes: np.ndarray, direction: str = "x", rotation_sense: int = -1):
-    """Unit normal (outward 'radial') and sliding direction of each tip node at rest, in the frame of its blade.
+CONE_SLOPE = 0.2737          # rotor 37's casing over the tip: r = 251.97 mm - 0.2737 (z - 6.32 mm) (NASA Table V)
+DIRECTIONS = ("x", "radial", "cone")
 
-    direction 'x': the blade frame's e_x for every node, as the paper does (§2.3); 'radial': (x, y, 0)/|(x, y)|.
+
+def contact_frames(nodes: np.ndarray, direction: str = "x", rotation_sense: int = -1, cone_slope: float = CONE_SLOPE):
+    """Unit normal (outward) and sliding direction of each tip node at rest, in the frame of its blade.
+
+    direction 'x': the blade frame's e_x for every node, as the paper does (§2.3); 'radial': (x, y, 0)/|(x, y)|;
+    'cone': the normal of the conical casing r = r_0 - cone_slope z over the tip, e_r + cone_slope e_z normalised
+    (rotor 37: tilted 15.3 deg from radial towards +z, downstream).
     Returns (normals (n, 3), slide (n, 3), theta0 (n,)): ``slide`` is the direction in which the node moves
-    relative to the casing (rotation_sense * e_theta); friction on the blade acts along -slide; theta0 is the
-    node's angle in the blade frame.
+    relative to the casing (rotation_sense * e_theta, in the casing's tangent plane for 'radial' and 'cone');
+    friction on the blade acts along -slide; theta0 is the node's angle in the blade frame.
     """
     nodes = np.asarray(nodes, float).reshape(-1, 3)
     theta0 = np.arctan2(nodes[:, 1], nodes[:, 0])
     if direction == "x":
         normals = np.tile([1.0, 0.0, 0.0], (len(nodes), 1))
         slide = np.tile([0.0, float(rotation_sense), 0.0], (len(nodes), 1))
-    elif direction == "radial":
-        normals = np.column_stack([np.cos(theta0), np.sin(theta0), np.zeros(len(nodes))])
+    elif direction in ("radial", "cone"):
+        normals = np.column_stack([np.cos(theta0), np.sin(theta0), np.full(len(nodes), 0.0)])
+        if direction == "cone":
+            normals[:, 2] = cone_slope
+            normals /= np.linalg.norm(normals, axis=1)[:, None]
         slide = rotation_sense * np.column_stack([-np.sin(theta0), np.cos(theta0), np.zeros(len(nodes))])
     else:
-        raise ValueError(f"direction must be 'x' or 'radial', got {direction!r}")
+        raise ValueError(f"direction must be one of {DIRECTIONS}, got {direction!r}")
     return normals, slide, theta0
 
 
@@ -70,7 +80,8 @@ def contact_matrices(nodes, r: int, casing: "Casing | None", rows=None):
     if rows.size and (rows.min() < 0 or rows.max() >= len(nodes)):
         raise ValueError(f"node rows must be in [0, {len(nodes) - 1}], got {rows.tolist()}")
     direction, sense = ("x", -1) if casing is None else (casing.direction, casing.rotation_sense)
-    normals, slide, theta_local = contact_frames(nodes.coordinates[rows], direction, sense)
+    slope = CONE_SLOPE if casing is None else casing.cone_slope
+    normals, slide, theta_local = contact_frames(nodes.coordinates[rows], direction, sense, slope)
     if casing is None:
         slide = np.zeros_like(slide)
     theta0 = theta_local + nodes.angles[rows]
@@ -90,10 +101,11 @@ class Casing:
         h_b: height of the two bumps, c0 + p0 (m), >= 0 (paper 0.625 mm).
         mu: Coulomb sliding-friction coefficient, >= 0 (paper 0.15).
         ramp_fraction, ramp_level: the ovalization reaches ``ramp_level`` at ``ramp_fraction`` of the run (eq. 38).
-        direction: 'x' (paper: e_x at every tip node) or 'radial'.
+        direction: 'x' (paper: e_x at every tip node), 'radial' or 'cone' (the conical casing's normal).
         rotation_sense: -1 (rotor 37 turns towards -theta) or +1.
         contact_nodes: rows of the model's node map (``ReducedModel.nodes``) that can touch; None = all.
         width: angular half-width parameter of the bumps (rad), eq. 37: 0.15.
+        cone_slope: -dr/dz of the casing over the tip, for direction 'cone' (rotor 37: 0.2737).
     """
 
     c0: float = 0.5e-3
@@ -105,6 +117,7 @@ class Casing:
     rotation_sense: int = -1
     contact_nodes: tuple | None = None
     width: float = 0.15
+    cone_slope: float = CONE_SLOPE
 
     def __post_init__(self):
         if not (0.0 < self.c0 < 0.05):
@@ -115,8 +128,10 @@ class Casing:
             raise ValueError(f"friction coefficient mu must be in [0, 2], got {self.mu}")
         if not (0.0 < self.ramp_fraction <= 1.0) or not (0.0 < self.ramp_level < 1.0):
             raise ValueError("ramp_fraction must be in (0, 1] and ramp_level in (0, 1)")
-        if self.direction not in ("x", "radial"):
-            raise ValueError(f"direction must be 'x' or 'radial', got {self.direction!r}")
+        if self.direction not in DIRECTIONS:
+            raise ValueError(f"direction must be one of {DIRECTIONS}, got {self.direction!r}")
+        if not (0.0 <= self.cone_slope <= 1.0):
+            raise ValueError(f"cone_slope must be in [0, 1] (a casing half-angle up to 45 deg), got {self.cone_slope}")
         if self.rotation_sense not in (-1, 1):
             raise ValueError(f"rotation_sense must be -1 or +1, got {self.rotation_sense}")
         if not (0.0 < self.width < np.pi / 2):

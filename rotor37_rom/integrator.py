@@ -12,8 +12,8 @@ Step n -> n+1 (t_n = n h):
                 (the reduced operator, not a lumped mass), active set iterated until lambda >= 0 and no gap < 0
     correction  Q_{n+1} = Q* + W f_c, f_c = sum_k lambda_k (-n_k - mu s_k) at node k's DOFs          (eq. 27)
 
-n_k is the contact normal (e_x or radial), s_k the direction in which node k slides on the casing (the rotation
-direction); sliding friction mu lambda_k acts along -s_k. Contact forces, penetrations and the power of friction
+n_k is the contact normal (e_x, radial or the casing cone's), s_k the direction in which node k slides on the casing
+(the rotation direction); sliding friction mu lambda_k acts along -s_k. Contact forces, penetrations and the power of friction
 are outputs, and so is the work each force does on the blade in the scheme's own energy balance: with the discrete
 energy E_{n+1/2} = 1/2 v M v + 1/2 q_{n+1} K q_n (v = (q_{n+1} - q_n)/h, ``discrete_energy``) a force f_n of step n
 does the work f_n . (q_{n+1} - q_{n-1})/2 and the damping takes (q_{n+1} - q_{n-1}) C (q_{n+1} - q_{n-1})/4h, so for
@@ -353,9 +353,9 @@ def _per_sim(casings, P):
         raise ValueError(f"casing: give one Casing or one per simulation ({P}), got {len(casings)}")
     first = casings[0]
     for c in casings:
-        if (c.direction, c.rotation_sense, c.contact_nodes, c.ramp_fraction, c.ramp_level, c.width) != \
+        if (c.direction, c.rotation_sense, c.contact_nodes, c.ramp_fraction, c.ramp_level, c.width, c.cone_slope) != \
                 (first.direction, first.rotation_sense, first.contact_nodes, first.ramp_fraction, first.ramp_level,
-                 first.width):
+                 first.width, first.cone_slope):
             raise ValueError("casing: the simulations of one batch may differ in c0, h_b and mu only")
     return casings
 

@@ -103,3 +103,44 @@ def test_integrator_follows_the_sliding_stability(ci_rom):
           f"{share:.1e}")
     assert rate == pytest.approx(s, rel=2 * share)
     assert res.work[0][1] > 0.0                  # friction feeds the blade
+
+
+def test_static_compliance_and_the_casing_cone_normal(ci_blade, ci_ops, ci_rom):
+    """``fem.static_compliance`` at the 8 tip nodes (24 unit loads on one MUMPS factorisation) equals the r = 45
+    model's tip block of K_r^-1: the constraint modes are exact static responses to tip loads, so the Galerkin
+    solution on the basis is exact and the two differ by round-off (kappa(K) u ~ 1e-10 relative; asserted 1e-8 of
+    max |G|); the sprag-slip onsets from G therefore equal the model's for every contact normal (1e-7). The casing
+    cone's normal is a unit vector at atan(0.2737) = 15.3 deg from e_r towards +e_z, orthogonal to the sliding
+    direction; with slope 0 it is the radial frame (to round-off)."""
+    from rotor37_rom import fem
+
+    G = fem.static_compliance(ci_blade, ci_blade.tip_dofs, ops=ci_ops)
+    rows = [ci_rom.nodes.row(name) for name in ci_blade.tip_names]
+    idx = ci_rom.nodes.q_index[rows].ravel()
+    G_rom = np.linalg.inv(ci_rom.K)[np.ix_(idx, idx)]
+    np.testing.assert_allclose(G, G_rom, rtol=0, atol=1e-8 * np.abs(G).max())
+    for direction in ("x", "radial", "cone"):
+        N, S, _, _ = contact_matrices(ci_rom.nodes, ci_rom.r, Casing(direction=direction), rows=rows)
+        n_tip = len(rows)
+        Nt, St = N[:, idx], S[:, idx]
+        for nodes in ([0], [1], [2], [3], [0, 1, 2, 3], None):
+            mu_rom = sprag_slip_friction(ci_rom.K, N, S, nodes)
+            mu_fom = sprag_slip_friction(np.linalg.inv(G), Nt, St, nodes)
+            assert (np.isinf(mu_rom) and np.isinf(mu_fom)) or mu_fom == pytest.approx(mu_rom, rel=1e-7), \
+                (direction, nodes, mu_rom, mu_fom)
+        assert Nt.shape == (n_tip, 3 * n_tip)
+    from rotor37_rom.casing import CONE_SLOPE, contact_frames
+
+    normals, slide, theta = contact_frames(ci_blade.tip_nodes, "cone", -1)
+    e_r = np.column_stack([np.cos(theta), np.sin(theta), 0 * theta])
+    np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1.0, rtol=1e-15)
+    np.testing.assert_allclose(np.einsum("ij,ij->i", normals, e_r), np.cos(np.arctan(CONE_SLOPE)), rtol=1e-15)
+    assert np.all(normals[:, 2] > 0) and np.abs(np.einsum("ij,ij->i", normals, slide)).max() < 1e-15
+    flat = contact_frames(ci_blade.tip_nodes, "cone", -1, cone_slope=0.0)
+    radial = contact_frames(ci_blade.tip_nodes, "radial", -1)
+    for a, b in zip(flat, radial):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-15)      # the normalisation: round-off
+    with pytest.raises(ValueError, match="cone_slope must be in"):
+        Casing(direction="cone", cone_slope=-0.1)
+    with pytest.raises(ValueError, match="direction must be one of"):
+        Casing(direction="axial")

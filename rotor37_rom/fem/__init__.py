@@ -17,14 +17,15 @@ from .fields import (cell_midpoints, cells_touching_points, displacement_functio
                      von_mises_function)
 from .operators import (JIT_PARAMS, MASS_DIAGONAL, SvkOperators, assemble_free_operators, assemble_mass,
                         assemble_scalar, assemble_stiffness, assemble_tangent_scipy, assemble_vector,
-                        create_svk_operators, evaluate_forces, evaluate_second_derivative, free_dofs,
-                        gather_dof_values, petsc_to_scipy, quadrature_gradients, scipy_to_petsc)
+                        create_svk_operators, evaluate_forces, evaluate_second_derivative, facet_centroid,
+                        free_dofs, gather_dof_values, petsc_to_scipy, quadrature_gradients, scipy_to_petsc)
 from .periodic import RepeatingSectors, sector_harmonic_load, solve_repeating_newmark
 from .sector import (Sector, build_on_rank0, clamp_cell_group, create_blade_sector, create_sector_from_file,
                      create_sector_from_gmsh, create_sector_from_mesh, locate_cyclic_pairs, tip_node_names,
                      write_sector_mesh)
 from .solvers import (ModalResult, StaticResult, TransientResult, compute_clamped_modes, mumps_solver,
-                      slepc_eigenpairs, solve_clamped_static, solve_eigenproblem, solve_newmark, solve_static)
+                      slepc_eigenpairs, solve_clamped_static, solve_eigenproblem, solve_newmark, solve_static,
+                      static_compliance)
 
 __all__ = [
     "Sector", "SvkOperators", "ModalResult", "StaticResult", "TransientResult",
@@ -37,5 +38,6 @@ __all__ = [
     "von_mises_at_quadrature", "cell_midpoints", "cells_touching_points", "MASS_DIAGONAL", "JIT_PARAMS",
     "create_disk_sector", "create_annular_sector", "locate_cyclic_pairs", "assemble_cyclic_operators", "CyclicModes",
     "solve_cyclic_modes", "sector_fields", "clamp_cell_group", "build_on_rank0", "CyclicOperators",
-    "RepeatingSectors", "solve_repeating_newmark", "sector_harmonic_load", "write_sector_mesh",
+    "RepeatingSectors", "solve_repeating_newmark", "sector_harmonic_load", "write_sector_mesh", "facet_centroid",
+    "static_compliance",
 ]

@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from .sector import Sector
 
 __all__ = ["SvkOperators", "create_svk_operators", "assemble_stiffness", "assemble_mass", "assemble_vector",
-           "assemble_scalar", "gather_dof_values", "free_dofs", "petsc_to_scipy", "scipy_to_petsc",
+           "assemble_scalar", "facet_centroid", "gather_dof_values", "free_dofs", "petsc_to_scipy", "scipy_to_petsc",
            "assemble_free_operators", "evaluate_forces", "evaluate_second_derivative", "assemble_tangent_scipy",
            "quadrature_gradients", "MASS_DIAGONAL", "JIT_PARAMS"]
 
@@ -114,6 +114,18 @@ def assemble_scalar(form, comm: MPI.Comm | None = None) -> float:
     compiled = fem.form(form, jit_params=JIT_PARAMS)
     comm = comm or compiled.mesh.comm
     return comm.allreduce(fem.assemble_scalar(compiled), op=MPI.SUM)
+
+
+def facet_centroid(sector: Sector, group: str) -> np.ndarray:
+    """(3,) area-weighted centroid (m) of a named facet group (e.g. 'clamp', 'tip')."""
+    if group not in sector.groups:
+        raise ValueError(f"group {group!r} not in this sector; it has {sorted(sector.groups)}")
+    ds = ufl.Measure("ds", domain=sector.mesh, subdomain_data=sector.facet_tags)(sector.groups[group])
+    x = ufl.SpatialCoordinate(sector.mesh)
+    area = assemble_scalar(ufl.as_ufl(1.0) * ds, sector.comm)
+    if not area > 0:
+        raise ValueError(f"group {group!r} has no facets")
+    return np.array([assemble_scalar(x[i] * ds, sector.comm) for i in range(3)]) / area
 
 
 def gather_dof_values(sector: Sector, values: np.ndarray, dofs: np.ndarray) -> np.ndarray:
