@@ -74,6 +74,7 @@ def test_plate_cyclic_modes_equal_the_assembled_plate(plate):
     assert 0.0 < plate.cyclic.worst_distance < 1e-9 * PLATE["outer"] * 1e3          # setPeriodic: round-off
 
 
+@pytest.mark.slow                     # builds a plate twice as fine (16 s): in make test, not in test-fast
 def test_plate_against_kirchhoff_theory(plate):
     """The lowest mode with n = k nodal diameters of the 3-D plate sector (P2) against the Kirchhoff plate (an
     analytical reference, independent of the code): within the thin-plate error, shear and rotary inertia
