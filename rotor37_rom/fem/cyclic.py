@@ -211,13 +211,17 @@ class CyclicOperators:
             A.axpy(c, Ac, SAME)
             A.axpy(s, As, SAME)
 
+    def _by_parts(self, k: int) -> bool:
+        """Whether index k is a combination of the k-free parts (0 < k < N/2, no axis nodes)."""
+        return self.sector.cyclic.n_copies(k) == 2 and not len(self.sector.cyclic.axis)
+
     def project(self, k: int) -> tuple[PETSc.Mat, PETSc.Mat, PETSc.Mat]:
         """(K_k, M_k, T_k) for harmonic index k: K_k = T_k^T diag(K, K) T_k and likewise M_k (one copy for k = 0 and
         N/2), with 1 / MASS_DIAGONAL on the eliminated slots' diagonal."""
         sector, pairs = self.sector, self.sector.cyclic
         k = pairs.check_k(k)
         m = pairs.n_copies(k)
-        if m == 2 and not len(pairs.axis):
+        if self._by_parts(k):
             out = tuple(A0.duplicate(copy=False) for A0, _, _ in self._harmonic_parts())
             self._combine(k, out)
             return out
@@ -243,9 +247,8 @@ class CyclicOperators:
         neighbouring k with as many copies (``CyclicModes.x``), a good start for Krylov-Schur."""
         if n_modes < 1:
             raise ValueError(f"n_modes must be >= 1, got {n_modes}")
-        pairs = self.sector.cyclic
-        m = pairs.n_copies(k)
-        reuse = m == 2 and not len(pairs.axis)
+        m = self.sector.cyclic.n_copies(k)
+        reuse = self._by_parts(k)
         if reuse:            # one K_k object and one solver for all 0 < k < N/2: MUMPS refactors, no new analysis
             if self._work is None:
                 self._work = (*(A0.duplicate(copy=False) for A0, _, _ in self._harmonic_parts()),

@@ -130,28 +130,17 @@ def solve_eigenproblem(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float = 
 
 def static_compliance(sector: Sector, dofs, K: PETSc.Mat | None = None, ops: SvkOperators | None = None
                       ) -> np.ndarray:
-    """G = E^T K^-1 E (m/N): the static displacement of each DOF of ``dofs`` under a unit force on each, clamped.
+    """G = E^T K^-1 E (m/N): the static displacement of each DOF of ``dofs`` under a unit force on each, clamped
+    (``solve_clamped_static`` with one unit load per DOF; serial).
 
-    ``dofs``: per-rank local DOF indices, -1 where not owned here (``sector.tip_dofs``, any shape; G follows its
-    flattened order). ``K``: the clamped stiffness (assembled if None), or any operator in the sector's layout (a
-    cyclic K_k of k = 0 or N/2). Symmetric, identical on every rank. Craig-Bampton keeps these DOFs with exact static
-    constraint modes, so a reduced model's compliance at them is this one."""
+    ``dofs``: DOF indices (``sector.tip_dofs``, any shape; G follows its flattened order). ``K``: the clamped
+    stiffness (assembled if None), or any operator in the sector's layout (a cyclic K_k of k = 0 or N/2). Symmetric.
+    Craig-Bampton keeps these DOFs with exact static constraint modes, so a reduced model's compliance at them is
+    this one."""
     dofs = np.asarray(dofs).ravel()
-    own = K is None
-    if own:
-        K = assemble_stiffness(sector, ops)
-    ksp = _lu_solver(sector.comm, K, "compliance_")
-    b, x = K.createVecRight(), K.createVecLeft()
-    G = np.zeros((dofs.size, dofs.size))
-    for j, d in enumerate(dofs):
-        b.set(0.0)
-        if d >= 0:
-            b.array[d] = 1.0
-        ksp.solve(b, x)
-        G[:, j] = gather_dof_values(sector, x.array, dofs)
-    ksp.destroy()
-    if own:
-        K.destroy()
+    loads = np.zeros((dofs.size, sector.n_dofs))
+    loads[np.arange(dofs.size), dofs] = 1.0
+    G = solve_clamped_static(sector, loads, ops, K=K)[:, dofs]
     return 0.5 * (G + G.T)
 
 
@@ -413,11 +402,15 @@ def solve_newmark(sector: Sector, force_shape: PETSc.Vec, load: Callable[[float]
     return TransientResult(t=t, monitored=np.array(monitored), u=u_out, v=v_out, energy=np.array(energies))
 
 
-def solve_clamped_static(sector: Sector, rhs: np.ndarray, ops: SvkOperators | None = None) -> np.ndarray:
-    """Solve K x = b for many right-hand sides b (n_rhs, n_dofs) with the clamp (one MUMPS factorisation)."""
+def solve_clamped_static(sector: Sector, rhs: np.ndarray, ops: SvkOperators | None = None,
+                         K: PETSc.Mat | None = None) -> np.ndarray:
+    """Solve K x = b for many right-hand sides b (n_rhs, n_dofs) with the clamp (one MUMPS factorisation). ``K``:
+    the clamped stiffness (assembled if None), or any operator in the sector's layout (a cyclic K_k of k = 0 or
+    N/2)."""
     _require_serial(sector, "solve_clamped_static")
-    ops = ops or create_svk_operators(sector)
-    K = assemble_stiffness(sector, ops)
+    own = K is None
+    if own:
+        K = assemble_stiffness(sector, ops or create_svk_operators(sector))
     ksp = _lu_solver(sector.comm, K, "md_")
     clamped = sector.clamp_bc.dof_indices()[0]
     b, x = K.createVecLeft(), K.createVecRight()
@@ -429,7 +422,8 @@ def solve_clamped_static(sector: Sector, rhs: np.ndarray, ops: SvkOperators | No
         ksp.solve(b, x)
         out[k] = x.array
     ksp.destroy()
-    K.destroy()
+    if own:
+        K.destroy()
     return out
 
 
