@@ -22,6 +22,13 @@ def machine_description() -> str:
            f"Python {platform.python_version()}"
 
 
+def mpirun_env(**extra: str) -> dict:
+    """The environment of an ``mpirun`` child: as root on the CI machine, oversubscribed, and unbound (a rank waiting
+    for rank 0's gmsh must not hold its core; gmsh meshes with two threads), plus ``extra``."""
+    return dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+                OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_hwloc_base_binding_policy="none", **extra)
+
+
 def write_results(name: str, rows: list, **extra) -> str:
     """results/<name>.json with the machine and rows; returns the machine description."""
     machine = machine_description()

@@ -11,13 +11,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import write_results  # noqa: E402
+from _common import mpirun_env, write_results  # noqa: E402
 
 CHILD = r"""
 import json, resource, sys, time
@@ -52,8 +51,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     rows = []
     # no core binding: rank 0 meshes with gmsh's two threads while rank 1 waits (bound to one core: 1.6x slower)
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_hwloc_base_binding_policy="none")
+    env = mpirun_env()
     for preset in args.presets:
         for ranks in args.ranks:
             cmd = [sys.executable, "-c", CHILD, preset]

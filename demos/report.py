@@ -48,6 +48,8 @@ from rotor37_rom.modes import PAPER_CLAMPED_OMEGA  # noqa: E402
 from rotor37_rom.report import Section, Table, write_report  # noqa: E402
 
 SIGMA_Y_TEXT = "sigma_Y = 1.38 GPa"
+NORMALS = {"x": "e_x (the paper's)", "radial": "radial at each node",
+           "cone": "the conical casing's (15.3 deg from radial)"}
 PAPER_STRESS = {False: "above sigma_Y (bladed disk at its 1B/EO4 resonance, Fig. 25)",
                 True: "below sigma_Y: the blade stays elastic (Fig. 25)"}
 # -
@@ -70,7 +72,10 @@ class ReportConfig:
         r_c: fixed-interface modes of the reduced model (>= 1; 25 gives the r = 55 model of the contact studies).
         speeds: (START, STOP, N): the maps' angular speeds (rad/s).
         revolutions: revolutions per speed (> 0), from rest (zero initial conditions).
-        mu: friction coefficient of the casing contact (>= 0; the paper 0.15, unbounded here at many speeds).
+        mu: friction coefficient of the casing contact (>= 0; the paper 0.15, unbounded here at many speeds with
+            the normal e_x).
+        direction: contact normal: 'x' (the paper's e_x), 'radial' or 'cone' (the conical casing's own normal,
+            with which friction cannot wedge this tip: docs/results.md).
         linear_cap: frequency cap of the linear map (kHz; None: none). The GNL map runs without one.
         levels: load levels on each side of delta = 0 in the clearance study (1..50).
         pictures: mode shapes and stress fields drawn with pyvista.
@@ -84,6 +89,7 @@ class ReportConfig:
     speeds: tuple[float, float, int] = (1200.0, 1600.0, 11)
     revolutions: float = 8.0
     mu: float = 0.0
+    direction: str = "x"
     linear_cap: float | None = 60.0
     levels: int = 10
     pictures: bool = True
@@ -119,7 +125,7 @@ class ReportConfig:
     def map_configs(self) -> list[ContactMapConfig]:
         """The linear map (with the cap) and the GNL map (exact tensors, h = 0.5 x 2 / omega_max)."""
         common = dict(model=self.model_file, speeds=self.speeds, revolutions=self.revolutions, mu=self.mu,
-                      out=self.out / "contact_map", quiet=self.quiet)
+                      direction=self.direction, out=self.out / "contact_map", quiet=self.quiet)
         return [ContactMapConfig(gnl="off", frequency_cap=self.linear_cap, **common),
                 ContactMapConfig(gnl="on", **common)]
 # -
@@ -371,7 +377,8 @@ def summary_table(result: ReportResult) -> Table:
                 if np.isfinite(w) else "no bounded speed dominated by 1B/EO4")
         rows.append([f"zero-IC 1B/EO4 resonance, {run.label} (rad/s)", ours,
                      f"{paper:.0f} ({percent(paper / PAPER['linear 1B/EO4'] - 1)})",
-                     f"mu = {c.mu:g}, {n:d} speed{'s' * (n > 1)} in {start:g}-{stop:g} x {c.revolutions:g} rev (paper: mu = 0.15, "
+                     f"mu = {c.mu:g}, normal {c.direction}, {n:d} speed{'s' * (n > 1)} in {start:g}-{stop:g} x "
+                     f"{c.revolutions:g} rev (paper: mu = 0.15, "
                      "every 2 rad/s x 200 rev)"])
     past = [f"{run.label}: {', '.join(f'{w:.0f}' for w in run.speeds[run.diverged])} rad/s"
             for _, run in result.runs if run.diverged.any()]
@@ -466,15 +473,17 @@ def maps_section(result: ReportResult) -> Section:
     return Section(
         "Interaction maps and NFRC (§2.3.1, Figs. 6-7)",
         [f"{n:d} speed{'s' * (n > 1)} in {start:g}-{stop:g} rad/s, {cfg.revolutions:g} revolutions each from rest (the paper: every "
-         f"2 rad/s, 200 revolutions), casing ovalized into two lobes (c0 = 0.5 mm, h_b = 0.625 mm), mu = {cfg.mu:g}. "
+         f"2 rad/s, 200 revolutions), casing ovalized into two lobes (c0 = 0.5 mm, h_b = 0.625 mm), mu = {cfg.mu:g}, "
+         f"contact normal {NORMALS[cfg.direction]}. "
          "The map is the spectrum of the second half of node LE's normal displacement; the NFRC its largest value "
          "over the last revolution. Speeds that grew past the limit (a tip DOF beyond 20 mm) are left out. The 1B/EO4 "
          "resonance is the largest response among the speeds whose spectrum peaks at 4 Omega (1B); the largest "
          "response of the map can be a higher mode's crossing.",
-         f"Why mu = {cfg.mu:g}: sustained sliding on the casing diverges (sprag-slip) from mu = "
-         f"{onset['weakest_node']:.3f} on the weakest contact node and {onset['all_nodes']:.3f} on all eight; with "
-         "intermittent contact on the moving bumps the paper's mu = 0.15 grows without bound at many speeds "
-         "(docs/results.md, 'Friction'), while the frictionless maps are bounded.",
+         f"Why mu = {cfg.mu:g} with this normal: sustained sliding on the casing diverges (sprag-slip) from mu = "
+         f"{onset_text(onset['weakest_node'])} on the weakest contact node and {onset_text(onset['all_nodes'])} on "
+         "all eight. With the normal e_x, intermittent contact on the moving bumps makes the paper's mu = 0.15 grow "
+         "without bound at many speeds, while the frictionless maps are bounded; with the conical casing's own "
+         "normal friction does not wedge the tip and mu = 0.15 stays bounded (docs/results.md, 'Friction').",
          "The linear map runs with the 60 kHz frequency cap (the cheapest cap within 5 % of the unscaled model), the "
          "GNL map with the exact cubic tensors at half the stability limit: with GNL a cap needs a step from the "
          "tangent stiffness of the states a run reaches (docs/performance.md)."],
@@ -482,6 +491,12 @@ def maps_section(result: ReportResult) -> Section:
                                              "largest response", "paper (rad/s, mu = 0.15)",
                                              "past the limit (rad/s)", "wall (s)"], rows)],
         figures=figures, flags=[f for f in flags(result) if "drawn as missing" in f])
+
+
+def onset_text(mu: float | None) -> str:
+    """A sprag-slip onset for the text: 'never' where friction does not wedge the nodes at any mu (None in the
+    summary)."""
+    return "never" if mu is None or not np.isfinite(mu) else f"{mu:.3f}"
 
 
 def stress_section(result: ReportResult) -> Section:
@@ -544,6 +559,8 @@ def build_parser() -> ArgumentParser:
                                                               "1600 11)")
     parser.add_argument("--revolutions", type=float, default=8.0, help="revolutions per speed (default 8)")
     parser.add_argument("--mu", type=float, default=0.0, help="friction coefficient (default 0; the paper 0.15)")
+    parser.add_argument("--direction", choices=list(NORMALS), default="x",
+                        help="contact normal: x (the paper's e_x, default), radial, cone (the casing cone's normal)")
     parser.add_argument("--linear-cap", type=float, default=60.0, metavar="KHZ",
                         help="frequency cap of the linear map (kHz, default 60; 0: none)")
     parser.add_argument("--levels", type=int, default=10, help="clearance study: load levels per side (1..50)")
@@ -557,7 +574,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Parse the options, run every study, write the report; raises ValueError for a bad input."""
     args = build_parser().parse_args(argv)
     config = ReportConfig(preset=args.preset, table=args.table, r_c=args.r_c, speeds=tuple(args.speeds),
-                          revolutions=args.revolutions, mu=args.mu, linear_cap=args.linear_cap or None,
+                          revolutions=args.revolutions, mu=args.mu, direction=args.direction, linear_cap=args.linear_cap or None,
                           levels=args.levels, pictures=not args.no_pictures, quiet=args.quiet, out=args.out)
     logging.basicConfig(level=logging.WARNING, force=True)
     logging.getLogger().handlers[0].setLevel(logging.WARNING)

@@ -1,0 +1,219 @@
+"""GNL against linear in contact on equal footing (issue #23, item 2): zero-IC interaction maps and NFRC of one
+reduced model with the geometric nonlinearity off and on, at friction coefficients where both stay bounded.
+
+With the paper's contact normal e_x this blade's tip wedges into the casing by friction from mu ~ 0.17 (sprag-slip,
+docs/results.md), and at mu = 0.15 about half of the map's speeds grow; the conical casing's own normal
+(``--direction cone``) keeps every map bounded. Each friction value runs the project's map command, unchanged, on
+the same reduced model with the same frequency cap for both settings (the linear model slowed above the cap exactly
+as the GNL one):
+
+    [mpirun -n RANKS] python demos/contact_map.py --model MODEL --gnl off|on|both --frequency-cap CAP --cubature 1e-4
+        --precision single --mu MU --direction DIRECTION --speeds START STOP N --revolutions R
+        --retry-diverged 2 --out results/gnl_vs_linear/<direction>_mu<MU>_<START>-<STOP>
+
+(the GNL forces are the point cubature trained on exact GNL contact runs of that friction value, float32, as in
+the GNL headline map). A killed run started again resumes. From each map's per-speed records this script takes,
+GNL off and on: the speeds that grew past the limit after the retries, the largest response and its speed, the
+1B/EO4 resonance (``sweep.engine_order_resonance``) and its stiffening over omega_1/4 of the model, and at that
+resonance the mechanism: the share of the last half of the run during which some tip node touches the casing, and
+the work the normal and the friction forces did on the blade. Results to results/bench_gnl_vs_linear.json (rows of
+earlier runs with other settings are kept), printed as Markdown (docs/results.md). Wall times are the maps' own
+output (a rerun that finds every speed done takes seconds).
+
+    python benchmarks/bench_gnl_vs_linear.py                  # mu = 0.15, 1200-2000 rad/s, 200 rev: ~1 h on 2 cores
+    python benchmarks/bench_gnl_vs_linear.py --mu 0 --gnl off    # the linear maps without friction: 4 min
+    python benchmarks/bench_gnl_vs_linear.py --mu 0 0.05 0.1 0.15 # every friction value of issue #23 (~4 h)
+
+The r = 55 ci model is built (20 s) when --model is missing. Each cubature training is serial (8 min); the maps run
+on --ranks ranks.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import mpirun_env, write_results  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+DEMO = ROOT / "demos" / "contact_map.py"
+OUT = Path("results/gnl_vs_linear")
+SETTINGS = {"off": (False,), "on": (True,), "both": (False, True)}
+
+
+def map_command(args, mu: float, speeds: tuple, out: Path) -> list[str]:
+    """The demo's command line of one friction value and speed range (under mpirun with more than one rank)."""
+    start, stop, n = speeds
+    cmd = [sys.executable, str(DEMO), "--model", str(args.model), "--gnl", args.gnl,
+           "--frequency-cap", f"{args.cap:g}", "--cubature", f"{args.cubature:g}", "--precision", "single",
+           "--mu", f"{mu:g}", "--direction", args.direction, "--speeds", f"{start:g}", f"{stop:g}", f"{int(n)}",
+           "--revolutions", f"{args.revolutions:g}", "--retry-diverged", "2", "--batch", f"{args.batch}",
+           "--out", str(out), "--quiet"]
+    if args.ranks > 1:
+        cmd = ["mpirun", "-n", str(args.ranks)] + cmd
+    return cmd
+
+
+def contact_share(record: dict) -> float:
+    """Share of the last half of a run's records during which some contact node carries a multiplier."""
+    lam = np.asarray(record["lam"])
+    half = lam[:, lam.shape[1] // 2:]
+    return float(np.mean(np.any(half > 0.0, axis=0)))
+
+
+def setting_records(folder: Path, gnl: bool, revolutions: float) -> tuple[dict, dict]:
+    """({speed: per-speed record}, summary.json entry) of one setting (GNL off or on) of the map in ``folder``."""
+    from rotor37_rom.sweep import load_sweep
+
+    summary = json.loads((folder / "summary.json").read_text())
+    entry = next(v for k, v in summary["runs"].items() if k.startswith("GNL") == gnl)
+    records = {}
+    for sweep in sorted((folder / "sweeps").iterdir()):
+        spec = json.loads((sweep / "spec.json").read_text())
+        if bool(spec["nonlinear"]) != gnl or float(spec["spec"]["revolutions"]) != revolutions:
+            continue
+        for rec in load_sweep(sweep):                  # the retries' records replace the first run's
+            if int(rec["diverged_step"]) < 0 or float(rec["omega"]) not in records:
+                records[float(rec["omega"])] = rec
+    return {w: records[w] for w in entry["speeds"]}, entry
+
+
+def map_row(folders: list[Path], mu: float, gnl: bool, revolutions: float, quarter_omega1: float) -> dict:
+    """One setting (GNL off or on) over the speed ranges of ``folders``: speeds grown past the limit, the largest
+    response, the 1B/EO4 resonance and the contact mechanism there."""
+    from rotor37_rom.sweep import engine_order_resonance, interaction_map
+
+    records, entries = {}, []
+    for folder in folders:
+        recs, entry = setting_records(folder, gnl, revolutions)
+        records.update(recs)
+        entries.append(entry)
+    speeds = np.array(sorted(records))
+    recs = [records[w] for w in speeds]
+    imap = interaction_map(recs)
+    resonance = engine_order_resonance(imap, 4, revolutions)
+    at = recs[int(np.argmin(np.abs(speeds - resonance)))] if np.isfinite(resonance) else None
+    work = np.asarray(at["work"], float) if at is not None else np.full(4, np.nan)
+    bounded = ~imap.diverged
+    checks = [e["contact_checks"] for e in entries]
+    return {
+        "mu": mu, "gnl": gnl, "h": [e["h"] for e in entries],
+        "speeds_grown": speeds[imap.diverged].tolist(), "n_speeds": len(speeds),
+        "peak_speed": float(speeds[bounded][np.nanargmax(imap.nfrc[bounded])]) if bounded.any() else None,
+        "peak_mm": float(np.nanmax(imap.nfrc) * 1e3) if bounded.any() else None,
+        "resonance": resonance, "stiffening_pct": 100.0 * (resonance / quarter_omega1 - 1.0),
+        "resonance_mm": float(imap.nfrc[speeds == resonance][0] * 1e3) if at is not None else None,
+        "contact_share": contact_share(at) if at is not None else None,
+        "work_normal_J_per_rev": float(work[0] / revolutions),
+        "work_friction_J_per_rev": float(work[1] / revolutions),
+        "max_penetration": max(c["max_penetration"] for c in checks),
+        "min_multiplier": min(c["min_multiplier"] for c in checks),
+        "max_friction_power": max(c["max_friction_power"] for c in checks),
+        "nfrc_mm": (imap.nfrc * 1e3).tolist(), "speeds": speeds.tolist()}
+
+
+def earlier_rows(rows: list[dict]) -> list[dict]:
+    """The rows of results/bench_gnl_vs_linear.json that ``rows`` do not replace (another friction value, setting or
+    normal, e.g. from a run with --gnl off only), so that the file collects every run."""
+    path = Path("results/bench_gnl_vs_linear.json")
+    if not path.is_file():
+        return []
+    key = ("mu", "gnl", "direction", "speeds")
+    new = {tuple(json.dumps(r[k]) for k in key) for r in rows}
+    return [r for r in json.loads(path.read_text())["rows"] if tuple(json.dumps(r.get(k)) for k in key) not in new]
+
+
+def markdown(rows: list[dict], quarter_omega1: float) -> str:
+    def f(x, fmt):
+        return "–" if x is None or not np.isfinite(x) else format(x, fmt)
+
+    lines = [f"| μ | GNL | grown (of N) | largest response | 1B/EO4 resonance (stiffening over ω₁/4 = "
+             f"{quarter_omega1:.0f}) | LE there | time in contact there | normal / friction work there (J/rev) |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(
+            f"| {r['mu']:g} | {'on' if r['gnl'] else 'off'} | {len(r['speeds_grown'])} of {r['n_speeds']} | "
+            f"{f(r['peak_mm'], '.2f')} mm at {f(r['peak_speed'], '.0f')} | {f(r['resonance'], '.0f')} rad/s "
+            f"({f(r['stiffening_pct'], '+.1f')} %) | {f(r['resonance_mm'], '.2f')} mm | "
+            f"{f(None if r['contact_share'] is None else 100 * r['contact_share'], '.1f')} % | "
+            f"{f(r['work_normal_J_per_rev'], '.3f')} / {f(r['work_friction_J_per_rev'], '.3f')} |")
+    return "\n".join(lines)
+
+
+def build_model(path: Path, preset: str, r_c: int) -> None:
+    """The reduced model the maps share (the project's contact model: 24 tip DOFs, r_c fixed-interface modes and the
+    modal derivatives of 1B, 1T, 2B with exact cubic tensors)."""
+    from rotor37_rom import fem
+    from rotor37_rom.builder import ReductionConfig, build_reduced_model
+    from rotor37_rom.reduction import save_reduced_model
+
+    sector = fem.create_blade_sector(preset=preset)
+    model, _ = build_reduced_model(sector, ReductionConfig(r_c=r_c, r_md=0, global_md_modes=3, forces="intrusive"),
+                                   cache_dir=OUT / "cache")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    save_reduced_model(model, path)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--model", type=Path, default=OUT / "rom.npz", help="reduced model; built when missing")
+    parser.add_argument("--preset", default="ci", help="mesh preset of the model built (default ci)")
+    parser.add_argument("--r-c", type=int, default=25, help="fixed-interface modes of the model built (default 25)")
+    parser.add_argument("--mu", type=float, nargs="+", default=[0.15], help="friction coefficients (default 0.15)")
+    parser.add_argument("--direction", choices=["x", "radial", "cone"], default="cone")
+    parser.add_argument("--gnl", choices=list(SETTINGS), default="both", help="maps with GNL off, on or both")
+    parser.add_argument("--speeds", type=float, nargs="+", default=[1200.0, 1600.0, 21, 1620.0, 2000.0, 20],
+                        metavar="START STOP N", help="one or more speed ranges, each a map of its own (its own "
+                        "cubature, trained at its speeds); default 1200-1600 x 21 and 1620-2000 x 20")
+    parser.add_argument("--revolutions", type=float, default=200.0)
+    parser.add_argument("--cap", type=float, default=120.0, help="frequency cap of both settings (kHz)")
+    parser.add_argument("--cubature", type=float, default=1e-4, help="tolerance of the GNL point cubature")
+    parser.add_argument("--batch", type=int, default=11, help="speeds integrated together per rank")
+    parser.add_argument("--ranks", type=int, default=2, help="MPI ranks of the maps (1: serial)")
+    args = parser.parse_args(argv)
+    from rotor37_rom.reduction import load_reduced_model
+
+    if not args.model.is_file():
+        build_model(args.model, args.preset, args.r_c)
+    model = load_reduced_model(args.model)
+    import scipy.linalg
+    quarter_omega1 = float(np.sqrt(scipy.linalg.eigh(model.K, model.M, eigvals_only=True)[0])) / 4
+    env = mpirun_env(OPENBLAS_NUM_THREADS="1") if args.ranks > 1 else None    # one BLAS thread per rank
+    if len(args.speeds) % 3:
+        print(f"error: --speeds takes START STOP N per range, got {len(args.speeds)} numbers", file=sys.stderr)
+        return 2
+    ranges = [tuple(args.speeds[i:i + 3]) for i in range(0, len(args.speeds), 3)]
+    rows, commands = [], []
+    for mu in args.mu:
+        folders = []
+        for speeds in ranges:
+            out = OUT / f"{args.direction}_mu{mu:g}_{speeds[0]:g}-{speeds[1]:g}"
+            cmd = map_command(args, mu, speeds, out)
+            commands.append(" ".join(str(c) for c in cmd))
+            t0 = time.perf_counter()
+            done = subprocess.run(cmd, env=env, cwd=Path.cwd())
+            if done.returncode != 0:
+                print(f"the map at mu = {mu:g} failed (exit {done.returncode}): {commands[-1]}", file=sys.stderr)
+                return 1
+            print(f"mu = {mu:g}, {speeds[0]:g}-{speeds[1]:g} rad/s: {time.perf_counter() - t0:.0f} s")
+            folders.append(out)
+        rows += [map_row(folders, mu, gnl, args.revolutions, quarter_omega1) | {"direction": args.direction}
+                 for gnl in SETTINGS[args.gnl]]
+    rows = earlier_rows(rows) + rows
+    machine = write_results("bench_gnl_vs_linear", rows, model={"file": str(args.model), "r": model.r,
+                            "sizes": model.sizes, "quarter_omega1": quarter_omega1},
+                            settings={k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()},
+                            commands=commands)
+    print(f"{machine}; model r = {model.r} {model.sizes}, {args.direction} normal, {args.revolutions:g} revolutions")
+    print(markdown(sorted(rows, key=lambda r: (r["direction"], r["mu"], r["gnl"])), quarter_omega1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
