@@ -147,15 +147,17 @@ def markdown(rows: list[dict], quarter_omega1: float) -> str:
 
 
 def build_model(path: Path, preset: str, r_c: int) -> None:
-    """The reduced model the maps share (the project's contact model: 24 tip DOFs, r_c fixed-interface modes and the
-    modal derivatives of 1B, 1T, 2B with exact cubic tensors)."""
-    from rotor37_rom import fem
-    from rotor37_rom.builder import ReductionConfig, build_reduced_model
+    """The reduced model the maps share, built as the map command builds it (24 tip DOFs, r_c fixed-interface modes,
+    the modal derivatives of 1B, 1T, 2B, exact cubic tensors), saved to ``path``."""
+    import importlib.util
+
     from rotor37_rom.reduction import save_reduced_model
 
-    sector = fem.create_blade_sector(preset=preset)
-    model, _ = build_reduced_model(sector, ReductionConfig(r_c=r_c, r_md=0, global_md_modes=3, forces="intrusive"),
-                                   cache_dir=OUT / "cache")
+    spec = importlib.util.spec_from_file_location("contact_map", DEMO)
+    demo = importlib.util.module_from_spec(spec)
+    sys.modules["contact_map"] = demo                   # its dataclasses look their module up
+    spec.loader.exec_module(demo)
+    model = demo.build_model(demo.ContactMapConfig(preset=preset, r_c=r_c, out=OUT))
     path.parent.mkdir(parents=True, exist_ok=True)
     save_reduced_model(model, path)
 
@@ -177,6 +179,9 @@ def main(argv=None) -> int:
     parser.add_argument("--batch", type=int, default=11, help="speeds integrated together per rank")
     parser.add_argument("--ranks", type=int, default=2, help="MPI ranks of the maps (1: serial)")
     args = parser.parse_args(argv)
+    if len(args.speeds) % 3:
+        print(f"error: --speeds takes START STOP N per range, got {len(args.speeds)} numbers", file=sys.stderr)
+        return 2
     from rotor37_rom.reduction import load_reduced_model
 
     if not args.model.is_file():
@@ -185,9 +190,6 @@ def main(argv=None) -> int:
     import scipy.linalg
     quarter_omega1 = float(np.sqrt(scipy.linalg.eigh(model.K, model.M, eigvals_only=True)[0])) / 4
     env = mpirun_env(OPENBLAS_NUM_THREADS="1") if args.ranks > 1 else None    # one BLAS thread per rank
-    if len(args.speeds) % 3:
-        print(f"error: --speeds takes START STOP N per range, got {len(args.speeds)} numbers", file=sys.stderr)
-        return 2
     ranges = [tuple(args.speeds[i:i + 3]) for i in range(0, len(args.speeds), 3)]
     rows, commands = [], []
     for mu in args.mu:
