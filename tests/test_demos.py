@@ -84,3 +84,15 @@ def test_contact_map_bad_input_is_one_line(tmp_path, args, flag):
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"error: {flag}") and "Traceback" not in run.stderr, run.stderr
     assert not out.exists()
+
+
+def test_report_passes_the_contact_normal_to_both_maps():
+    """The report's --direction reaches both maps' casing (the cone normal keeps the paper's mu = 0.15 bounded), and a
+    normal it does not know is refused naming the option, before any work."""
+    report = load_demo("report")
+    config = report.ReportConfig(direction="cone", mu=0.15)
+    assert [c.casing.direction for c in config.map_configs] == ["cone", "cone"]
+    assert [c.casing.mu for c in config.map_configs] == [0.15, 0.15]
+    assert report.onset_text(None) == report.onset_text(float("inf")) == "never"
+    with pytest.raises(ValueError, match="^--direction: "):
+        report.ReportConfig(direction="z")
