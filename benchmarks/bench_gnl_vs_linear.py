@@ -162,6 +162,18 @@ def build_model(path: Path, preset: str, r_c: int) -> None:
     save_reduced_model(model, path)
 
 
+def nfrc_chart(rows: list[dict], direction: str, quarter_omega1: float) -> Path:
+    """The NFRC of every row with this normal, one curve per friction value and setting, with the paper's zero-IC
+    resonances; results/gnl_vs_linear/nfrc_<direction>.png."""
+    from rotor37_rom.charts import plot_nfrc
+
+    curves = {f"mu = {r['mu']:g}, GNL {'on' if r['gnl'] else 'off'}":
+              (r["speeds"], np.asarray(r["nfrc_mm"], float) * 1e-3, "o-" if r["gnl"] else "s--")
+              for r in sorted(rows, key=lambda r: (r["mu"], r["gnl"])) if r["direction"] == direction}
+    return plot_nfrc(curves, OUT / f"nfrc_{direction}.png", linear_resonance=quarter_omega1,
+                     paper={"paper zero IC, no GNL": 1446.0, "paper zero IC, GNL": 1535.0})
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--model", type=Path, default=OUT / "rom.npz", help="reduced model; built when missing")
@@ -212,7 +224,9 @@ def main(argv=None) -> int:
                             "sizes": model.sizes, "quarter_omega1": quarter_omega1},
                             settings={k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()},
                             commands=commands)
-    print(f"{machine}; model r = {model.r} {model.sizes}, {args.direction} normal, {args.revolutions:g} revolutions")
+    chart = nfrc_chart(rows, args.direction, quarter_omega1)
+    print(f"{machine}; model r = {model.r} {model.sizes}, {args.direction} normal, {args.revolutions:g} revolutions; "
+          f"NFRC chart {chart}")
     print(markdown(sorted(rows, key=lambda r: (r["direction"], r["mu"], r["gnl"])), quarter_omega1))
     return 0
 
