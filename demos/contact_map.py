@@ -1,12 +1,15 @@
-# # Blade-tip/casing contact: interaction maps, NFRC and continuation (paper §2.3.1, §2.3.3; Figs. 6, 7, 11, 12)
+# # Blade-tip/casing contact: interaction maps, NFRC and continuation (paper §2.3.1, §2.3.3, §3.4; Figs. 6, 7, 11, 12, 23, 24)
 #
-# Builds (or loads) a reduced model of the clamped blade, then sweeps the angular speed with the casing ovalized into
-# two lobes (eqs. 37-38; c0 = 0.5 mm, h_b = 0.625 mm, mu = 0.15), GNL off and on. Every speed's result is written as
+# Builds (or loads) a reduced model of the clamped blade, or with `--disk` of the whole 36-sector bladed disk (every
+# blade's 8 tip nodes in contact, each blade at its own angle), then sweeps the angular speed with the casing ovalized
+# into two lobes (eqs. 37-38; c0 = 0.5 mm, h_b = 0.625 mm, mu = 0.15), GNL off and on. Every speed's result is written as
 # it finishes; a killed run started again resumes. The same command under `mpirun -n N` splits the speeds over the
 # ranks (give --model, the file the serial run saved; with --cubature rank 0 trains, the others wait).
 #
 #     python demos/contact_map.py --preset ci --speeds 1200 1600 21 --revolutions 20          # minutes
 #     python demos/contact_map.py --preset coarse --speeds 1200 1600 201 --revolutions 200      # paper scale (hours)
+#     python demos/contact_map.py --disk --gnl off --direction cone --frequency-cap 60 --speeds 1200 1650 10 \
+#         --out results/disk_map                                   # the bladed disk (minutes per speed batch)
 #     mpirun -n 2 python demos/contact_map.py --model results/contact_map/rom.npz --speeds 1200 1600 21
 #     OPENBLAS_NUM_THREADS=1 mpirun -n 2 python demos/contact_map.py --model results/contact_map/rom.npz --gnl on \
 #         --cubature 1e-4 --precision single --frequency-cap 120 --mu 0 --speeds 1200 1600 100 --revolutions 200 \
@@ -33,14 +36,16 @@ import numpy as np
 import scipy.linalg
 
 from rotor37_rom.casing import Casing, contact_matrices
+from rotor37_rom.disk import mistuning_factors, sector_harmonics
 from rotor37_rom.cli import ArgumentParser, run_main
 from rotor37_rom.charts import plot_interaction_map, plot_nfrc, plot_time_history
 from rotor37_rom.friction import sprag_slip_friction
 from rotor37_rom.geometry.blade import MESH_PRESETS
-from rotor37_rom.integrator import CentralDifference, gnl_time_step, probe_states, training_speeds
+from rotor37_rom.integrator import (CentralDifference, gnl_time_step, largest_states, probe_states, simulate,
+                                    training_speeds)
 from rotor37_rom.reduction import ReducedModel, load_reduced_model, save_reduced_model, with_force_precision
 from rotor37_rom.sweep import (ContinuationPoint, InteractionMap, SweepSpec, continuation, interaction_map,
-                               load_sweep, record_row, rerun_diverged, run_sweep)
+                               last_revolution_max, load_sweep, record_row, rerun_diverged, run_sweep)
 
 if TYPE_CHECKING:
     from mpi4py import MPI
@@ -49,6 +54,7 @@ PAPER = {"linear 1B/EO4": 1317.0, "zero IC, no GNL": 1446.0, "zero IC, GNL": 153
          "continuation, no GNL": 1520.0, "continuation, GNL": 1551.0}
 GNL_SETTINGS = {"off": (False,), "on": (True,), "both": (False, True)}
 PRECISIONS = ("double", "single")
+N_SECTORS = 36                                     # rotor 37's blades (the disk sector of fem.create_disk_sector)
 # -
 
 
@@ -72,9 +78,15 @@ class ContactMapConfig:
     Attributes:
         preset: mesh preset of the blade the model is built on (and the cubature trained on): ci, coarse, paper.
         model: a saved reduced model (.npz) to load instead of building one (required under MPI).
-        r_c: fixed-interface modes of the model built (>= 1).
-        r_md: modal derivatives selected by the criterion (>= 0).
-        global_md: also the modal derivatives of the first N clamped modes (0..10).
+        disk: build the model of the 36-sector bladed disk (``disk_builder``: every sector's 8 tip nodes, modal
+            derivatives by MI 2b, ``r_cyclic`` interface modes) instead of the clamped blade's.
+        r_c: fixed-interface modes (per sector) of the model built (>= 1). None: 15 for the blade, 10 for the disk.
+        r_md: modal derivatives (per sector) selected by the criterion (>= 0). None: 0 for the blade, 10 for the disk.
+        global_md: also the modal derivatives of the first N clamped modes (0..10; the blade's).
+        r_cyclic: the disk's interface modes (eq. 51, >= 1; the paper's 144).
+        mistuning: the disk's blade-to-blade stiffness scatter, a standard deviation in [0, 1) (0: tuned).
+        seed: of the mistuning's random factors.
+        sector: the sector whose node LE makes the map and the NFRC (0 .. 35; the blade: 0).
         speeds: (START, STOP, N): N angular speeds (rad/s) from START to STOP.
         revolutions: rotor revolutions simulated at each speed (> 0).
         gnl: geometric nonlinearity: 'off', 'on' or 'both' (one map each).
@@ -101,9 +113,14 @@ class ContactMapConfig:
 
     preset: str = "ci"
     model: Path | None = None
-    r_c: int = 15
-    r_md: int = 0
+    disk: bool = False
+    r_c: int | None = None
+    r_md: int | None = None
     global_md: int = 3
+    r_cyclic: int = 144
+    mistuning: float = 0.0
+    seed: int = 0
+    sector: int = 0
     speeds: tuple[float, float, int] = (1200.0, 1600.0, 21)
     revolutions: float = 20.0
     gnl: str = "both"
@@ -138,12 +155,32 @@ class ContactMapConfig:
         """The mesh preset and the sizes of a model to build."""
         if self.preset not in MESH_PRESETS:
             raise ValueError(f"--preset must be one of {', '.join(MESH_PRESETS)}, got {self.preset!r}")
-        if not self.r_c >= 1:
+        if self.r_c is not None and not self.r_c >= 1:
             raise ValueError(f"--r-c must be >= 1, got {self.r_c}")
-        if not self.r_md >= 0:
+        if self.r_md is not None and not self.r_md >= 0:
             raise ValueError(f"--r-md must be >= 0, got {self.r_md}")
         if not 0 <= self.global_md <= 10:
             raise ValueError(f"--global-md must be in 0..10, got {self.global_md}")
+        if not self.r_cyclic >= 1:
+            raise ValueError(f"--r-cyclic must be >= 1, got {self.r_cyclic}")
+        if not 0 <= self.mistuning < 1:
+            raise ValueError(f"--mistuning must be in [0, 1) (standard deviation of the blades' stiffness factors), "
+                             f"got {self.mistuning}")
+        if self.mistuning > 0 and not self.disk:
+            raise ValueError("--mistuning needs --disk (it scatters the disk's blades)")
+        limit = N_SECTORS - 1 if self.disk or self.model is not None else 0
+        if not 0 <= self.sector <= limit:
+            raise ValueError(f"--sector must be in [0, {limit}] ({'the disk' if limit else 'a single blade'}'s "
+                             f"sectors), got {self.sector}")
+        if self.disk and self.cubature is not None:
+            raise ValueError("--cubature: the disk's GNL forces are the sector's exact tensors (no cubature for the "
+                             "disk)")
+
+    @property
+    def modes(self) -> tuple[int, int]:
+        """(r_c, r_md) of the model built: the options, or 15, 0 for the blade and 10, 10 for the disk."""
+        return (self.r_c if self.r_c is not None else (10 if self.disk else 15),
+                self.r_md if self.r_md is not None else (10 if self.disk else 0))
 
     def _check_sweep(self) -> None:
         """Speeds, run length, batches and retries."""
@@ -200,7 +237,7 @@ class ContactMapConfig:
     def _normalise(self) -> None:
         """Floats, tuples and paths, as the command line gives them (same cache keys from Python and the shell)."""
         for name in ("revolutions", "safety", "h", "frequency_cap", "tangent_safety", "cubature", "mu", "c0", "hb",
-                     "continuation"):
+                     "continuation", "mistuning"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, float(getattr(self, name)))
         start, stop, n = self.speeds
@@ -228,9 +265,23 @@ class ContactMapConfig:
         return Casing(c0=self.c0, h_b=self.hb, mu=self.mu, direction=self.direction)
 
     @property
-    def sweep_spec(self) -> SweepSpec:
-        """The contact scenario each speed runs."""
-        return SweepSpec(revolutions=self.revolutions, casing=self.casing, batch_size=self.batch)
+    def node(self) -> str:
+        """The node whose response makes the map: LE of ``sector`` (a NodeMap label)."""
+        return f"{self.sector}:LE"
+
+    def sweep_spec(self, model: ReducedModel) -> SweepSpec:
+        """The contact scenario each speed runs; a disk records node LE of every sector and TE of ``sector``."""
+        monitor = None
+        if model.nodes.n_sectors > 1:
+            try:
+                rows = [model.nodes.row("LE", s) for s in range(model.nodes.n_sectors)]
+                rows += [model.nodes.row("TE", self.sector)] if "TE" in model.nodes.names else []
+                monitor = tuple(rows)
+            except ValueError as exc:
+                raise ValueError(f"--sector: {exc}") from None
+        elif self.sector != 0:
+            raise ValueError(f"--sector must be 0 for a single blade's model, got {self.sector}")
+        return SweepSpec(revolutions=self.revolutions, casing=self.casing, batch_size=self.batch, monitor=monitor)
 
     @property
     def frequency_cap_rad_s(self) -> float | None:
@@ -349,15 +400,26 @@ def reduced_model(config: ContactMapConfig, comm: MPI.Comm | None) -> tuple[Redu
 
 
 def build_model(config: ContactMapConfig) -> ReducedModel:
-    """Build the reduced model of the ``config.preset`` blade (cached in <out>/cache)."""
+    """Build the reduced model of the ``config.preset`` blade, or of the bladed disk (cached in <out>/cache)."""
     from rotor37_rom import fem
-    from rotor37_rom.builder import ReductionConfig, build_reduced_model
 
-    sector = fem.create_blade_sector(preset=config.preset)
-    reduction = ReductionConfig(r_c=config.r_c, r_md=config.r_md, global_md_modes=config.global_md,
-                                forces="intrusive")
+    r_c, r_md = config.modes
     t0 = time.perf_counter()
-    model, _ = build_reduced_model(sector, reduction, cache_dir=config.out / "cache")
+    if config.disk:
+        from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
+
+        sector = fem.create_disk_sector(preset=config.preset)
+        factors = None if config.mistuning == 0 else tuple(mistuning_factors(N_SECTORS, config.mistuning,
+                                                                              config.seed).tolist())
+        reduction = DiskReductionConfig(tip_nodes="all", r_c=r_c, r_md=r_md, criterion="MI2b",
+                                        r_cyclic=config.r_cyclic, mistuning=factors)
+        model, _ = build_disk_model(sector, reduction, cache_dir=config.out / "cache")
+    else:
+        from rotor37_rom.builder import ReductionConfig, build_reduced_model
+
+        sector = fem.create_blade_sector(preset=config.preset)
+        reduction = ReductionConfig(r_c=r_c, r_md=r_md, global_md_modes=config.global_md, forces="intrusive")
+        model, _ = build_reduced_model(sector, reduction, cache_dir=config.out / "cache")
     print(f"reduced model: {config.preset} preset ({sector.n_dofs} DOF) -> r = {model.r} {model.sizes} "
           f"in {time.perf_counter() - t0:.1f} s")
     return model
@@ -368,10 +430,22 @@ def eigenfrequencies(model: ReducedModel) -> np.ndarray:
     return np.sqrt(scipy.linalg.eigh(model.K, model.M, eigvals_only=True)[:3])
 
 
-def sprag_slip_onsets(model: ReducedModel, casing: Casing) -> dict:
-    """Friction coefficients at which sustained sliding on the casing diverges (rotor37_rom.friction)."""
-    N, S, _, _ = contact_matrices(model.nodes, model.r, casing)
-    single = [sprag_slip_friction(model.K, N, S, [k]) for k in range(N.shape[0])]
+def eo4_frequency(model: ReducedModel) -> float:
+    """The 1B frequency engine order 4 meets (rad/s): omega_1 of a blade; for a disk the lowest mode of 4 nodal
+    diameters (the stationary two-lobe casing excites k = 4 through EO4 on a tuned disk)."""
+    if model.sectors is None:
+        return float(eigenfrequencies(model)[0])
+    lam, V = scipy.linalg.eigh(model.K, model.M, subset_by_index=[0, 3 * model.nodes.n_sectors - 1])
+    k = sector_harmonics(V, model.sectors.blocks)
+    return float(np.sqrt(lam[k == 4].min())) if (k == 4).any() else float(np.sqrt(lam[0]))
+
+
+def sprag_slip_onsets(model: ReducedModel, casing: Casing, sector: int = 0) -> dict:
+    """Friction coefficients at which sustained sliding on the casing diverges (rotor37_rom.friction): per contact
+    node of ``sector`` (a tuned disk's sectors are alike) and for all contact nodes together."""
+    N, S, _, rows = contact_matrices(model.nodes, model.r, casing)
+    mine = [k for k, row in enumerate(rows) if model.nodes.sector[row] == sector]
+    single = [sprag_slip_friction(model.K, N, S, [k]) for k in mine]
     return {"weakest_node": min(single), "per_node": single, "all_nodes": sprag_slip_friction(model.K, N, S)}
 
 
@@ -382,7 +456,9 @@ def _finite(x: float) -> float | None:
 
 def model_summary(config: ContactMapConfig, model: ReducedModel, omega: np.ndarray, onset: dict) -> dict:
     """The summary.json entries of the model and the set-up (its 'runs' still empty)."""
-    return {"r": model.r, "sizes": model.sizes, "omega_1_3": omega.tolist(), "linear_resonance": omega[0] / 4,
+    return {"r": model.r, "sizes": model.sizes, "omega_1_3": omega.tolist(), "linear_resonance": eo4_frequency(model) / 4,
+            "node": config.node, "disk": model.sectors is not None,
+            "mistuning": model.metadata.get("config", {}).get("mistuning"),
             "speeds": list(config.speeds), "revolutions": config.revolutions, "casing": vars(config.casing),
             "runs": {}, "sprag_slip": {k: ([_finite(x) for x in v] if isinstance(v, list) else _finite(v))
                                        for k, v in onset.items()}}
@@ -455,12 +531,23 @@ def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: Centr
 
 def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: ReducedModel,
                     states: np.ndarray | None) -> float:
-    """The GNL step with a frequency cap, from the tangent limit on ``states`` (None: on a short unscaled probe)."""
+    """The GNL step with a frequency cap, from the tangent limit on ``states`` (None: on a short unscaled probe;
+    for a disk, whose unscaled step is ~5e-8 s, a capped GNL probe at 4 of the speeds, its 8 largest states)."""
     if states is None:
-        probe = config.speed_grid[:: max(1, config.speeds[2] // 16)]
         revolutions = min(4.0, config.revolutions)
-        states = probe_states(model, probe, config.casing, revolutions=revolutions)
-        print(f"GNL step from the tangent limit on a {revolutions:g}-revolution unscaled probe at {len(probe)} speeds")
+        if model.sectors is not None:
+            probe = training_speeds(config.speed_grid, 4)
+            scheme = CentralDifference(model, nonlinear=True, safety=config.safety,
+                                       frequency_cap=config.frequency_cap_rad_s)
+            res = simulate(scheme, probe, config.casing, revolutions=revolutions, on_blowup="flag", record_q=True,
+                           record_every=max(1, int(round(2e-5 / scheme.h))))
+            states = largest_states(res, scheme.boundary_rows, 8)
+            kind = "capped"
+        else:
+            probe = config.speed_grid[:: max(1, config.speeds[2] // 16)]
+            states = probe_states(model, probe, config.casing, revolutions=revolutions)
+            kind = "unscaled"
+        print(f"GNL step from the tangent limit on a {revolutions:g}-revolution {kind} probe at {len(probe)} speeds")
     h = gnl_time_step(run_model, states, config.frequency_cap_rad_s, safety=config.tangent_safety,
                       cap_safety=config.safety)
     print(f"GNL with a {config.frequency_cap:g} kHz cap: h = {h:.3g} s")
@@ -504,7 +591,7 @@ def sweep_map(config: ContactMapConfig, scheme: CentralDifference, comm: MPI.Com
     """Run the map's speeds and retry those that blew up. Returns the sweep folder, the per-speed records (rank 0;
     [] on the others), {retried speed: its last step} and the wall time (s)."""
     rank = 0 if comm is None else comm.rank
-    spec, speeds, sweeps = config.sweep_spec, config.speed_grid, config.out / "sweeps"
+    spec, speeds, sweeps = config.sweep_spec(scheme.model), config.speed_grid, config.out / "sweeps"
     t0 = time.perf_counter()
     folder = run_sweep(scheme, speeds, spec, sweeps, comm=comm, progress=not config.quiet)
     # rank 0 reads the records (~1 GB for the 100-speed headline map); rerun_diverged tells the others
@@ -550,18 +637,19 @@ def continuation_branches(config: ContactMapConfig, scheme: CentralDifference, r
 # model, speeds and revolutions, and nfrc.png draws them all.
 
 # +
-def chart_map(config: ContactMapConfig, result: MapResult, records: list[dict], omega: np.ndarray, r: int
-              ) -> list[Path]:
+def chart_map(config: ContactMapConfig, result: MapResult, records: list[dict], omega: np.ndarray, r: int,
+              lin_res: float) -> list[Path]:
     """Draw the interaction map, the time history of the largest response and the continuation NFRC (if any)."""
-    out, imap, lin_res = config.out, result.imap, omega[0] / 4
+    out, imap = config.out, result.imap
     files = [plot_interaction_map(imap, out / f"interaction_map_{result.tag}.png", eigenfrequencies=omega,
                                   linear_resonance=lin_res,
-                                  title=f"node LE, {result.label}, r = {r}, {config.revolutions:g} rev., "
+                                  title=f"node {config.node}, {result.label}, r = {r}, {config.revolutions:g} rev., "
                                         f"h = {result.h:.3g} s")]
     ok = np.isfinite(imap.nfrc)
     worst = records[int(np.nanargmax(np.where(ok, imap.nfrc, -1)))] if ok.any() else records[0]
-    files.append(plot_time_history(worst["t"], {"LE": worst["u_r"][record_row(worst, "0:LE")],
-                                                "TE": worst["u_r"][record_row(worst, "0:TE")]},
+    curves = {name: worst["u_r"][record_row(worst, f"{config.sector}:{name}")] for name in ("LE", "TE")
+              if f"{config.sector}:{name}" in map(str, worst["labels"])}
+    files.append(plot_time_history(worst["t"], curves,
                                    out / f"time_history_{result.tag}.png",
                                    title=f"{result.label}, Omega = {float(worst['omega']):.0f} rad/s"))
     if result.branches:
@@ -589,6 +677,12 @@ def summary_entry(config: ContactMapConfig, scheme: CentralDifference, result: M
                  "max_penetration": max(float(r["max_penetration"]) for r in records),
                  "min_multiplier": min(float(r["min_multiplier"]) for r in records),
                  "max_friction_power": max(float(r["friction_power"]) for r in records)}}
+    if len({label.partition(":")[0] for label in map(str, records[0]["labels"])}) > 1:     # a disk: every LE
+        per_sector = [[last_revolution_max(r["t"], u, float(r["omega"])) if int(r["diverged_step"]) < 0 else np.nan
+                       for u, label in zip(r["u_r"], map(str, r["labels"])) if label.endswith(":LE")]
+                      for r in records]
+        entry["largest_over_sectors"] = [float(np.nanmax(a)) if np.isfinite(a).any() else None for a in per_sector]
+        entry["largest_sector"] = [int(np.nanargmax(a)) if np.isfinite(a).any() else None for a in per_sector]
     for name, branch in result.branches.items():
         entry[f"continuation_{name}_peak"] = branch.peak.omega
         entry[f"continuation_{name}"] = [(p.omega, p.amplitude, p.steady, p.halvings) for p in branch.points]
@@ -650,7 +744,7 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None) -> C
     rank = 0 if comm is None else comm.rank
     model, files = reduced_model(config, comm)
     omega = eigenfrequencies(model)
-    onset = sprag_slip_onsets(model, config.casing)
+    onset = sprag_slip_onsets(model, config.casing, config.sector)
     summary = model_summary(config, model, omega, onset)
     if rank == 0 and not config.quiet:
         print(f"sustained sliding diverges (sprag-slip) from mu = {onset['weakest_node']:.3f} on one contact node, "
@@ -664,9 +758,9 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None) -> C
         branches = continuation_branches(config, scheme, retried, tag, comm)
         if rank != 0:
             continue
-        runs[label] = result = MapResult(label, tag, folder, interaction_map(records), scheme.h, scheme.h_crit,
-                                         retried, wall, branches)
-        files += chart_map(config, result, records, omega, model.r)
+        runs[label] = result = MapResult(label, tag, folder, interaction_map(records, config.node), scheme.h,
+                                         scheme.h_crit, retried, wall, branches)
+        files += chart_map(config, result, records, omega, model.r, summary["linear_resonance"])
         summary["runs"][label] = summary_entry(config, scheme, result, records)
         print_map(result, summary["linear_resonance"])
     if rank == 0:
@@ -688,9 +782,19 @@ def build_parser() -> ArgumentParser:
                             argument_default=argparse.SUPPRESS)
     parser.add_argument("--preset", help=f"mesh preset: {', '.join(MESH_PRESETS)} (default ci)")
     parser.add_argument("--model", type=Path, help="load this reduced model (.npz) instead of building one")
-    parser.add_argument("--r-c", type=int, help="fixed-interface modes of the model built (default 15)")
-    parser.add_argument("--r-md", type=int, help="modal derivatives of the model built (default 0)")
+    parser.add_argument("--disk", action="store_true",
+                        help="the 36-sector bladed disk (every blade's 8 tip nodes in contact) instead of the blade")
+    parser.add_argument("--r-c", type=int, help="fixed-interface modes (per sector) of the model built (default 15; "
+                                                "disk 10)")
+    parser.add_argument("--r-md", type=int, help="modal derivatives (per sector) of the model built (default 0; disk "
+                                                 "10, by MI 2b)")
     parser.add_argument("--global-md", type=int, help="modal derivatives of the first N clamped modes (default 3)")
+    parser.add_argument("--r-cyclic", type=int, help="the disk's interface modes (default 144, the paper's)")
+    parser.add_argument("--mistuning", type=float, metavar="SIGMA",
+                        help="the disk's blade stiffness scatter: standard deviation in [0, 1) of log-normal factors "
+                             "(default 0: tuned)")
+    parser.add_argument("--seed", type=int, help="seed of the mistuning factors (default 0)")
+    parser.add_argument("--sector", type=int, help="sector whose node LE makes the map (0..35; default 0)")
     parser.add_argument("--speeds", type=float, nargs=3, metavar=("START", "STOP", "N"),
                         help="N angular speeds (rad/s) from START to STOP (default 1200 1600 21)")
     parser.add_argument("--revolutions", type=float, help="revolutions per speed (default 20)")

@@ -231,11 +231,11 @@ def peak_stress(config: ContactMapConfig, run: MapResult, sector, model, recover
         return PeakStress(run.label, nonlinear, speed, False)
     scheme = CentralDifference(model, nonlinear=nonlinear, h=run.h, safety=config.safety,
                                frequency_cap=config.frequency_cap_rad_s)
-    if sweep_folder(scheme, config.sweep_spec, config.out / "sweeps") != run.folder:
+    if sweep_folder(scheme, config.sweep_spec(model), config.out / "sweeps") != run.folder:
         raise RuntimeError(f"the rebuilt scheme of '{run.label}' is not the map's (sweep folders differ)")
     if speed in run.retried:
         scheme = scheme.with_step(run.retried[speed])
-    record = load_speed(sweep_folder(scheme, config.sweep_spec, config.out / "sweeps"), speed)
+    record = load_speed(sweep_folder(scheme, config.sweep_spec(model), config.out / "sweeps"), speed)
     steps = int(np.ceil(config.revolutions * 2 * np.pi / speed / scheme.h))
     casing = config.casing
     res = simulate(scheme, [speed], casing, revolutions=1, initial=(record["q_final"], record["q_prev"]),

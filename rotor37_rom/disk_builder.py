@@ -104,7 +104,8 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     tip_rows = [sector.tip_names.index("LE")] if config.tip_nodes == "LE" else list(range(len(sector.tip_names)))
     tip_dofs = np.asarray(sector.tip_dofs)[tip_rows].ravel()
     metadata = {"config": dataclasses.asdict(config), "mesh": mesh_signature(sector), "source": sector.source,
-                "version": __version__, "kind": "disk", "n_sectors": N}
+                "version": __version__, "kind": "disk", "n_sectors": N,
+                "damping": "5e-4 on the 3 N lowest modes"}
     cache, cached = cached_model(metadata, cache_dir, "disk")
     if cached is not None:
         return cached, {"cached": True}
@@ -158,7 +159,7 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     Pi, omega_pi, k_pi = interface_modes(s, N, config.r_cyclic, selection=config.interface)
     scales = np.ones(N) if config.mistuning is None else np.asarray(config.mistuning, float)
     K, M = assemble_disk_matrices(s, Pi, N, scales)
-    C, omega = modal_damping(K, M)
+    C, omega = modal_damping(K, M, n_low=3 * N)             # the blade's 1B, 1T, 2B ratio for those families
     report.update(omega=omega, omega_c=omega_c, interface_omega=omega_pi, interface_k=k_pi, q_train=q_train,
                   md_scale=md_scale, sector_matrices=s)
     lap("assembly")

@@ -34,8 +34,10 @@ from typing import Callable, Sequence
 
 import numpy as np
 import scipy.linalg
+import scipy.sparse
 
 from rotor37_rom.casing import Casing, casing_clearance, contact_matrices, ramp_rate
+from rotor37_rom.disk import HarmonicBlocks
 from rotor37_rom.nonlinear_forces import PolynomialForces, cubic_monomial_indices, quadratic_monomial_indices
 
 __all__ = ["CentralDifference", "SimulationResult", "SimulationDiverged", "capped_mass", "gnl_time_step",
@@ -253,7 +255,14 @@ class CentralDifference:
                     self.Xg = PolynomialForces(A=-self.X0 @ forces.A, B=-self.X0 @ forces.B)
                 else:                                      # quadrature (exact or ECSW): evaluate, then map
                     self.Xg = forces
+            # a tuned disk: X1, X2, X0 per harmonic index (block-circulant), None for a blade or a mistuned disk
+            sectors = getattr(self.model, "sectors", None)
+            self.harmonic = None
+            if sectors is not None and not isinstance(self.Xg, PolynomialForces):
+                self.harmonic = HarmonicBlocks.from_operators(sectors.blocks, [self.X1, self.X2, self.X0],
+                                                              [self.model.K, self.model.M])
             return
+        self.harmonic = None
         # massless boundary: eta from the explicit scheme, u_b from K_bb u_b + K_bi eta = f_b + f_c
         b, i = self._boundary_interior()
         Mi, Ci, Ki = M[np.ix_(i, i)], C[np.ix_(i, i)], K[np.ix_(i, i)]
@@ -277,6 +286,12 @@ class CentralDifference:
         self.Xg = None
 
     def predict(self, Q: np.ndarray, Qp: np.ndarray, F: np.ndarray | None) -> np.ndarray:
+        if self.harmonic is not None:                     # tuned disk: one batched product over the harmonics
+            G = None if F is None else (F if F.ndim == 2 else np.repeat(F[:, None], Q.shape[1], axis=1))
+            if self.Xg is not None:
+                g = self.Xg.evaluate(Q)
+                G = -g if G is None else G - g
+            return self.harmonic.apply(Q, Qp) if G is None else self.harmonic.apply(Q, Qp, G)
         out = self.X1 @ Q
         out += self.X2 @ Qp
         if F is not None:
@@ -416,10 +431,13 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
     phase = np.broadcast_to(np.asarray(phase, float), (P,)).copy()
     nodes = scheme.model.nodes
     # u_n = N q at the contact nodes, S q along the sliding; the monitored nodes' normal displacements Nm q
+    # (sparse: one node's three entries of q per row; a disk has hundreds of contact nodes)
     N, S, theta0, cidx = contact_matrices(nodes, r, None if casings is None else casings[0])
+    N, S = scipy.sparse.csr_matrix(N), scipy.sparse.csr_matrix(S)
     nc = len(cidx)
     monitor = np.arange(len(nodes)) if monitor is None else np.asarray(monitor, dtype=np.int64).ravel()
-    Nm = contact_matrices(nodes, r, None if casings is None else casings[0], rows=monitor)[0]
+    Nm = scipy.sparse.csr_matrix(contact_matrices(nodes, r, None if casings is None else casings[0],
+                                                  rows=monitor)[0])
     nm = len(monitor)
     labels = tuple(nodes.labels[k] for k in monitor)
     if casings is not None:
@@ -430,9 +448,9 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         sense = casings[0].rotation_sense
         radius = np.hypot(nodes.coordinates[cidx, 0], nodes.coordinates[cidx, 1])
         # response to unit multipliers: normal force -n_k, friction force -s_k (times mu)
-        WN = -scheme.W @ N.T                                    # (r, nc)
-        WT = -scheme.W @ S.T                                    # (r, nc)
-        DN, DT = N @ WN, N @ WT                                 # (nc, nc)
+        WN = -np.asarray((N @ scheme.W.T).T)                    # (r, nc)
+        WT = -np.asarray((S @ scheme.W.T).T)                    # (r, nc)
+        DN, DT = np.asarray(N @ WN), np.asarray(N @ WT)         # (nc, nc)
         contact = _ContactSolver(DN, DT)
 
     # state
@@ -507,7 +525,8 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                     for k, j in enumerate(hits):
                         lam[:, k], gap_after[:, k] = contact.solve(mus[k], g[:, j])
                     mlam = lam * mus                       # friction multipliers mu lambda
-                    Qn[:, hits] += WN @ lam + WT @ mlam
+                    act = np.nonzero((lam > 0).any(axis=1))[0]  # the nodes pushed (a few of a disk's hundreds)
+                    Qn[:, hits] += WN[:, act] @ lam[act] + WT[:, act] @ mlam[act]
                     dq = Qn[:, hits] - Qpa[:, hits]        # q_n+1 - q_n-1: the force of step n works over dq / 2
                     work[0, ps] -= 0.5 * np.sum(lam * (N @ dq), axis=0)
                     work[1, ps] -= 0.5 * np.sum(mlam * (S @ dq), axis=0)
@@ -602,16 +621,18 @@ class _ContactSolver:
     """Multipliers lambda >= 0 with D_AA lambda_A = g_A on the active set A and no remaining gap < 0 elsewhere, for
     D = DN + mu DT (n_c, n_c), which maps multipliers to the change of the normal displacements (u_r += D lambda, so
     gap -= D lambda); g: predicted gaps. Active-set iteration from the penetrating nodes, with the inverse of each
-    D_AA met kept (per mu and active set: at most 2^n_c of them, in practice a few), since a sweep solves the same
-    few small systems millions of times."""
+    D_AA met kept (per mu and active set: a blade meets a few, a disk's blades passing the bumps more; at most
+    ``max_kept``, then the store starts again), since a sweep solves the same small systems millions of times."""
 
-    def __init__(self, DN: np.ndarray, DT: np.ndarray, max_iter: int = 64):
-        self.DN, self.DT, self.max_iter = DN, DT, max_iter
+    def __init__(self, DN: np.ndarray, DT: np.ndarray, max_iter: int = 64, max_kept: int = 4096):
+        self.DN, self.DT, self.max_iter, self.max_kept = DN, DT, max_iter, max_kept
         self._inverses: dict = {}
 
     def _inverse(self, mu: float, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         key = (float(mu), active.tobytes())
         if key not in self._inverses:
+            if len(self._inverses) >= self.max_kept:          # a disk meets many sets as blades pass the bumps
+                self._inverses.clear()
             A = np.nonzero(active)[0]
             self._inverses[key] = (A, np.linalg.inv((self.DN + mu * self.DT)[np.ix_(A, A)]))
         return self._inverses[key]

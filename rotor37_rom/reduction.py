@@ -320,17 +320,23 @@ def select_pairs(W: np.ndarray, r_md: int) -> np.ndarray:
     return pairs[order[:r_md]]
 
 
-def modal_damping(K: np.ndarray, M: np.ndarray, ratios: Callable[[np.ndarray], np.ndarray] | None = None):
+def modal_damping(K: np.ndarray, M: np.ndarray, ratios: Callable[[np.ndarray], np.ndarray] | None = None,
+                  n_low: int = 3):
     """C~ = M~ V diag(2 xi_k omega_k) V^T M~ on the modes of the reduced model (V^T M~ V = I).
 
-    Default ratios: xi = 5e-4 for the first three modes, 5e-3 above (paper §2.2.1).
-    Returns (C, omega): damping matrix and the reduced model's eigenfrequencies (rad/s).
+    Default ratios: xi = 5e-4 for the first ``n_low`` modes, 5e-3 above (paper §2.2.1: the blade's 1B, 1T, 2B; a
+    disk of N sectors passes 3 N, those three families). A mode whose frequency equals that of the last low mode to
+    1e-8 gets its ratio too: C is then a function of (K, M) alone and keeps their symmetries (a tuned disk's
+    degenerate pairs are never split). Returns (C, omega): damping matrix and the eigenfrequencies (rad/s).
     """
     lam, V = scipy.linalg.eigh(K, M)
     if lam.min() <= 0:
         raise ValueError("reduced stiffness is not positive definite on the reduced space")
     omega = np.sqrt(lam)
-    xi = ratios(omega) if ratios else np.where(np.arange(len(omega)) < 3, 5e-4, 5e-3)
+    if not 0 <= n_low <= len(omega):
+        raise ValueError(f"n_low must be in [0, {len(omega)}], got {n_low}")
+    cut = omega[n_low - 1] * (1 + 1e-8) if n_low else -1.0
+    xi = ratios(omega) if ratios else np.where(omega <= cut, 5e-4, 5e-3)
     MV = M @ V
     return MV @ np.diag(2.0 * xi * omega) @ MV.T, omega
 

@@ -5,7 +5,7 @@ import pytest
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
-FE_FIXTURES = {"ci_blade", "ci_ops", "ci_rom", "table_path", "ci_disk", "ci_disk_ops"}
+FE_FIXTURES = {"ci_blade", "ci_ops", "ci_rom", "table_path", "ci_disk", "ci_disk_ops", "disk_model"}
 
 
 def pytest_collection_modifyitems(config, items):
@@ -72,6 +72,16 @@ def ci_disk_ops(ci_disk):
     from rotor37_rom import fem
 
     return fem.create_svk_operators(ci_disk)
+
+
+@pytest.fixture(scope="session")
+def disk_model(ci_disk, ci_disk_ops):
+    """A small disk model of the ci sector (LE only: r_b = 3, r_c = 8, 4 modal derivatives by MI 2b, 96 interface
+    modes; r = 636), exact forces; (model, build report)."""
+    from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
+
+    config = DiskReductionConfig(tip_nodes="LE", r_c=8, r_md=4, criterion="MI2b", r_cyclic=96)
+    return build_disk_model(ci_disk, config, ops=ci_disk_ops)
 
 
 @pytest.fixture(scope="session")

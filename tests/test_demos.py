@@ -62,7 +62,11 @@ def test_contact_map_command_line_is_the_config(contact_map, tmp_path):
     ({"preset": "huge"}, "--preset"), ({"speeds": (1400, 1450, 2.5)}, "--speeds"), ({"revolutions": 0}, "--revolutions"),
     ({"gnl": "maybe"}, "--gnl"), ({"c0": 0}, "--c0"), ({"hb": -1e-3}, "--hb"), ({"direction": "z"}, "--direction"),
     ({"safety": 1.5}, "--safety"), ({"h": -1e-7}, "--h"), ({"batch": 0}, "--batch"), ({"r_c": 0}, "--r-c"),
-    ({"continuation": -5}, "--continuation"), ({"precision": "half"}, "--precision")])
+    ({"continuation": -5}, "--continuation"), ({"precision": "half"}, "--precision"),
+    ({"disk": True, "mistuning": -0.01}, "--mistuning"), ({"disk": True, "mistuning": 1.0}, "--mistuning"),
+    ({"mistuning": 0.02}, "--mistuning"), ({"disk": True, "sector": 36}, "--sector"), ({"sector": 1}, "--sector"),
+    ({"disk": True, "sector": -1}, "--sector"), ({"disk": True, "r_cyclic": 0}, "--r-cyclic"),
+    ({"disk": True, "cubature": 1e-4}, "--cubature")])
 def test_contact_map_config_names_the_option(contact_map, fields, flag):
     with pytest.raises(ValueError, match=f"^{flag}[ :]"):
         contact_map.ContactMapConfig(**fields)

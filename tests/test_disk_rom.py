@@ -73,13 +73,6 @@ def test_repeating_sectors_equal_the_assembled_structure():
         np.testing.assert_allclose(rep.fields[:, s % n_rep], per_sector[1:, s], atol=1e-9 * scale, rtol=0)
 
 
-@pytest.fixture(scope="module")
-def disk_model(ci_disk, ci_disk_ops):
-    """A small disk model (LE only: r_b = 3, r_c = 8, 4 modal derivatives, 96 interface modes), exact forces."""
-    config = DiskReductionConfig(tip_nodes="LE", r_c=8, r_md=4, criterion="MI2b", r_cyclic=96)
-    return build_disk_model(ci_disk, config, ops=ci_disk_ops)
-
-
 def test_disk_frequencies_bound_the_cyclic_reference(ci_disk, ci_disk_ops, disk_model):
     """Per nodal diameter k = 0, 1, 9, 18, the disk model's three lowest frequencies (1B, 1T, 2B families) are upper
     bounds of the full-order cyclic ones (the model is a Galerkin projection of the whole disk: Rayleigh-Ritz; 1e-9

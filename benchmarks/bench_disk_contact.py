@@ -1,0 +1,131 @@
+"""Blade-tip/casing contact on the whole bladed disk (paper §3.4): the cost of a full-disk map and a short one.
+
+One disk model (ci preset: every sector's 8 tip nodes kept physical, r_b = 24, r_c = 10 fixed-interface modes,
+r_MD = 10 modal derivatives by MI 2b, r_cyclic = 144 interface modes; exact sector tensors), all 36 x 8 tip nodes
+in contact with the two-lobe casing (each blade at its own angle), through the blade's integrator and sweep.
+
+1. Cost per simulation-step (a batch of 8 speeds in 1,200-1,650 rad/s, 2,000 steps with contact): the step
+   operators dense against per harmonic index (``disk.HarmonicBlocks``, automatic for a tuned disk), GNL off and on;
+   the GNL step from the tangent limit on states of a capped GNL run; the wall time of the issue's full-disk map
+   (90 speeds x 200 revolutions in 1,200-1,650 rad/s, GNL) extrapolated from them, on one process.
+2. A short map through ``sweep.run_sweep`` (GNL off, --speeds x --revolutions): node LE of sector 0 and the largest
+   over the sectors, the contact checks (penetration, lambda >= 0, friction power <= 0).
+
+    python benchmarks/bench_disk_contact.py [--speeds 1200 1650 10] [--revolutions 20] [--cap 60]
+
+Results: results/bench_disk_contact.json (machine stated). A full map of the disk is this bench's extrapolation,
+not a run: see docs/performance.md.
+"""
+from __future__ import annotations
+
+import argparse
+import resource
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import write_results  # noqa: E402
+
+from rotor37_rom import fem  # noqa: E402
+from rotor37_rom.casing import Casing  # noqa: E402
+from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
+from rotor37_rom.integrator import CentralDifference, gnl_time_step, largest_states, simulate  # noqa: E402
+from rotor37_rom.sweep import SweepSpec, last_revolution_max, load_sweep, run_sweep  # noqa: E402
+
+MAP_SPEEDS, MAP_REVOLUTIONS = np.linspace(1200.0, 1650.0, 90), 200.0     # the issue's full-disk map
+
+
+def cost_per_sim_step(scheme, casing, speeds, steps=2000) -> tuple[float, object]:
+    """Seconds per simulation-step of a batch run with contact (and the run, for its states)."""
+    t0 = time.perf_counter()
+    res = simulate(scheme, speeds, casing, n_steps=steps, duration=steps * scheme.h * 5, record_every=20,
+                   record_q=True, on_blowup="flag")
+    return (time.perf_counter() - t0) / (steps * len(speeds)), res
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--preset", default="ci", choices=["ci", "coarse"])
+    parser.add_argument("--cap", type=float, default=60.0, help="frequency cap (kHz) of the explicit scheme")
+    parser.add_argument("--speeds", type=float, nargs=3, default=[1200.0, 1650.0, 10], metavar=("START", "STOP", "N"))
+    parser.add_argument("--revolutions", type=float, default=20.0, help="revolutions of the short map")
+    parser.add_argument("--mu", type=float, default=0.15, help="friction coefficient")
+    args = parser.parse_args(argv)
+    start, stop, n = args.speeds
+    if not (5.0 <= args.cap <= 500.0) or not (0 < start <= stop) or not (n >= 1 and float(n).is_integer()) \
+            or not (0 < args.revolutions <= 200) or not (0 <= args.mu <= 2):
+        print("error: --cap must be in [5, 500] kHz, --speeds need 0 < START <= STOP and an integer N >= 1, "
+              "--revolutions in (0, 200], --mu in [0, 2]", file=sys.stderr)
+        return 2
+    cap = 2 * np.pi * 1e3 * args.cap
+    casing = Casing(mu=args.mu, direction="cone")
+    t0 = time.perf_counter()
+    sector = fem.create_disk_sector(preset=args.preset)
+    model, _ = build_disk_model(sector, DiskReductionConfig(tip_nodes="all", r_c=10, r_md=10, criterion="MI2b",
+                                                            r_cyclic=144), cache_dir=Path("results/cache"))
+    offline = time.perf_counter() - t0
+    print(f"disk model r = {model.r} {model.sizes}, {len(model.nodes)} tip nodes; {offline:.0f} s", flush=True)
+    batch = np.linspace(1200.0, 1650.0, 8)
+    row = {"preset": args.preset, "r": model.r, "sizes": model.sizes, "contact_nodes": len(model.nodes),
+           "offline_s": offline, "cap_khz": args.cap, "mu": args.mu, "direction": "cone", "batch": len(batch)}
+    linear = CentralDifference(model, nonlinear=False, safety=0.5, frequency_cap=cap)
+    row["h_linear"] = linear.h
+    row["harmonic_blocks"] = linear.harmonic.sizes.tolist()
+    dense = CentralDifference(model, nonlinear=False, safety=0.5, frequency_cap=cap)
+    dense.harmonic = None                                  # the same operators applied densely: the baseline
+    row["us_linear_dense"] = 1e6 * cost_per_sim_step(dense, casing, batch)[0]
+    row["us_linear_harmonic"] = 1e6 * cost_per_sim_step(linear, casing, batch)[0]
+    gnl = CentralDifference(model, nonlinear=True, h=linear.h, frequency_cap=cap)
+    us_gnl, probe = cost_per_sim_step(gnl, casing, batch)
+    row["us_gnl_harmonic"] = 1e6 * us_gnl
+    states = largest_states(probe, gnl.boundary_rows, 6)
+    row["h_gnl"] = gnl_time_step(model, states, cap, safety=0.5, cap_safety=0.5)
+    print(f"per simulation-step (batch of {len(batch)}): linear dense {row['us_linear_dense']:.0f} us, per harmonic "
+          f"{row['us_linear_harmonic']:.0f} us; GNL per harmonic {row['us_gnl_harmonic']:.0f} us; h linear "
+          f"{linear.h:.3g} s, GNL {row['h_gnl']:.3g} s", flush=True)
+    sim_steps = float(np.sum(np.ceil(MAP_REVOLUTIONS * 2 * np.pi / MAP_SPEEDS / row["h_gnl"])))
+    row["full_map_gnl_sim_steps"] = sim_steps
+    row["full_map_gnl_hours_one_process"] = sim_steps * us_gnl / 3600
+    lin_steps = float(np.sum(np.ceil(MAP_REVOLUTIONS * 2 * np.pi / MAP_SPEEDS / linear.h)))
+    row["full_map_linear_hours_one_process"] = lin_steps * row["us_linear_harmonic"] * 1e-6 / 3600
+    print(f"full-disk map, 90 speeds x 200 rev: GNL {row['full_map_gnl_hours_one_process']:.1f} h, linear "
+          f"{row['full_map_linear_hours_one_process']:.1f} h on one process (extrapolated)", flush=True)
+    # the short map through the sweep: LE of every sector monitored
+    monitor = tuple(model.nodes.row("LE", s) for s in range(36))
+    spec = SweepSpec(revolutions=args.revolutions, casing=casing, batch_size=int(n), monitor=monitor)
+    t0 = time.perf_counter()
+    folder = run_sweep(linear, np.linspace(start, stop, int(n)), spec, Path("results/bench_disk_contact"),
+                       progress=False)
+    records = load_sweep(folder)
+    row["short_map_s"] = time.perf_counter() - t0
+    speeds, le0, largest, where, checks = [], [], [], [], []
+    for rec in records:
+        om = float(rec["omega"])
+        amp = [last_revolution_max(rec["t"], u, om) for u in rec["u_r"]]
+        speeds.append(om)
+        le0.append(amp[0])
+        largest.append(max(amp))
+        where.append(int(np.argmax(amp)))
+        checks.append((float(rec["max_penetration"]), float(rec["min_multiplier"]), float(rec["friction_power"]),
+                       int(rec["diverged_step"])))
+    row["short_map"] = {"speeds": speeds, "revolutions": args.revolutions, "le_sector0_m": le0,
+                        "largest_le_m": largest, "largest_sector": where, "h": linear.h,
+                        "max_penetration": max(c[0] for c in checks), "min_multiplier": min(c[1] for c in checks),
+                        "max_friction_power": max(c[2] for c in checks),
+                        "diverged": [s for s, c in zip(speeds, checks) if c[3] >= 0]}
+    for om, a, b, w in zip(speeds, le0, largest, where):
+        print(f"  {om:7.1f} rad/s: LE of sector 0 {a * 1e3:.4f} mm, largest {b * 1e3:.4f} mm (sector {w})")
+    print(f"short map {row['short_map_s']:.0f} s; penetration <= {row['short_map']['max_penetration']:.1e} m, "
+          f"lambda >= {row['short_map']['min_multiplier']:.1e} N, friction power <= "
+          f"{row['short_map']['max_friction_power']:.2g} W, diverged {row['short_map']['diverged']}")
+    row["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    machine = write_results("bench_disk_contact", [row])
+    print(f"{machine}; peak RSS {row['peak_rss_mb']:.0f} MB")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

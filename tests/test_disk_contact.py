@@ -1,0 +1,140 @@
+"""Blade-tip/casing contact on the bladed disk (paper §3.4) through the blade's integrator.
+
+- a tuned disk's step operators applied per harmonic index equal the dense ones to round-off (and a mistuned disk,
+  whose operators are not block-circulant, keeps the dense ones);
+- tuned disk in contact with the ovalized casing, GNL off and on: every blade's tip history is blade 0's shifted in
+  time by j (2 pi / 36) / Omega (the casing is fixed and the blades identical: the steady response is a travelling
+  wave), the discrete energy balance holds to round-off (GNL off), no penetration is left, lambda >= 0 and friction
+  opposes the sliding;
+- mistuning factors: mean 1, the asked standard deviation, positive, seeded; bad input.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from rotor37_rom.casing import Casing
+from rotor37_rom.disk import assemble_disk_matrices, mistuning_factors
+from rotor37_rom.integrator import CentralDifference, simulate
+from rotor37_rom.reduction import modal_damping
+
+pytestmark = pytest.mark.slow
+
+OMEGA = 1400.0                       # rad/s: the 1B/EO4 region of the paper's maps
+SHIFT = 2 * np.pi / 36 / OMEGA       # time for the rotor to turn one sector (s)
+STEPS_PER_SHIFT = 13                 # h = SHIFT / 13 = 9.6e-6 s: a sector's turn is a whole number of steps
+CAP = 1e5                            # rad/s: frequency cap, h_crit = 2e-5 s
+
+
+def _le_rows(model):
+    return [model.nodes.row("LE", s) for s in range(36)]
+
+
+def test_harmonic_blocks_equal_the_dense_operators(disk_model):
+    """X1 q + X2 q_prev + X0 (f - g(q)) per harmonic index (19 blocks for N = 36, one batched product) equals the
+    dense products to round-off, GNL and forcing included: the blocks drop what the dense operators carry outside
+    them, their own round-off amplified by the capped mass's conditioning (at most 1e-8 of each operator, the
+    threshold of ``HarmonicBlocks``; 3e-10 here), so the products agree to 1e-8; a disk mistuned by 3 % gets the
+    dense operators (its blocks couple the harmonics)."""
+    model, report = disk_model
+    scheme = CentralDifference(model, nonlinear=True, h=SHIFT / STEPS_PER_SHIFT, frequency_cap=CAP)
+    assert scheme.harmonic is not None
+    sizes = scheme.harmonic.sizes
+    assert len(sizes) == 19 and sizes.sum() == model.r
+    rng = np.random.default_rng(0)
+    Q, Qp, F = (1e-4 * rng.standard_normal((model.r, 5)) for _ in range(3))
+    dense = scheme.X1 @ Q + scheme.X2 @ Qp + scheme.X0 @ (F - model.forces.evaluate(Q))
+    np.testing.assert_allclose(scheme.predict(Q, Qp, F), dense, rtol=0, atol=1e-8 * np.abs(dense).max())
+    factors = mistuning_factors(36, 0.03, seed=1)
+    K, _ = assemble_disk_matrices(report["sector_matrices"], model.sectors.Pi, 36, factors)
+    mistuned = dataclasses.replace(model, K=K)
+    assert CentralDifference(mistuned, nonlinear=False, h=scheme.h, frequency_cap=CAP).harmonic is None
+
+
+@pytest.mark.parametrize("gnl", [False, True])
+def test_tuned_disk_contact_is_a_travelling_wave(disk_model, gnl):
+    """36 blades (node LE of each) against the two-lobe casing (c0 = 0.5 mm, bumps of 0.55 mm: light contact),
+    mu = 0.15 along the casing cone's normal, 1400 rad/s, 0.15 s from rest; modal damping 2 % so that the start-up
+    transient decays by exp(-0.02 omega_1 t) < 2e-5 after the casing's ramp (99 % at 0.03 s; omega_1 ~ 5,800 rad/s),
+    where the forcing is a pure travelling wave. Blade j's LE history over the last two revolutions equals blade 0's
+    delayed by j (2 pi / 36) / Omega (a whole number of steps, so the discrete schemes are exactly shifted too) to
+    1e-3 of its amplitude (the transient's bound, with a margin of 50 for the contact's nonlinearity). Contact
+    checks of the blade: no penetration after the correction (1e-12 m, round-off), lambda >= 0, friction power
+    <= 0 (opposes the sliding); GNL off: the discrete energy changes by the contact and damping works to 1e-9 of the
+    largest energy (round-off of 15,600 steps, as the blade's test)."""
+    model, _ = disk_model
+    C, _ = modal_damping(model.K, model.M, ratios=lambda w: np.full_like(w, 0.02))
+    damped = dataclasses.replace(model, C=C)
+    scheme = CentralDifference(damped, nonlinear=gnl, h=SHIFT / STEPS_PER_SHIFT, frequency_cap=CAP)
+    assert scheme.harmonic is not None and scheme.h < 0.5 * scheme.h_crit
+    n_steps = int(round(0.15 / scheme.h))
+    casing = Casing(h_b=0.55e-3, mu=0.15, direction="cone")
+    res = simulate(scheme, OMEGA, casing, n_steps=n_steps, monitor=_le_rows(model), energy=not gnl)
+    assert res.diverged_step[0] == -1
+    assert res.contact_steps[0] > 1000, res.contact_steps
+    u = res.u_r[0]                                                       # (36, steps + 1), normal displacement
+    window = np.arange(n_steps - int(2 * 2 * np.pi / OMEGA / scheme.h), n_steps + 1)
+    amplitude = np.abs(u[0, window]).max()
+    assert amplitude > 1e-5                                              # the blades do move (tens of microns)
+    worst = max(np.abs(u[j, window] - u[0, window - j * STEPS_PER_SHIFT]).max() for j in range(1, 36))
+    print(f"GNL {gnl}: LE amplitude {amplitude * 1e3:.4f} mm, largest departure from the travelling wave "
+          f"{worst / amplitude:.2e}, contact steps {res.contact_steps[0]}")
+    assert worst <= 1e-3 * amplitude
+    # and not trivially: the blades are out of phase with one another
+    assert np.abs(u[1, window] - u[0, window]).max() > 0.1 * amplitude
+    assert res.max_penetration[0] <= 1e-12
+    assert (res.lam[0] >= 0).all() and res.lam[0].max() > 0
+    assert res.friction_power[0] <= 0.0
+    if not gnl:
+        E, W = res.energy[0], res.work_history[0]
+        balance = (E - E[0]) - (W[0] + W[1] + W[2] - W[3])
+        assert np.abs(balance).max() <= 1e-9 * np.abs(E).max()
+        assert res.work[0][0] > 0 and res.work[0][3] > 0         # the bumps feed the blades, the damping takes
+
+
+def test_mistuning_factors():
+    """Log-normal stiffness factors: mean 1 and standard deviation sigma (checked on 2e5 draws to 5 standard errors
+    of the estimators, the log-normal's kurtosis in that of the standard deviation), all > 0 even at sigma = 0.9, the same disk for the same seed; sigma outside [0, 1)
+    refused naming the scatter."""
+    for sigma in (0.01, 0.05, 0.9):
+        x = mistuning_factors(200_000, sigma, seed=3)
+        se = sigma / np.sqrt(x.size)
+        assert abs(x.mean() - 1.0) <= 5 * se
+        s2 = np.log1p(sigma**2)
+        kurtosis = np.exp(4 * s2) + 2 * np.exp(3 * s2) + 3 * np.exp(2 * s2) - 3          # mu_4 / sigma^4
+        assert abs(x.std() - sigma) <= 5 * sigma * np.sqrt(kurtosis - 1) / (2 * np.sqrt(x.size))
+        assert x.min() > 0
+    np.testing.assert_allclose(mistuning_factors(36, 0.02, seed=7), mistuning_factors(36, 0.02, seed=7), rtol=1e-15)
+    assert not np.allclose(mistuning_factors(36, 0.02, seed=7), mistuning_factors(36, 0.02, seed=8))
+    assert np.array_equal(mistuning_factors(36, 0.0), np.ones(36))
+    for bad in (-0.01, 1.0, 1.5):
+        with pytest.raises(ValueError, match=r"mistuning scatter must be in \[0, 1\)"):
+            mistuning_factors(36, bad)
+
+
+def test_contact_map_takes_a_disk_model(disk_model, tmp_path):
+    """The map command runs a saved disk model as it runs a blade's (--model): the map and NFRC at node LE of the
+    asked sector, node LE of every sector recorded and the largest over them in summary.json (so never below the
+    asked sector's), the EO4 resonance from the 1B family's 4-diameter mode (above the family's lowest)."""
+    from conftest import load_demo
+    from rotor37_rom.reduction import save_reduced_model
+    from rotor37_rom.sweep import load_sweep
+
+    contact_map = load_demo("contact_map")
+    model, _ = disk_model
+    config = contact_map.ContactMapConfig(model=save_reduced_model(model, tmp_path / "disk.npz"), sector=5,
+                                          speeds=(1400, 1500, 2), revolutions=1.0, gnl="off", frequency_cap=16.0,
+                                          direction="cone", hb=0.55e-3, quiet=True, out=tmp_path / "map")
+    result = contact_map.run_contact_map(config)
+    run, summary = result.runs["no GNL, cap 16 kHz"], result.summary
+    assert summary["node"] == "5:LE" and summary["disk"]
+    entry = summary["runs"]["no GNL, cap 16 kHz"]
+    assert np.all(np.asarray(entry["largest_over_sectors"]) >= run.nfrc) and np.all(run.nfrc > 0)
+    records = load_sweep(run.folder)
+    assert [str(x) for x in records[0]["labels"]] == [f"{s}:LE" for s in range(36)]
+    assert entry["contact_checks"]["max_penetration"] <= 1e-12
+    assert 4 * result.linear_resonance > result.eigenfrequencies[0]
+    with pytest.raises(ValueError, match="--sector"):
+        contact_map.ContactMapConfig(model=config.model, sector=36)
