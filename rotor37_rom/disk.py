@@ -237,9 +237,10 @@ class HarmonicBlocks:
     blocks and the identity on the interface modes (each of one harmonic already), makes the operators of a tuned
     disk block-diagonal: harmonic k couples only the cos/sin k components of every sector entry and the interface
     modes of index k, 19 blocks of ~2 r_s + r_cyclic / 19 for N = 36 instead of one of N r_s + r_cyclic. The blocks
-    are found from the operators themselves (the connected components of their transformed pattern), so a mistuned
-    disk, whose operators are not block-circulant, is recognised and refused (``from_operators`` returns None).
-    What the blocks leave out of the dense operators (their round-off, ~1e-10) is dropped.
+    are found from the model's K and M (the connected components of their transformed pattern), and each operator
+    is checked to lie in them, so a mistuned disk, whose operators are not block-circulant, is recognised and
+    refused (``from_operators`` returns None). What the blocks leave out of the dense operators (their round-off,
+    ~1e-10) is dropped.
 
     ``apply(X)`` computes sum_i A_i X_i for the operators A_i given, for X_i (r, P): the blocks padded to one size and
     applied in one batched product (dense cost / ~N/2 FLOPs, one call).
