@@ -45,7 +45,8 @@ from rotor37_rom.integrator import (CentralDifference, gnl_time_step, largest_st
                                     training_speeds)
 from rotor37_rom.reduction import ReducedModel, load_reduced_model, save_reduced_model, with_force_precision
 from rotor37_rom.sweep import (ContinuationPoint, InteractionMap, SweepSpec, continuation, interaction_map,
-                               last_revolution_max, load_sweep, record_row, rerun_diverged, run_sweep)
+                               last_revolution_max, load_speed, load_sweep, record_row, rerun_diverged, run_sweep,
+                               sweep_folder)
 
 if TYPE_CHECKING:
     from mpi4py import MPI
@@ -87,6 +88,8 @@ class ContactMapConfig:
         mistuning: the disk's blade-to-blade stiffness scatter, a standard deviation in [0, 1) (0: tuned).
         seed: of the mistuning's random factors.
         sector: the sector whose node LE makes the map and the NFRC (0 .. 35; the blade: 0).
+        stress: a disk's von Mises stress at t_max of each map's largest response, every sector rebuilt from q (the
+            blade's: demos/report.py).
         speeds: (START, STOP, N): N angular speeds (rad/s) from START to STOP.
         revolutions: rotor revolutions simulated at each speed (> 0).
         gnl: geometric nonlinearity: 'off', 'on' or 'both' (one map each).
@@ -121,6 +124,7 @@ class ContactMapConfig:
     mistuning: float = 0.0
     seed: int = 0
     sector: int = 0
+    stress: bool = False
     speeds: tuple[float, float, int] = (1200.0, 1600.0, 21)
     revolutions: float = 20.0
     gnl: str = "both"
@@ -172,6 +176,9 @@ class ContactMapConfig:
         if not 0 <= self.sector <= limit:
             raise ValueError(f"--sector must be in [0, {limit}] ({'the disk' if limit else 'a single blade'}'s "
                              f"sectors), got {self.sector}")
+        if self.stress and not (self.disk or self.model is not None):
+            raise ValueError("--stress is the disk's (--disk or a disk --model); the blade's stress at t_max is "
+                             "demos/report.py's")
         if self.disk and self.cubature is not None:
             raise ValueError("--cubature: the disk's GNL forces are the sector's exact tensors (no cubature for the "
                              "disk)")
@@ -698,6 +705,50 @@ def summary_entry(config: ContactMapConfig, scheme: CentralDifference, result: M
     return entry
 
 
+def disk_peak_stress(config: ContactMapConfig, scheme: CentralDifference, result: MapResult, tag: str
+                     ) -> tuple[dict, list[Path]]:
+    """The whole bladed disk's von Mises stress at t_max (largest |u| of node LE of ``config.sector``) of the map's
+    largest bounded response: that run carried on one revolution from its final state (as the report does for the
+    blade), every sector's field rebuilt from q (no reassembly). Returns (numbers, [picture])."""
+    from rotor37_rom import fem
+    from rotor37_rom.analysis import disk_stress, disk_stress_summary
+    from rotor37_rom.builder import mesh_signature
+    from rotor37_rom.plotting import render_stress
+
+    model, speed = scheme.model, result.peak_speed
+    if model.sectors is None:
+        raise ValueError("--stress needs a disk model (this one is a single blade's: demos/report.py draws its stress)")
+    if not np.isfinite(speed):
+        return {"speed": None}, []
+    sector = fem.create_disk_sector(preset=config.preset)
+    if mesh_signature(sector) != model.metadata.get("mesh"):
+        raise ValueError(f"--preset: the model was not built on the {config.preset} disk sector's mesh")
+    run_scheme = scheme.with_step(result.retried[speed]) if speed in result.retried else scheme
+    record = load_speed(sweep_folder(run_scheme, config.sweep_spec(model), config.out / "sweeps"), speed)
+    steps = int(np.ceil(config.revolutions * 2 * np.pi / speed / run_scheme.h))
+    casing = config.casing
+    res = simulate(run_scheme, [speed], casing, revolutions=1, initial=(record["q_final"], record["q_prev"]),
+                   duration=1e-12, phase=casing.rotation_sense * speed * steps * run_scheme.h,
+                   record_every=max(1, int(round(1e-6 / run_scheme.h))), record_q=True, on_blowup="flag",
+                   monitor=[model.nodes.label_row(config.node)])
+    if res.diverged_step[0] >= 0:
+        return {"speed": speed, "diverged": True}, []
+    u = res.u_r[0][0]
+    k = int(np.nanargmax(np.abs(u)))
+    fields, values = disk_stress(sector, model, res.records_q[0][:, k], nonlinear=run_scheme.nonlinear)
+    numbers = disk_stress_summary(sector, model, values, config.sector)
+    numbers.update(speed=speed, t_max=steps * run_scheme.h + float(res.t[0][k]), u_le=float(u[k]))
+    factor = 0.1 * 0.074 / max(np.abs(fields).max(), 1e-12)     # largest motion drawn at 10 % of the blade's span
+    title = (f"{result.label}: von Mises at t_max, Omega = {speed:.0f} rad/s, node {config.node} (x{factor:.0f})")
+    picture = render_stress(sector, fields[config.sector], values, config.out / f"stress_disk_{tag}.png", title,
+                            n_sectors=model.nodes.n_sectors, factor=factor, clim=numbers["clim"],
+                            sector_displacements=fields)
+    print(f"         stress at t_max ({speed:.0f} rad/s): sector {config.sector} {numbers['vm_max'] / 1e6:.0f} MPa "
+          f"({numbers['ratio_yield']:.2f} sigma_Y) outside the tip band, largest over the sectors "
+          f"{numbers['vm_max_all_sectors'] / 1e6:.0f} MPa (sector {numbers['sector_of_max']})")
+    return numbers, [picture]
+
+
 def print_map(result: MapResult, linear_resonance: float) -> None:
     """One line per map (step, largest response, divergences) and one per continuation branch."""
     print(f"{result.label:>7}: h = {result.h:.3g} s (2/omega_max = {result.h_crit:.3g}), largest response at "
@@ -770,6 +821,9 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None) -> C
         files += chart_map(config, result, records, omega, model.r, summary["linear_resonance"])
         summary["runs"][label] = summary_entry(config, scheme, result, records)
         print_map(result, summary["linear_resonance"])
+        if config.stress:
+            summary["runs"][label]["stress"], pictures = disk_peak_stress(config, scheme, result, tag)
+            files += pictures
     if rank == 0:
         files += write_summary(config.out, summary)
     return ContactMapResult(config.out, omega, float(summary["linear_resonance"]), runs, summary, files)
@@ -802,6 +856,8 @@ def build_parser() -> ArgumentParser:
                              "(default 0: tuned)")
     parser.add_argument("--seed", type=int, help="seed of the mistuning factors (default 0)")
     parser.add_argument("--sector", type=int, help="sector whose node LE makes the map (0..35; default 0)")
+    parser.add_argument("--stress", action="store_true",
+                        help="the disk's von Mises stress at t_max of each map's largest response (all sectors)")
     parser.add_argument("--speeds", type=float, nargs=3, metavar=("START", "STOP", "N"),
                         help="N angular speeds (rad/s) from START to STOP (default 1200 1600 21)")
     parser.add_argument("--revolutions", type=float, help="revolutions per speed (default 20)")

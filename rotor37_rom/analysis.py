@@ -6,7 +6,7 @@ import numpy as np
 
 from rotor37_rom import fem
 
-__all__ = ["stress_at_peak", "disk_stress", "TIP_BAND"]
+__all__ = ["stress_at_peak", "disk_stress", "disk_stress_summary", "tip_band", "TIP_BAND"]
 
 TIP_BAND = 0.1     # cells closer to a contact node than this fraction of the span are reported apart
 
@@ -27,12 +27,8 @@ def stress_at_peak(sector, model, recovery, result, nonlinear: bool, sim: int = 
     k = int(np.nanargmax(np.abs(u_le) if magnitude else u_le))
     q = result.records_q[sim][:, k]
     cell_max = recovery.cell_max(q, nonlinear)
-    nodes = model.nodes.coordinates[model.nodes.sector == 0]        # the contact nodes on this sector's mesh
-    singular = fem.cells_touching_points(sector, nodes)
+    band, singular = tip_band(sector, model)
     mid = fem.cell_midpoints(sector)
-    span = np.ptp(np.hypot(mid[:, 0], mid[:, 1]))
-    distance = np.min(np.linalg.norm(mid[:, None, :] - nodes[None, :, :], axis=2), axis=1)
-    band = distance < TIP_BAND * span                               # contact-impulse zone around the tip nodes
     regular = cell_max.copy()
     regular[band] = -np.inf
     cell = int(np.argmax(regular))
@@ -42,6 +38,30 @@ def stress_at_peak(sector, model, recovery, result, nonlinear: bool, sim: int = 
             "vm_max_at_contact_nodes": float(cell_max[singular].max()), "cell_max": cell_max,
             "vm_max_tip_band": float(cell_max[band].max()),
             "clim": [0.0, float(np.percentile(cell_max[~band], 99.5))]}
+
+
+def tip_band(sector, model) -> tuple[np.ndarray, np.ndarray]:
+    """(cells within ``TIP_BAND`` of the span of a contact node, cells touching one) of the sector's mesh: the zone
+    of the contact impulses, where point forces make the FE stress singular."""
+    nodes = model.nodes.coordinates[model.nodes.sector == 0]        # the contact nodes on this sector's mesh
+    singular = fem.cells_touching_points(sector, nodes)
+    mid = fem.cell_midpoints(sector)
+    span = np.ptp(np.hypot(mid[:, 0], mid[:, 1]))
+    distance = np.min(np.linalg.norm(mid[:, None, :] - nodes[None, :, :], axis=2), axis=1)
+    return distance < TIP_BAND * span, singular
+
+
+def disk_stress_summary(sector, model, values: np.ndarray, monitored: int = 0) -> dict:
+    """The numbers of a disk's von Mises field (``disk_stress`` values, (N, n_cells), all sectors): the largest in
+    sector ``monitored`` and over all sectors outside the tip band (and which sector), in the tip band, and the ratio
+    of the sector's to the yield stress."""
+    band, _ = tip_band(sector, model)
+    regular = np.where(band[None, :], -np.inf, values)
+    per_sector = regular.max(axis=1)
+    return {"vm_max": float(per_sector[monitored]), "ratio_yield": float(per_sector[monitored] / sector.material.sigma_y),
+            "vm_max_all_sectors": float(per_sector.max()), "sector_of_max": int(np.argmax(per_sector)),
+            "vm_max_tip_band": float(values[monitored][band].max()),
+            "clim": [0.0, float(np.percentile(values[:, ~band], 99.5))]}
 
 
 def disk_stress(sector, model, q: np.ndarray, nonlinear: bool = True, sectors=None) -> tuple[np.ndarray, np.ndarray]:

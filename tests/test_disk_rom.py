@@ -164,7 +164,7 @@ def test_disk_stress_of_a_tuned_state(ci_disk, disk_model):
     field and the same von Mises stress, sector by sector through the DiskBasis (the interface rows of sector n and
     n + 1, the last wrapping to the first), to round-off; a sector at rest in a state that moves only sector 3 has
     no stress, and GNL changes the stress (Green-Lagrange's quadratic term at ~2 mm)."""
-    from rotor37_rom.analysis import disk_stress
+    from rotor37_rom.analysis import disk_stress, disk_stress_summary, tip_band
 
     model, report = disk_model
     basis = model.sectors
@@ -186,5 +186,13 @@ def test_disk_stress_of_a_tuned_state(ci_disk, disk_model):
     q_one[basis.blocks[3]] = block
     _, vm_one = disk_stress(ci_disk, model, q_one, sectors=(3, 10))
     assert vm_one[0].max() > 0 and vm_one[1].max() == 0.0
+    # the summary of a field that loads sector 3 only: its largest is sector 3's, the others' is 0
+    values = np.zeros((36, vm_one.shape[1]))
+    values[3] = vm_one[0]
+    numbers = disk_stress_summary(ci_disk, model, values, monitored=10)
+    band, _ = tip_band(ci_disk, model)
+    assert numbers["sector_of_max"] == 3 and numbers["vm_max"] == 0.0
+    assert numbers["vm_max_all_sectors"] == vm_one[0][~band].max()
+    assert numbers["ratio_yield"] == 0.0 and 0 < band.sum() < band.size
     with pytest.raises(ValueError, match="entries"):
         disk_stress(ci_disk, model, q[:-1])
