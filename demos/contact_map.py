@@ -705,6 +705,22 @@ def summary_entry(config: ContactMapConfig, scheme: CentralDifference, result: M
     return entry
 
 
+def carry_on(config: ContactMapConfig, scheme: CentralDifference, result: MapResult, speed: float,
+             monitor: Sequence[int] | None = None):
+    """The map's run at ``speed`` carried on one revolution from its final state (its sweep record, at the step it
+    ran with), the casing where it was, states recorded every ~1e-6 s. Returns (SimulationResult, its scheme, the
+    time (s) the map's run ended at)."""
+    run_scheme = scheme.with_step(result.retried[speed]) if speed in result.retried else scheme
+    record = load_speed(sweep_folder(run_scheme, config.sweep_spec(scheme.model), config.out / "sweeps"), speed)
+    steps = int(np.ceil(config.revolutions * 2 * np.pi / speed / run_scheme.h))
+    casing = config.casing
+    res = simulate(run_scheme, [speed], casing, revolutions=1, initial=(record["q_final"], record["q_prev"]),
+                   duration=1e-12, phase=casing.rotation_sense * speed * steps * run_scheme.h,
+                   record_every=max(1, int(round(1e-6 / run_scheme.h))), record_q=True, on_blowup="flag",
+                   monitor=monitor)
+    return res, run_scheme, steps * run_scheme.h
+
+
 def disk_peak_stress(config: ContactMapConfig, scheme: CentralDifference, result: MapResult, tag: str
                      ) -> tuple[dict, list[Path]]:
     """The whole bladed disk's von Mises stress at t_max (largest |u| of node LE of ``config.sector``) of the map's
@@ -723,21 +739,14 @@ def disk_peak_stress(config: ContactMapConfig, scheme: CentralDifference, result
     sector = fem.create_disk_sector(preset=config.preset)
     if mesh_signature(sector) != model.metadata.get("mesh"):
         raise ValueError(f"--preset: the model was not built on the {config.preset} disk sector's mesh")
-    run_scheme = scheme.with_step(result.retried[speed]) if speed in result.retried else scheme
-    record = load_speed(sweep_folder(run_scheme, config.sweep_spec(model), config.out / "sweeps"), speed)
-    steps = int(np.ceil(config.revolutions * 2 * np.pi / speed / run_scheme.h))
-    casing = config.casing
-    res = simulate(run_scheme, [speed], casing, revolutions=1, initial=(record["q_final"], record["q_prev"]),
-                   duration=1e-12, phase=casing.rotation_sense * speed * steps * run_scheme.h,
-                   record_every=max(1, int(round(1e-6 / run_scheme.h))), record_q=True, on_blowup="flag",
-                   monitor=[model.nodes.label_row(config.node)])
+    res, run_scheme, t_start = carry_on(config, scheme, result, speed, [model.nodes.label_row(config.node)])
     if res.diverged_step[0] >= 0:
         return {"speed": speed, "diverged": True}, []
     u = res.u_r[0][0]
     k = int(np.nanargmax(np.abs(u)))
     fields, values = disk_stress(sector, model, res.records_q[0][:, k], nonlinear=run_scheme.nonlinear)
     numbers = disk_stress_summary(sector, model, values, config.sector)
-    numbers.update(speed=speed, t_max=steps * run_scheme.h + float(res.t[0][k]), u_le=float(u[k]))
+    numbers.update(speed=speed, t_max=t_start + float(res.t[0][k]), u_le=float(u[k]))
     factor = 0.1 * 0.074 / max(np.abs(fields).max(), 1e-12)     # largest motion drawn at 10 % of the blade's span
     title = (f"{result.label}: von Mises at t_max, Omega = {speed:.0f} rad/s, node {config.node} (x{factor:.0f})")
     picture = render_stress(sector, fields[config.sector], values, config.out / f"stress_disk_{tag}.png", title,

@@ -38,7 +38,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))   # this demo runs the others: import them from demos/
 from blade_modes import BladeModesConfig, BladeModesResult, run_blade_modes  # noqa: E402
-from contact_map import PAPER, ContactMapConfig, ContactMapResult, MapResult, run_contact_map  # noqa: E402
+from contact_map import PAPER, ContactMapConfig, ContactMapResult, MapResult, carry_on, run_contact_map  # noqa: E402
 from reduced_blade import PAPER_LINEAR_RANGE, ReducedBladeConfig, ReducedBladeResult, run_reduced_blade  # noqa: E402
 
 from rotor37_rom.cli import TABLE_HELP, ArgumentParser, run_main  # noqa: E402
@@ -222,8 +222,8 @@ def peak_stress(config: ContactMapConfig, run: MapResult, sector, model, recover
                 pictures: bool) -> PeakStress:
     """The stress at t_max of ``run``'s resonance (one revolution carried on from the map's final state)."""
     from rotor37_rom.analysis import stress_at_peak
-    from rotor37_rom.integrator import CentralDifference, simulate
-    from rotor37_rom.sweep import load_speed, sweep_folder
+    from rotor37_rom.integrator import CentralDifference
+    from rotor37_rom.sweep import sweep_folder
 
     nonlinear = config.gnl == "on"
     speed = resonance(run, config.revolutions)
@@ -233,15 +233,7 @@ def peak_stress(config: ContactMapConfig, run: MapResult, sector, model, recover
                                frequency_cap=config.frequency_cap_rad_s)
     if sweep_folder(scheme, config.sweep_spec(model), config.out / "sweeps") != run.folder:
         raise RuntimeError(f"the rebuilt scheme of '{run.label}' is not the map's (sweep folders differ)")
-    if speed in run.retried:
-        scheme = scheme.with_step(run.retried[speed])
-    record = load_speed(sweep_folder(scheme, config.sweep_spec(model), config.out / "sweeps"), speed)
-    steps = int(np.ceil(config.revolutions * 2 * np.pi / speed / scheme.h))
-    casing = config.casing
-    res = simulate(scheme, [speed], casing, revolutions=1, initial=(record["q_final"], record["q_prev"]),
-                   duration=1e-12, phase=casing.rotation_sense * speed * steps * scheme.h,
-                   record_every=max(1, int(round(1e-6 / scheme.h))), record_q=True, on_blowup="flag")
-    t_start = steps * scheme.h
+    res, scheme, t_start = carry_on(config, scheme, run, speed)
     if res.diverged_step[0] >= 0:
         return PeakStress(run.label, nonlinear, speed, False, t_diverged=t_start + res.diverged_step[0] * scheme.h)
     peak = stress_at_peak(sector, model, recovery, res, nonlinear, magnitude=True)
