@@ -12,6 +12,9 @@ in contact with the two-lobe casing (each blade at its own angle), through the b
    over the sectors, the contact checks (penetration, lambda >= 0, friction power <= 0).
 
     python benchmarks/bench_disk_contact.py [--speeds 1200 1650 10] [--revolutions 20] [--cap 60]
+    python benchmarks/bench_disk_contact.py --gnl-throughput 10          # one process, 10 speeds x 1,500 GNL steps
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_disk_contact.py --gnl-throughput 5 &
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_disk_contact.py --gnl-throughput 5  # the two cores as two ranks
 
 Results: results/bench_disk_contact.json (machine stated). A full map of the disk is this bench's extrapolation,
 not a run: see docs/performance.md.
@@ -53,12 +56,15 @@ def main(argv=None) -> int:
     parser.add_argument("--speeds", type=float, nargs=3, default=[1200.0, 1650.0, 10], metavar=("START", "STOP", "N"))
     parser.add_argument("--revolutions", type=float, default=20.0, help="revolutions of the short map")
     parser.add_argument("--mu", type=float, default=0.15, help="friction coefficient")
+    parser.add_argument("--gnl-throughput", type=int, metavar="P", default=0,
+                        help="only time P speeds x 1,500 GNL steps at h = 1.15e-6 s (run two side by side to measure "
+                             "what two ranks give)")
     args = parser.parse_args(argv)
     start, stop, n = args.speeds
     if not (5.0 <= args.cap <= 500.0) or not (0 < start <= stop) or not (n >= 1 and float(n).is_integer()) \
-            or not (0 < args.revolutions <= 200) or not (0 <= args.mu <= 2):
+            or not (0 < args.revolutions <= 200) or not (0 <= args.mu <= 2) or not 0 <= args.gnl_throughput <= 100:
         print("error: --cap must be in [5, 500] kHz, --speeds need 0 < START <= STOP and an integer N >= 1, "
-              "--revolutions in (0, 200], --mu in [0, 2]", file=sys.stderr)
+              "--revolutions in (0, 200], --mu in [0, 2], --gnl-throughput in [0, 100]", file=sys.stderr)
         return 2
     cap = 2 * np.pi * 1e3 * args.cap
     casing = Casing(mu=args.mu, direction="cone")
@@ -68,6 +74,15 @@ def main(argv=None) -> int:
                                                             r_cyclic=144), cache_dir=Path("results/cache"))
     offline = time.perf_counter() - t0
     print(f"disk model r = {model.r} {model.sizes}, {len(model.nodes)} tip nodes; {offline:.0f} s", flush=True)
+    if args.gnl_throughput:
+        scheme = CentralDifference(model, nonlinear=True, h=1.15e-6, frequency_cap=cap)
+        speeds = np.linspace(1200.0, 1650.0, args.gnl_throughput)
+        t0 = time.perf_counter()
+        simulate(scheme, speeds, casing, n_steps=1500, duration=1500 * scheme.h * 5, on_blowup="flag")
+        wall = time.perf_counter() - t0
+        print(f"{len(speeds)} speeds x 1500 GNL steps: {wall:.1f} s ({1e6 * wall / 1500 / len(speeds):.0f} us per "
+              f"simulation-step)")
+        return 0
     batch = np.linspace(1200.0, 1650.0, 8)
     row = {"preset": args.preset, "r": model.r, "sizes": model.sizes, "contact_nodes": len(model.nodes),
            "offline_s": offline, "cap_khz": args.cap, "mu": args.mu, "direction": "cone", "batch": len(batch)}
