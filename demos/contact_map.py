@@ -452,8 +452,10 @@ def sprag_slip_onsets(model: ReducedModel, casing: Casing, sector: int = 0) -> d
     node of ``sector`` (a tuned disk's sectors are alike) and for all contact nodes together."""
     N, S, _, rows = contact_matrices(model.nodes, model.r, casing)
     mine = [k for k, row in enumerate(rows) if model.nodes.sector[row] == sector]
-    single = [sprag_slip_friction(model.K, N, S, [k]) for k in mine]
-    return {"weakest_node": min(single), "per_node": single, "all_nodes": sprag_slip_friction(model.K, N, S)}
+    G = np.linalg.inv(model.K)                          # once, not per node (r = 1,728 on the disk)
+    single = [sprag_slip_friction(model.K, N, S, [k], compliance=G) for k in mine]
+    return {"weakest_node": min(single), "per_node": single,
+            "all_nodes": sprag_slip_friction(model.K, N, S, compliance=G)}
 
 
 def _finite(x: float) -> float | None:
@@ -721,24 +723,31 @@ def carry_on(config: ContactMapConfig, scheme: CentralDifference, result: MapRes
     return res, run_scheme, steps * run_scheme.h
 
 
-def disk_peak_stress(config: ContactMapConfig, scheme: CentralDifference, result: MapResult, tag: str
-                     ) -> tuple[dict, list[Path]]:
-    """The whole bladed disk's von Mises stress at t_max (largest |u| of node LE of ``config.sector``) of the map's
-    largest bounded response: that run carried on one revolution from its final state (as the report does for the
-    blade), every sector's field rebuilt from q (no reassembly). Returns (numbers, [picture])."""
+def stress_mesh(config: ContactMapConfig, model: ReducedModel):
+    """The disk sector's mesh the model was built on (for ``--stress``; made once per call of the study)."""
     from rotor37_rom import fem
-    from rotor37_rom.analysis import disk_stress, disk_stress_summary
     from rotor37_rom.builder import mesh_signature
-    from rotor37_rom.plotting import render_stress
 
-    model, speed = scheme.model, result.peak_speed
     if model.sectors is None:
         raise ValueError("--stress needs a disk model (this one is a single blade's: demos/report.py draws its stress)")
-    if not np.isfinite(speed):
-        return {"speed": None}, []
     sector = fem.create_disk_sector(preset=config.preset)
     if mesh_signature(sector) != model.metadata.get("mesh"):
         raise ValueError(f"--preset: the model was not built on the {config.preset} disk sector's mesh")
+    return sector
+
+
+def disk_peak_stress(config: ContactMapConfig, scheme: CentralDifference, result: MapResult, tag: str, sector
+                     ) -> tuple[dict, list[Path]]:
+    """The whole bladed disk's von Mises stress at t_max (largest |u| of node LE of ``config.sector``) of the map's
+    largest bounded response: that run carried on one revolution from its final state (as the report does for the
+    blade), every sector's field rebuilt from q (no reassembly) on the disk ``sector`` (``stress_mesh``). Returns
+    (numbers, [picture])."""
+    from rotor37_rom.analysis import disk_stress, disk_stress_summary
+    from rotor37_rom.plotting import render_stress
+
+    model, speed = scheme.model, result.peak_speed
+    if not np.isfinite(speed):
+        return {"speed": None}, []
     res, run_scheme, t_start = carry_on(config, scheme, result, speed, [model.nodes.label_row(config.node)])
     if res.diverged_step[0] >= 0:
         return {"speed": speed, "diverged": True}, []
@@ -817,7 +826,7 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None) -> C
         print(f"sustained sliding diverges (sprag-slip) from mu = {onset['weakest_node']:.3f} on one contact node, "
               f"{onset['all_nodes']:.3f} on all of them; this run: mu = {config.mu:g} (growth can start below: "
               f"docs/results.md, 'Friction')")
-    runs = {}
+    runs, mesh = {}, None
     for gnl in GNL_SETTINGS[config.gnl]:
         scheme = time_scheme(config, model, gnl, comm)
         label, tag = setting_names(config, gnl)
@@ -831,7 +840,8 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None) -> C
         summary["runs"][label] = summary_entry(config, scheme, result, records)
         print_map(result, summary["linear_resonance"])
         if config.stress:
-            summary["runs"][label]["stress"], pictures = disk_peak_stress(config, scheme, result, tag)
+            mesh = mesh or stress_mesh(config, model)
+            summary["runs"][label]["stress"], pictures = disk_peak_stress(config, scheme, result, tag, mesh)
             files += pictures
     if rank == 0:
         files += write_summary(config.out, summary)

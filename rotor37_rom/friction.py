@@ -51,11 +51,12 @@ def sliding_contact_eigenvalues(M, C, K, N, S, mu: float, nodes=None) -> np.ndar
     return ev[np.argsort(-ev.real)]
 
 
-def sprag_slip_friction(K, N, S, nodes=None) -> float:
+def sprag_slip_friction(K, N, S, nodes=None, compliance: np.ndarray | None = None) -> float:
     """Smallest mu > 0 at which persistent sliding on the rows ``nodes`` diverges: det(N G (N + mu S)^T) = 0 with
-    G = K^-1; -G_nn / G_ns for one node. inf when friction never wedges these nodes (G_ns >= 0 for one node)."""
+    G = K^-1; -G_nn / G_ns for one node. inf when friction never wedges these nodes (G_ns >= 0 for one node).
+    ``compliance``: K^-1 if the caller has it (many node sets of one model)."""
     Na, Sa = _rows(np.asarray(N, float), np.asarray(S, float), nodes)
-    G = np.linalg.inv(np.asarray(K, float))
+    G = np.linalg.inv(np.asarray(K, float)) if compliance is None else np.asarray(compliance, float)
     A, Bm = Na @ G @ Na.T, Na @ G @ Sa.T
     nu = np.linalg.eigvals(np.linalg.solve(A, Bm))      # (A + mu Bm) x = 0  <=>  A^-1 Bm x = -x / mu
     real = nu[(np.abs(nu.imag) <= 1e-12 * np.abs(nu).max()) & (nu.real < 0)].real
