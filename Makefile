@@ -11,7 +11,7 @@ export OMPI_MCA_rmaps_base_oversubscribe := 1
 export MPLBACKEND := Agg
 export PYVISTA_OFF_SCREEN := true
 
-.PHONY: setup demo test test-fast test-fe test-mpi test-slow test-kernels bench contact-map clean
+.PHONY: setup demo test test-fast test-fe test-mpi test-slow test-kernels bench contact-map speed-accuracy clean
 
 setup: $(STAMP)
 
@@ -82,6 +82,11 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_contact_rom_size.py --gnl --r-c 10 15 25 40
 	$(PY) benchmarks/bench_contact_ecsw.py
 	$(PY) benchmarks/bench_integrator.py
+
+# the speed-accuracy study (docs/choosing-a-model.md): every scene's candidates, cost and error, the charts and the
+# file choose_model reads (rotor37_rom/data/speed_accuracy.json); ~50 min on 2 cores
+speed-accuracy: $(STAMP)
+	$(PY) benchmarks/speed_accuracy.py
 
 clean:
 	rm -rf $(VENV) results .pytest_cache

@@ -55,6 +55,8 @@ PAPER = {"linear 1B/EO4": 1317.0, "zero IC, no GNL": 1446.0, "zero IC, GNL": 153
          "continuation, no GNL": 1520.0, "continuation, GNL": 1551.0}
 GNL_SETTINGS = {"off": (False,), "on": (True,), "both": (False, True)}
 PRECISIONS = ("double", "single")
+CHOSEN_DEFAULTS = {"frequency_cap": None, "safety": 0.5, "cubature": None, "precision": "double",
+                   "tangent_safety": 0.5, "retry_diverged": 0}          # what --tolerance may set, at the dataclass's defaults
 N_SECTORS = 36                                     # rotor 37's blades (the disk sector of fem.create_disk_sector)
 # -
 
@@ -100,6 +102,10 @@ class ContactMapConfig:
         tangent_safety: with a cap, the GNL step is this x 2 / the largest tangent frequency, in (0, 1].
         cubature: GNL forces by point cubature trained to this relative tolerance, in (0, 1). None: exact tensors.
         precision: arithmetic of the cubature forces: 'double' or 'single' (float32; needs ``cubature``).
+        tolerance: choose r_c, the frequency cap, the step and the force evaluation of each setting (GNL off, on) as
+            the cheapest model of the speed-accuracy study within this relative error (``model_choice.choose_model``
+            on the scenes 'map-linear' and 'map-gnl', read from rotor37_rom/data/speed_accuracy.json), in (0, 1);
+            the options it sets must not be given with it. None: the options as given.
         retry_diverged: runs that blew up run again with the step halved, up to this many times (0..4).
         mu: Coulomb friction coefficient of the casing contact (paper 0.15).
         c0: clearance at rest (m).
@@ -134,6 +140,7 @@ class ContactMapConfig:
     tangent_safety: float = 0.5
     cubature: float | None = None
     precision: str = "double"
+    tolerance: float | None = None
     retry_diverged: int = 0
     mu: float = 0.15
     c0: float = 0.5e-3
@@ -185,9 +192,29 @@ class ContactMapConfig:
 
     @property
     def modes(self) -> tuple[int, int]:
-        """(r_c, r_md) of the model built: the options, or 15, 0 for the blade and 10, 10 for the disk."""
+        """(r_c, r_md) of the model built: the options, or 15, 0 for the blade and 10, 10 for the disk; with
+        ``tolerance`` the largest r_c the settings' choices need."""
+        if self.tolerance is not None and self.r_c is None:
+            return (max(self.choice(gnl).options.get("r_c", 15) for gnl in GNL_SETTINGS[self.gnl]),
+                    self.r_md if self.r_md is not None else 0)
         return (self.r_c if self.r_c is not None else (10 if self.disk else 15),
                 self.r_md if self.r_md is not None else (10 if self.disk else 0))
+
+    def choice(self, gnl: bool):
+        """The speed-accuracy study's cheapest model within ``tolerance`` for one setting (a ModelChoice)."""
+        from rotor37_rom.model_choice import choose_model
+
+        try:
+            return choose_model("map-gnl" if gnl else "map-linear", self.tolerance)
+        except ValueError as exc:
+            raise ValueError(f"--tolerance: {exc}") from None
+
+    def setting(self, gnl: bool) -> "ContactMapConfig":
+        """The configuration one setting (GNL off or on) runs with: with ``tolerance``, its chosen options."""
+        if self.tolerance is None:
+            return self
+        options = {k: v for k, v in self.choice(gnl).options.items() if k != "r_c"}
+        return dataclasses.replace(self, tolerance=None, **options)
 
     def _check_sweep(self) -> None:
         """Speeds, run length, batches and retries."""
@@ -228,6 +255,19 @@ class ContactMapConfig:
             raise ValueError(f"--precision must be one of {', '.join(PRECISIONS)}, got {self.precision!r}")
         if self.precision != "double" and self.cubature is None:
             raise ValueError("--precision single needs --cubature (the exact cubic tensors are evaluated in double)")
+        if self.tolerance is not None:
+            if not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
+                raise ValueError(f"--tolerance must be in (0, 1) (a relative error: 0.05 = 5 %), got {self.tolerance}")
+            if self.disk:
+                raise ValueError("--tolerance: the speed-accuracy study has no bladed-disk map yet; give the options")
+            chosen = set().union(*(self.choice(gnl).options for gnl in GNL_SETTINGS[self.gnl]))
+            given = [name for name in sorted(chosen - {"r_c"}) if getattr(self, name) != CHOSEN_DEFAULTS[name]]
+            if self.r_c is not None:
+                given.append("r_c")
+            if given or self.model is not None or self.h is not None:
+                names = [f"--{n.replace('_', '-')}" for n in given] + (["--model"] if self.model else []) \
+                    + (["--h"] if self.h is not None else [])
+                raise ValueError(f"--tolerance chooses {', '.join(names)}: give either the tolerance or the options")
 
     def _check_continuation(self) -> None:
         """Continuation step, range and steadiness window."""
@@ -828,16 +868,23 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None) -> C
               f"docs/results.md, 'Friction')")
     runs, mesh = {}, None
     for gnl in GNL_SETTINGS[config.gnl]:
-        scheme = time_scheme(config, model, gnl, comm)
-        label, tag = setting_names(config, gnl)
-        folder, records, retried, wall = sweep_map(config, scheme, comm)
-        branches = continuation_branches(config, scheme, retried, tag, comm)
+        setting = config.setting(gnl)
+        if config.tolerance is not None and rank == 0:
+            print(f"--tolerance {config.tolerance:g}: {config.choice(gnl).describe()}")
+        scheme = time_scheme(setting, model, gnl, comm)
+        label, tag = setting_names(setting, gnl)
+        folder, records, retried, wall = sweep_map(setting, scheme, comm)
+        branches = continuation_branches(setting, scheme, retried, tag, comm)
         if rank != 0:
             continue
         runs[label] = result = MapResult(label, tag, folder, interaction_map(records, config.node), scheme.h,
                                          scheme.h_crit, retried, wall, branches)
-        files += chart_map(config, result, records, omega, model.r, summary["linear_resonance"])
-        summary["runs"][label] = summary_entry(config, scheme, result, records)
+        files += chart_map(setting, result, records, omega, model.r, summary["linear_resonance"])
+        summary["runs"][label] = summary_entry(setting, scheme, result, records)
+        if config.tolerance is not None:
+            choice = config.choice(gnl)
+            summary["runs"][label]["chosen"] = dict(tolerance=config.tolerance, model=choice.name,
+                                                    options=choice.options, expected_error=choice.error)
         print_map(result, summary["linear_resonance"])
         if config.stress:
             mesh = mesh or stress_mesh(config, model)
@@ -899,6 +946,9 @@ def build_parser() -> ArgumentParser:
     parser.add_argument("--precision", choices=PRECISIONS,
                         help="with --cubature: arithmetic of the cubature forces (single: float32, 1.6-2.1x faster "
                              "in bench_contact_ecsw, within 4e-7 of the double force; default double)")
+    parser.add_argument("--tolerance", type=float, metavar="TOL",
+                        help="choose r_c, the frequency cap, the step and the GNL forces as the cheapest model within "
+                             "this relative error in the speed-accuracy study (docs/choosing-a-model.md), in (0, 1)")
     parser.add_argument("--retry-diverged", type=int, metavar="N",
                         help="run the speeds that blew up again with the step halved, up to N times (0..4, default 0)")
     parser.add_argument("--mu", type=float, help="friction coefficient (default 0.15)")

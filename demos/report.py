@@ -12,8 +12,9 @@
 # 4. the von Mises stress at t_max, where node LE reaches its largest radial displacement, at the resonance of each
 #    map (Fig. 25 analogue), from bounded runs only.
 #
-# Settings: the linear map runs with the 60 kHz frequency cap and the GNL map with exact cubic tensors at half the
-# stability limit, the choices of the accuracy studies for the reduced model of r = 55 (docs/results.md). Friction
+# Settings: each map (GNL off, on) runs with the frequency cap, step and force evaluation that the speed-accuracy
+# study measured as the cheapest within 5 % on this scene (`--tolerance`, docs/choosing-a-model.md), on the reduced
+# model of r = 55 that the basis-size studies support for contact (docs/results.md). Friction
 # is off (mu = 0): with the paper's mu = 0.15 this blade's responses grow without bound at many speeds (the LE half
 # of the tip wedges into the casing: sprag-slip), which the report would flag run by run (`--mu 0.15` shows it).
 #
@@ -38,7 +39,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))   # this demo runs the others: import them from demos/
 from blade_modes import BladeModesConfig, BladeModesResult, run_blade_modes  # noqa: E402
-from contact_map import PAPER, ContactMapConfig, ContactMapResult, MapResult, carry_on, run_contact_map  # noqa: E402
+from contact_map import (PAPER, ContactMapConfig, ContactMapResult, MapResult, carry_on, run_contact_map,  # noqa: E402
+                         time_scheme)
 from reduced_blade import PAPER_LINEAR_RANGE, ReducedBladeConfig, ReducedBladeResult, run_reduced_blade  # noqa: E402
 
 from rotor37_rom.cli import TABLE_HELP, ArgumentParser, run_main  # noqa: E402
@@ -76,7 +78,10 @@ class ReportConfig:
             the normal e_x).
         direction: contact normal: 'x' (the paper's e_x), 'radial' or 'cone' (the conical casing's own normal,
             with which friction cannot wedge this tip: docs/results.md).
-        linear_cap: frequency cap of the linear map (kHz; None: none). The GNL map runs without one.
+        tolerance: the maps' frequency cap, step and force evaluation are the cheapest within this relative error
+            in the speed-accuracy study (``model_choice.choose_model``, scenes 'map-linear' and 'map-gnl'), in
+            (0, 1); None: set by hand (``linear_cap``; the GNL map with exact tensors at half the stability limit).
+        linear_cap: with ``tolerance`` None, the frequency cap of the linear map (kHz; None: none).
         levels: load levels on each side of delta = 0 in the clearance study (1..50).
         pictures: mode shapes and stress fields drawn with pyvista.
         quiet: no progress bars.
@@ -90,7 +95,8 @@ class ReportConfig:
     revolutions: float = 8.0
     mu: float = 0.0
     direction: str = "x"
-    linear_cap: float | None = 60.0
+    tolerance: float | None = 0.05
+    linear_cap: float | None = None
     levels: int = 10
     pictures: bool = True
     quiet: bool = False
@@ -100,6 +106,8 @@ class ReportConfig:
         object.__setattr__(self, "out", Path(self.out))
         if self.linear_cap is not None and not self.linear_cap > 0:
             raise ValueError(f"--linear-cap must be > 0 kHz (0: no cap), got {self.linear_cap}")
+        if self.tolerance is not None and self.linear_cap is not None:
+            raise ValueError("--linear-cap sets the linear map by hand: give --tolerance 0 with it")
         self.modes_config, self.clearance_config                          # noqa: B018 (each checks its options)
         maps = self.map_configs[0]                                        # the maps' checks, and their numbers
         object.__setattr__(self, "speeds", maps.speeds)
@@ -121,13 +129,35 @@ class ReportConfig:
     def model_file(self) -> Path:
         return self.out / "rom.npz"
 
+    def choice(self, gnl: bool):
+        """The speed-accuracy study's model for one map at ``tolerance`` (a ModelChoice), or None by hand."""
+        if self.tolerance is None:
+            return None
+        from rotor37_rom.model_choice import choose_model, reference_model
+
+        scene = "map-gnl" if gnl else "map-linear"
+        try:
+            return choose_model(scene, self.tolerance)
+        except ValueError as exc:
+            if "below every measured model" not in str(exc):
+                raise ValueError(f"--tolerance: {exc}") from None
+            return reference_model(scene)       # nothing measured meets it: the study's yardstick
+
     @property
     def map_configs(self) -> list[ContactMapConfig]:
-        """The linear map (with the cap) and the GNL map (exact tensors, h = 0.5 x 2 / omega_max)."""
+        """The linear map and the GNL map: the study's choices at ``tolerance`` (their cap, step and forces; the
+        model is the report's), or by hand: the linear map with ``linear_cap``, the GNL map with exact tensors at
+        h = 0.5 x 2 / omega_max."""
         common = dict(model=self.model_file, speeds=self.speeds, revolutions=self.revolutions, mu=self.mu,
                       direction=self.direction, out=self.out / "contact_map", quiet=self.quiet)
-        return [ContactMapConfig(gnl="off", frequency_cap=self.linear_cap, **common),
-                ContactMapConfig(gnl="on", **common)]
+        configs = []
+        for gnl in (False, True):
+            choice = self.choice(gnl)
+            options = {} if choice is None else {k: v for k, v in choice.options.items() if k != "r_c"}
+            if choice is None and not gnl:
+                options["frequency_cap"] = self.linear_cap
+            configs.append(ContactMapConfig(gnl="on" if gnl else "off", **options, **common))
+        return configs
 # -
 
 
@@ -222,15 +252,13 @@ def peak_stress(config: ContactMapConfig, run: MapResult, sector, model, recover
                 pictures: bool) -> PeakStress:
     """The stress at t_max of ``run``'s resonance (one revolution carried on from the map's final state)."""
     from rotor37_rom.analysis import stress_at_peak
-    from rotor37_rom.integrator import CentralDifference
     from rotor37_rom.sweep import sweep_folder
 
     nonlinear = config.gnl == "on"
     speed = resonance(run, config.revolutions)
     if not np.isfinite(speed):
         return PeakStress(run.label, nonlinear, speed, False)
-    scheme = CentralDifference(model, nonlinear=nonlinear, h=run.h, safety=config.safety,
-                               frequency_cap=config.frequency_cap_rad_s)
+    scheme = time_scheme(dataclasses.replace(config, h=run.h), model, nonlinear, None)   # cubature: the cached one
     if sweep_folder(scheme, config.sweep_spec(model), config.out / "sweeps") != run.folder:
         raise RuntimeError(f"the rebuilt scheme of '{run.label}' is not the map's (sweep folders differ)")
     res, scheme, t_start = carry_on(config, scheme, run, speed)
@@ -476,13 +504,28 @@ def maps_section(result: ReportResult) -> Section:
          "all eight. With the normal e_x, intermittent contact on the moving bumps makes the paper's mu = 0.15 grow "
          "without bound at many speeds, while the frictionless maps are bounded; with the conical casing's own "
          "normal friction does not wedge the tip and mu = 0.15 stays bounded (docs/results.md, 'Friction').",
-         "The linear map runs with the 60 kHz frequency cap (the cheapest cap within 5 % of the unscaled model), the "
-         "GNL map with the exact cubic tensors at half the stability limit: with GNL a cap needs a step from the "
-         "tangent stiffness of the states a run reaches (docs/performance.md)."],
+         settings_text(cfg)],
         tables=[Table("Response from rest", ["map", "h (s)", "1B/EO4 resonance (rad/s)", "amplitude (mm)",
                                              "largest response", "paper (rad/s, mu = 0.15)",
                                              "past the limit (rad/s)", "wall (s)"], rows)],
         figures=figures, flags=[f for f in flags(result) if "drawn as missing" in f])
+
+
+def settings_text(cfg: ReportConfig) -> str:
+    """How the maps' cap, step and forces were set: the speed-accuracy study's choices, or by hand."""
+    if cfg.tolerance is None:
+        cap = "no frequency cap" if cfg.linear_cap is None else f"the {cfg.linear_cap:g} kHz frequency cap"
+        return (f"Set by hand (--tolerance 0): the linear map runs with {cap}, the GNL map with the exact cubic "
+                "tensors at half the stability limit.")
+    parts = []
+    for gnl in (False, True):
+        c = cfg.choice(gnl)
+        parts.append(f"{'GNL' if gnl else 'linear'} map: " + (
+            "no measured model within the tolerance, so the study's reference setting (exact forces, no cap, half "
+            "the stability limit)" if c.name == "reference" else f"{c.name} (expected error {100 * c.error:.2g} %)"))
+    return (f"Each map runs with the cheapest model of the speed-accuracy study within {100 * cfg.tolerance:g} % "
+            f"(--tolerance; docs/choosing-a-model.md, measured on this scene at r = 45-70): " + "; ".join(parts)
+            + ". The reduced model is the report's own (its r_c), not the study's.")
 
 
 def onset_text(mu: float | None) -> str:
@@ -553,8 +596,11 @@ def build_parser() -> ArgumentParser:
     parser.add_argument("--mu", type=float, default=0.0, help="friction coefficient (default 0; the paper 0.15)")
     parser.add_argument("--direction", choices=list(NORMALS), default="x",
                         help="contact normal: x (the paper's e_x, default), radial, cone (the casing cone's normal)")
-    parser.add_argument("--linear-cap", type=float, default=60.0, metavar="KHZ",
-                        help="frequency cap of the linear map (kHz, default 60; 0: none)")
+    parser.add_argument("--tolerance", type=float, default=0.05, metavar="TOL",
+                        help="the maps' cap, step and forces: the cheapest within this relative error in the "
+                             "speed-accuracy study (docs/choosing-a-model.md; default 0.05; 0: by hand)")
+    parser.add_argument("--linear-cap", type=float, default=None, metavar="KHZ",
+                        help="with --tolerance 0: frequency cap of the linear map (kHz; default none)")
     parser.add_argument("--levels", type=int, default=10, help="clearance study: load levels per side (1..50)")
     parser.add_argument("--no-pictures", action="store_true", help="skip the pyvista pictures")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
@@ -566,7 +612,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Parse the options, run every study, write the report; raises ValueError for a bad input."""
     args = build_parser().parse_args(argv)
     config = ReportConfig(preset=args.preset, table=args.table, r_c=args.r_c, speeds=tuple(args.speeds),
-                          revolutions=args.revolutions, mu=args.mu, direction=args.direction, linear_cap=args.linear_cap or None,
+                          revolutions=args.revolutions, mu=args.mu, direction=args.direction,
+                          tolerance=args.tolerance or None,
+                          linear_cap=args.linear_cap or None,
                           levels=args.levels, pictures=not args.no_pictures, quiet=args.quiet, out=args.out)
     logging.basicConfig(level=logging.WARNING, force=True)
     logging.getLogger().handlers[0].setLevel(logging.WARNING)

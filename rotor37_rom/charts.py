@@ -140,17 +140,38 @@ def plot_time_history(t: np.ndarray, series: dict, path: str | Path, title: str 
     return _save(fig, path)
 
 
-def plot_speed_accuracy(rows: list, path: str | Path, title: str = "") -> Path:
-    """Cost vs error: rows of (label, cost (s), error (relative)); the 'speed vs accuracy' chart of a study."""
+def plot_speed_accuracy(rows: list, path: str | Path, title: str = "", cost_label: str = "cost (s)",
+                        tolerances: tuple = ()) -> Path:
+    """Error against cost on log-log axes: rows of (label, cost, error (relative)); the Pareto-optimal models
+    (``model_choice.pareto_front``) are joined and labelled, the others drawn grey; ``tolerances`` as dotted lines.
+    A run that diverged (error inf) is drawn on the top edge with a cross."""
+    from rotor37_rom.model_choice import pareto_front
+
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(6, 4.2))
-    for k, (label, cost, err) in enumerate(rows):
-        ax.loglog([cost], [max(err, 1e-16)], "o", color=f"C{k % 10}", label=label)
-    ax.set_xlabel("cost (s)")
+    fig, ax = plt.subplots(figsize=(7.2, 4.8))
+    labels = [r[0] for r in rows]
+    cost = np.array([r[1] for r in rows], float)
+    err = np.array([r[2] for r in rows], float)
+    front = pareto_front(cost, err)
+    finite = np.isfinite(err)
+    top = 2 * np.nanmax(np.where(finite, err, np.nan)) if finite.any() else 1.0
+    ax.loglog(cost[finite & ~front], np.maximum(err[finite & ~front], 1e-16), "o", color="0.6", label="dominated")
+    if (~finite).any():
+        ax.loglog(cost[~finite], np.full((~finite).sum(), top), "x", color="C3", ms=9, label="diverged")
+    order = np.flatnonzero(front)[np.argsort(cost[front])]
+    ax.loglog(cost[order], np.maximum(err[order], 1e-16), "o-", color="C0", label="Pareto-optimal")
+    for i in range(len(rows)):
+        y = err[i] if finite[i] else top
+        ax.annotate(labels[i], (cost[i], max(y, 1e-16)), fontsize=7, xytext=(4, 3), textcoords="offset points",
+                    color="k" if front[i] or not finite[i] else "0.45")
+    for tol in tolerances:
+        ax.axhline(tol, color="k", ls=":", lw=0.7)
+        ax.annotate(f"{100 * tol:g} %", (ax.get_xlim()[0], tol), fontsize=7, xytext=(2, 2), textcoords="offset points")
+    ax.set_xlabel(cost_label)
     ax.set_ylabel("relative error")
-    ax.set_title(title)
+    ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="lower left")
     return _save(fig, path)
 
 

@@ -48,8 +48,10 @@ def test_clearance_consumption_full_and_reduced(ci_blade, ci_ops):
 
     rom, _ = build_reduced_model(ci_blade, ReductionConfig(r_c=15, r_md=0, forces="quadrature", global_md_modes=3),
                                  ops=ci_ops)
+    no_md, _ = build_reduced_model(ci_blade, ReductionConfig(r_c=15, r_md=0, forces="quadrature"), ops=ci_ops)
     for mode, zeta in (("1B", 1e-3), ("1T", 0.5e-3)):
-        c = clearance_consumption_study(ci_blade, mode, zeta, n_levels=10, ops=ci_ops, roms={"rom": rom})
+        c = clearance_consumption_study(ci_blade, mode, zeta, n_levels=10, ops=ci_ops, roms={"rom": rom,
+                                                                                             "no MD": no_md})
         rom_error = relative_error(c.curves["rom"], c.curves["FOM nonlinear"])
         print(mode, "ROM r = 45 max error", np.nanmax(rom_error))
         assert np.nanmax(rom_error) <= 0.1                                # the paper's 10 % acceptance level
@@ -57,6 +59,13 @@ def test_clearance_consumption_full_and_reduced(ci_blade, ci_ops):
         lo, hi = delta_range_within(c.deltas, err)
         print(mode, "linear within 10 % for delta in", (lo, hi), "max error", np.nanmax(err))
         assert lo <= -0.1 + 1e-12 and hi >= 0.1 - 1e-12                  # the paper's 10 % criterion
+        # where the methods fail (docs/choosing-a-model.md, gallery): the linear model at large amplitude, and a
+        # Craig-Bampton basis without modal derivatives (r = 39), whose cubic forces are exact on its span but which
+        # cannot represent the quadratic foreshortening, both miss the 10 % level (measured 93 % / 83 % for 1B)
+        assert lo > -1.0 and hi < 1.0 and np.nanmax(err) > 0.1
+        no_md_error = np.nanmax(relative_error(c.curves["no MD"], c.curves["FOM nonlinear"]))
+        print(mode, "no modal derivatives: max error", no_md_error)
+        assert no_md_error > 0.1
         D = c.curves["FOM linear"] - c.curves["FOM nonlinear"]
         at = {round(d, 6): k for k, d in enumerate(c.deltas)}
         S = {d: D[at[d]] + D[at[-d]] for d in (0.1, 0.2)}

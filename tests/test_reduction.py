@@ -179,6 +179,15 @@ def test_step_matches_intrusive_and_its_amplitude_dependence(ci_blade, ci_ops, r
         assert errors[amp] <= 100 * estimates[amp] + 100 * U
     assert errors[1e-3] <= 1e-6
     assert errors[1e-7] > errors[1e-5] > errors[1e-3]
+    # too large an amplitude (docs/choosing-a-model.md, gallery): no truncation error for an exactly cubic force, but
+    # the quadratic tensor is then the small part of g(s) ~ B s^3, so its round-off grows like u |B| s / |A|, linearly
+    # with the amplitude (measured 2.8e-15 at 1 cm, 2.7e-12 at 10 m; 10 asked for a growth of 1000)
+    large = {}
+    for amp in (1e-2, 10.0):
+        est = identify_step(g, amp / np.abs(Phi).max(axis=0))
+        large[amp] = np.abs(est.A - exact.A).max() / np.abs(exact.A).max()
+    print("STEP quadratic tensor error at 1 cm and 10 m:", large)
+    assert large[10.0] > 10 * large[1e-2]
 
 
 def test_finite_difference_md_converge_linearly(ci_blade, ci_ops, cb_parts):
@@ -231,6 +240,19 @@ def test_ecsw_held_out_accuracy(ci_blade, ci_ops):
     print(f"points: {points.n_points} (cells: {model.forces.w.size} points), held-out max error {err_p.max():.1e}")
     assert points.training_error <= 1e-3 and err_p.max() <= 1e-2
     assert points.n_points < model.forces.w.size and np.all(points.forces.w > 0)
+    # where it fails (docs/choosing-a-model.md, gallery): the same points on the states of a rub, the linear static
+    # response to a load along e_x at one contact node (2 mm there), a local tip deformation that the smooth training
+    # states do not contain. The error is far beyond the 1e-2 the training guarantees on states of its family
+    # (measured 30-94 %); the project trains its cubatures on contact runs for this reason
+    rub = []
+    for node in range(len(model.nodes)):
+        f = np.zeros(model.r)
+        f[model.nodes.q_index[node][0]] = 1.0
+        q = np.linalg.solve(model.K, f)
+        rub.append(q * 2e-3 / abs(q[model.nodes.q_index[node][0]]))
+    err_rub = state_errors(exact, points.forces, np.array(rub).T)
+    print(f"points trained on smooth states, on rub states: median error {np.median(err_rub):.2f}")
+    assert np.median(err_rub) > 10 * 1e-2
 
 
 def test_selection_weights():

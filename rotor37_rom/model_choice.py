@@ -1,0 +1,122 @@
+"""The model for a tolerance: the cheapest measured configuration of a scene whose error meets it.
+
+The speed-accuracy study (``python benchmarks/speed_accuracy.py``, ``make speed-accuracy``) measures, per scene, the
+cost and the error against a reference of every candidate model and writes them to ``rotor37_rom/data/
+speed_accuracy.json`` (versioned with the code). ``choose_model(scene, tolerance)`` reads that file — never numbers
+typed here — and returns the cheapest candidate whose *expected* error is within the tolerance: the larger of the
+error measured on the study's cases and, when the study ran the candidate on held-out cases (other speeds, another
+mode or amplitude), the error there. A candidate that missed on held-out cases is thereby passed over for the next
+cheapest.
+
+Pure Python and NumPy (no dolfinx): the demos call it before any meshing.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+__all__ = ["STUDY_FILE", "SCHEMA", "ModelChoice", "load_study", "pareto_front", "expected_error", "choose_model",
+           "reference_model", "scenes"]
+
+STUDY_FILE = Path(__file__).resolve().parent / "data" / "speed_accuracy.json"
+SCHEMA = 1
+
+
+@dataclasses.dataclass(frozen=True)
+class ModelChoice:
+    """One candidate of a scene: its options (the scene command's option names, e.g. ``frequency_cap``), its expected
+    error (relative), the error on the study's cases and on held-out cases (None: not run there), and its cost."""
+
+    scene: str
+    name: str
+    options: dict
+    error: float
+    study_error: float
+    held_out_error: float | None
+    cost: float
+    cost_unit: str
+
+    def describe(self) -> str:
+        if self.name == "reference":
+            return (f"{self.scene}: the study's reference ({', '.join(f'{k} {v}' for k, v in self.options.items())};"
+                    f" the yardstick of the others, its own error not measured), cost {self.cost:.3g} {self.cost_unit}")
+        held = "not run" if self.held_out_error is None else f"{100 * self.held_out_error:.2g} %"
+        return (f"{self.scene}: {self.name} — expected error {100 * self.error:.2g} % (study "
+                f"{100 * self.study_error:.2g} %, held-out {held}), cost {self.cost:.3g} {self.cost_unit}")
+
+
+def load_study(path: str | Path | None = None) -> dict:
+    """The study file (default: the one shipped with the package); ValueError if absent or of another schema."""
+    path = Path(path) if path is not None else STUDY_FILE
+    if not path.is_file():
+        raise ValueError(f"speed-accuracy study file {path} not found: run python benchmarks/speed_accuracy.py")
+    study = json.loads(path.read_text())
+    if study.get("schema") != SCHEMA:
+        raise ValueError(f"speed-accuracy study file {path}: schema {study.get('schema')!r}, expected {SCHEMA}")
+    return study
+
+
+def scenes(study: dict | None = None) -> list[str]:
+    """The scenes the study measured."""
+    return sorted((study or load_study())["scenes"])
+
+
+def pareto_front(costs: Sequence[float], errors: Sequence[float]) -> np.ndarray:
+    """Mask of the Pareto-optimal points: no other point is at most as costly and at most as wrong, and strictly
+    better in one of the two. NaN or infinite errors (a run that diverged) are never optimal."""
+    c, e = np.asarray(costs, float), np.asarray(errors, float)
+    ok = np.isfinite(c) & np.isfinite(e)
+    front = np.zeros(c.size, bool)
+    for i in np.flatnonzero(ok):
+        dominated = ok & (c <= c[i]) & (e <= e[i]) & ((c < c[i]) | (e < e[i]))
+        front[i] = not dominated.any()
+    return front
+
+
+def expected_error(candidate: dict) -> float:
+    """The error a candidate is chosen by: the larger of its study error and its held-out error (if measured)."""
+    err = candidate.get("error")
+    err = math.inf if err is None else float(err)
+    held = candidate.get("held_out_error")
+    return err if held is None else max(err, float(held))
+
+
+def choose_model(scene: str, tolerance: float, study: dict | None = None) -> ModelChoice:
+    """The cheapest measured candidate of ``scene`` whose expected error is <= ``tolerance`` (relative, in (0, 1)).
+
+    Raises ValueError naming the scene (unknown scene) or the tolerance (out of range, or below every candidate's
+    expected error: then the message gives the smallest one measured)."""
+    study = study if study is not None else load_study()
+    if scene not in study["scenes"]:
+        raise ValueError(f"scene must be one of {', '.join(scenes(study))}, got {scene!r}")
+    if not (isinstance(tolerance, (int, float)) and 0 < tolerance < 1):
+        raise ValueError(f"tolerance must be in (0, 1) (a relative error, 0.05 = 5 %), got {tolerance!r}")
+    data = study["scenes"][scene]
+    best = None
+    for cand in data["candidates"]:
+        err = expected_error(cand)
+        if err <= tolerance and (best is None or cand["cost"] < best["cost"]):
+            best = cand
+    if best is None:
+        smallest = min(expected_error(c) for c in data["candidates"])
+        raise ValueError(f"tolerance {tolerance:g} is below every measured model of scene {scene!r} "
+                         f"(smallest expected error {smallest:.3g}); allowed: tolerance >= {smallest:.3g}")
+    return ModelChoice(scene, best["name"], dict(best["options"]), expected_error(best), float(best["error"]),
+                       best.get("held_out_error"), float(best["cost"]), data["cost_unit"])
+
+
+def reference_model(scene: str, study: dict | None = None) -> ModelChoice:
+    """The reference model of ``scene`` (what every candidate was measured against), for a caller that must run
+    something when no candidate meets its tolerance; its error is NaN (not measured)."""
+    study = study if study is not None else load_study()
+    if scene not in study["scenes"]:
+        raise ValueError(f"scene must be one of {', '.join(scenes(study))}, got {scene!r}")
+    data = study["scenes"][scene]
+    ref = data["reference"]
+    return ModelChoice(scene, "reference", dict(ref.get("options", {})), math.nan, math.nan, None,
+                       float(ref.get("sweep_s", math.nan)), data["cost_unit"])
