@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import importlib.util
 import json
 import math
@@ -53,7 +54,9 @@ MAP = dict(preset="ci", speeds=(1200.0, 1600.0, 11), revolutions=8.0, mu=0.0, di
 HELD_OUT_SPEEDS = (1220.0, 1580.0, 10)
 
 
+@functools.lru_cache(maxsize=None)
 def _demo(name: str):
+    """demos/<name>.py as a module (demos/ is not a package), loaded once."""
     spec = importlib.util.spec_from_file_location(f"demo_{name}", ROOT / "demos" / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module
@@ -232,6 +235,8 @@ def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_pat
 def map_errors(run: MapRun, ref: MapRun, robust: np.ndarray) -> dict:
     """NFRC error on the robust speeds (relative to the reference's peak there), resonance speed and peak errors,
     and the LE history error at the robust speed of largest reference response."""
+    from rotor37_rom.sweep import record_row
+
     if run.diverged.any():
         return dict(nfrc=math.inf, speed=math.inf, peak=math.inf, map=math.inf, history=math.inf)
     peak_ref = np.nanmax(ref.nfrc[robust])
@@ -240,11 +245,9 @@ def map_errors(run: MapRun, ref: MapRun, robust: np.ndarray) -> dict:
     speed = abs(run.speeds[i] - ref.speeds[i_ref]) / ref.speeds[i_ref]
     peak = abs(run.nfrc[i] - ref.nfrc[i_ref]) / ref.nfrc[i_ref]
     k = int(np.flatnonzero(robust)[np.argmax(ref.nfrc[robust])])
-    t_ref, u_ref = ref.records[k]["t"], np.asarray(ref.records[k]["u_r"])[0]
-    row = [str(x) for x in run.records[k]["labels"]].index("0:LE")
-    u = np.interp(t_ref, run.records[k]["t"], np.asarray(run.records[k]["u_r"])[row])
-    row_ref = [str(x) for x in ref.records[k]["labels"]].index("0:LE")
-    u_ref = np.asarray(ref.records[k]["u_r"])[row_ref]
+    rec, rec_ref = run.records[k], ref.records[k]
+    u_ref = np.asarray(rec_ref["u_r"])[record_row(rec_ref)]
+    u = np.interp(rec_ref["t"], rec["t"], np.asarray(rec["u_r"])[record_row(rec)])
     history = float(np.abs(u - u_ref).max() / np.abs(u_ref).max())
     return dict(nfrc=nfrc, speed=float(speed), peak=float(peak), map=max(nfrc, speed, peak), history=history,
                 history_speed=float(ref.speeds[k]))

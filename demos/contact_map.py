@@ -55,8 +55,6 @@ PAPER = {"linear 1B/EO4": 1317.0, "zero IC, no GNL": 1446.0, "zero IC, GNL": 153
          "continuation, no GNL": 1520.0, "continuation, GNL": 1551.0}
 GNL_SETTINGS = {"off": (False,), "on": (True,), "both": (False, True)}
 PRECISIONS = ("double", "single")
-CHOSEN_DEFAULTS = {"frequency_cap": None, "safety": 0.5, "cubature": None, "precision": "double",
-                   "tangent_safety": 0.5, "retry_diverged": 0}          # what --tolerance may set, at the dataclass's defaults
 N_SECTORS = 36                                     # rotor 37's blades (the disk sector of fem.create_disk_sector)
 # -
 
@@ -261,7 +259,8 @@ class ContactMapConfig:
             if self.disk:
                 raise ValueError("--tolerance: the speed-accuracy study has no bladed-disk map yet; give the options")
             chosen = set().union(*(self.choice(gnl).options for gnl in GNL_SETTINGS[self.gnl]))
-            given = [name for name in sorted(chosen - {"r_c"}) if getattr(self, name) != CHOSEN_DEFAULTS[name]]
+            defaults = {f.name: f.default for f in dataclasses.fields(self)}
+            given = [name for name in sorted(chosen - {"r_c"}) if getattr(self, name) != defaults[name]]
             if self.r_c is not None:
                 given.append("r_c")
             if given or self.model is not None or self.h is not None:
