@@ -67,6 +67,17 @@ N_SECTORS = 36                                     # rotor 37's blades (the disk
 # files of the same run from the shell.
 
 # +
+def map_model(tolerance: float, gnl: bool, fallback: bool = False):
+    """The speed-accuracy study's model of a map (scene 'map-gnl' or 'map-linear') within ``tolerance``; with
+    ``fallback`` the study's reference where no measured model meets it. Errors name --tolerance."""
+    from rotor37_rom.model_choice import choose_model
+
+    try:
+        return choose_model("map-gnl" if gnl else "map-linear", tolerance, fallback=fallback)
+    except ValueError as exc:
+        raise ValueError(f"--tolerance: {exc}") from None
+
+
 def continued_revolutions(revolutions: float) -> float:
     """Length of each continued run: 15 % of the first (the paper: 200 then 30), at least 5 revolutions."""
     return max(5.0, revolutions * 0.15)
@@ -200,12 +211,7 @@ class ContactMapConfig:
 
     def choice(self, gnl: bool):
         """The speed-accuracy study's cheapest model within ``tolerance`` for one setting (a ModelChoice)."""
-        from rotor37_rom.model_choice import choose_model
-
-        try:
-            return choose_model("map-gnl" if gnl else "map-linear", self.tolerance)
-        except ValueError as exc:
-            raise ValueError(f"--tolerance: {exc}") from None
+        return map_model(self.tolerance, gnl)
 
     def setting(self, gnl: bool) -> "ContactMapConfig":
         """The configuration one setting (GNL off or on) runs with: with ``tolerance``, its chosen options."""

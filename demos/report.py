@@ -39,8 +39,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))   # this demo runs the others: import them from demos/
 from blade_modes import BladeModesConfig, BladeModesResult, run_blade_modes  # noqa: E402
-from contact_map import (PAPER, ContactMapConfig, ContactMapResult, MapResult, carry_on, run_contact_map,  # noqa: E402
-                         time_scheme)
+from contact_map import (PAPER, ContactMapConfig, ContactMapResult, MapResult, carry_on, map_model,  # noqa: E402
+                         run_contact_map, time_scheme)
 from reduced_blade import PAPER_LINEAR_RANGE, ReducedBladeConfig, ReducedBladeResult, run_reduced_blade  # noqa: E402
 
 from rotor37_rom.cli import TABLE_HELP, ArgumentParser, run_main  # noqa: E402
@@ -130,18 +130,9 @@ class ReportConfig:
         return self.out / "rom.npz"
 
     def choice(self, gnl: bool):
-        """The speed-accuracy study's model for one map at ``tolerance`` (a ModelChoice), or None by hand."""
-        if self.tolerance is None:
-            return None
-        from rotor37_rom.model_choice import choose_model, reference_model
-
-        scene = "map-gnl" if gnl else "map-linear"
-        try:
-            return choose_model(scene, self.tolerance)
-        except ValueError as exc:
-            if "below every measured model" not in str(exc):
-                raise ValueError(f"--tolerance: {exc}") from None
-            return reference_model(scene)       # nothing measured meets it: the study's yardstick
+        """The speed-accuracy study's model for one map at ``tolerance`` (a ModelChoice; its reference where no
+        measured model meets the tolerance), or None by hand."""
+        return None if self.tolerance is None else map_model(self.tolerance, gnl, fallback=True)
 
     @property
     def map_configs(self) -> list[ContactMapConfig]:

@@ -86,11 +86,12 @@ def expected_error(candidate: dict) -> float:
     return err if held is None else max(err, float(held))
 
 
-def choose_model(scene: str, tolerance: float, study: dict | None = None) -> ModelChoice:
+def choose_model(scene: str, tolerance: float, study: dict | None = None, fallback: bool = False) -> ModelChoice:
     """The cheapest measured candidate of ``scene`` whose expected error is <= ``tolerance`` (relative, in (0, 1)).
 
     Raises ValueError naming the scene (unknown scene) or the tolerance (out of range, or below every candidate's
-    expected error: then the message gives the smallest one measured)."""
+    expected error: then the message gives the smallest one measured, unless ``fallback``, which returns the scene's
+    reference model instead, ``reference_model``)."""
     study = study if study is not None else load_study()
     if scene not in study["scenes"]:
         raise ValueError(f"scene must be one of {', '.join(scenes(study))}, got {scene!r}")
@@ -102,6 +103,8 @@ def choose_model(scene: str, tolerance: float, study: dict | None = None) -> Mod
         err = expected_error(cand)
         if err <= tolerance and (best is None or cand["cost"] < best["cost"]):
             best = cand
+    if best is None and fallback:
+        return reference_model(scene, study)
     if best is None:
         smallest = min(expected_error(c) for c in data["candidates"])
         raise ValueError(f"tolerance {tolerance:g} is below every measured model of scene {scene!r} "

@@ -147,5 +147,6 @@ def test_reference_model_is_the_yardstick():
         ref = reference_model(scene, study)
         assert ref.options == study["scenes"][scene]["reference"]["options"] and np.isnan(ref.error)
         assert "reference" in ref.describe()
+        assert choose_model(scene, 1e-9, study, fallback=True) == ref           # what the report runs then
     with pytest.raises(ValueError, match="scene must be one of"):
         reference_model("no-such-scene", study)
