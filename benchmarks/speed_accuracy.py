@@ -1,6 +1,6 @@
 """Speed against accuracy: per scene, the cost and the error of every candidate model, one study (issue #22).
 
-    python benchmarks/speed_accuracy.py                       # all scenes (~50 min on the 2-core machine)
+    python benchmarks/speed_accuracy.py                       # all scenes (~1 h on the 2-core machine)
     python benchmarks/speed_accuracy.py --scene modes clearance map-linear
     make speed-accuracy                                       # the same as the first line
 
@@ -16,10 +16,13 @@ Scenes (single blade, the report's settings):
   revolutions from rest, mu = 0, normal e_x (what ``make demo`` runs), GNL off / on; error: the largest of the NFRC
   error on the speeds robust to a 1e-4 force perturbation (relative to the reference's peak), the resonance speed's
   and the peak amplitude's relative errors; candidates: r_c, frequency cap, step, force evaluation (exact tensors,
-  point cubature, float32); held out (linear): 10 other speeds.
+  point cubature, float32); held out: 10 other speeds (a cubature as trained on the study's speeds).
 - ``history-linear`` / ``history-gnl``: the LE time history of the same runs at the robust speed of largest response:
   max |u - u_ref| / max |u_ref| over the run.
 - the stability map: the stable step 2 / omega_max of the tangent against the LE amplitude, with and without a cap.
+- ``paper-speedup``: the GNL map model chosen at 5 % (else 20 %) against the paper's r = 189 exact tensors at 1e-7 s.
+- ``cost-r``: the cost per simulation-step against r for each force method (no GNL, exact tensors, point cubature on
+  all points and on 10 points per mode, float64 / float32), synthetic models of each size, and the trained cubatures.
 
 Writes ``rotor37_rom/data/speed_accuracy.json`` (versioned: ``choose_model`` reads it) and the charts
 ``docs/img/speed_accuracy_<scene>.png``; work files under ``results/speed_accuracy/``. Scenes not run keep their
@@ -45,13 +48,15 @@ from _common import machine_description  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 WORK = ROOT / "results" / "speed_accuracy"
 IMG = ROOT / "docs" / "img"
-SCENES = ("modes", "clearance", "map-linear", "map-gnl", "stability", "paper-speedup")
+SCENES = ("modes", "clearance", "map-linear", "map-gnl", "stability", "paper-speedup", "cost-r")
 PAPER_R, PAPER_H = 189, 1e-7            # the paper's single-blade GNL setting: r = 189, exact tensors, h = 1e-7 s
 TOLERANCES = (0.01, 0.05, 0.2)
 PERTURBATION = 1e-4
 ROBUST = 0.01            # a speed is robust when the 1e-4 perturbation moves its NFRC by <= 1 % of the peak
 MAP = dict(preset="ci", speeds=(1200.0, 1600.0, 11), revolutions=8.0, mu=0.0, direction="x", quiet=True, batch=16)
 HELD_OUT_SPEEDS = (1220.0, 1580.0, 10)
+PREFIX = "computed since, on their own: "
+FRESH: list[str] = []    # what this invocation computed rather than read from results/speed_accuracy (runs' note)
 
 
 @functools.lru_cache(maxsize=None)
@@ -201,7 +206,8 @@ def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_pat
     done = out / "study_run.json"
     config = cm.ContactMapConfig(**{**MAP, "speeds": speeds, "model": model_path, "gnl": "on" if gnl else "off",
                                     "out": out, **opts})
-    if not done.is_file():
+    setting = json.dumps([str(model_path), opts], sort_keys=True, default=str)
+    if not done.is_file() or json.loads(done.read_text()).get("setting", setting) != setting:
         shared = WORK / "cubature_cache"          # one cubature training per model and casing, shared by candidates
         shared.mkdir(parents=True, exist_ok=True)
         out.mkdir(parents=True, exist_ok=True)
@@ -210,8 +216,10 @@ def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_pat
         t0 = time.perf_counter()
         result = cm.run_contact_map(config)
         wall = time.perf_counter() - t0
+        FRESH.append(f"{tag} {wall:.0f} s")
         run = next(iter(result.runs.values()))
-        done.write_text(json.dumps({"wall": wall, "sweep_wall": run.wall_s, "h": run.h, "folder": str(run.folder)}))
+        done.write_text(json.dumps({"wall": wall, "sweep_wall": run.wall_s, "h": run.h, "folder": str(run.folder),
+                                    "setting": setting}))
     info = json.loads(done.read_text())
     grid = config.speed_grid
     # each speed's record: the map's, or the bounded one of its retries at a smaller step (their own sweep folders)
@@ -277,6 +285,7 @@ GNL_CANDIDATES = [  # the reference is r_c 15 (r = 45) with exact tensors, no ca
     ("r_c 10, retries", {"r_c": 10, "retry_diverged": 2}),
     ("cubature 1e-4", {"r_c": 15, "cubature": 1e-4}),
     ("cubature 1e-4 float32", {"r_c": 15, "cubature": 1e-4, "precision": "single"}),
+    ("cubature 1e-5 float32", {"r_c": 15, "cubature": 1e-5, "precision": "single"}),
 ]
 
 
@@ -321,6 +330,17 @@ def scene_map(gnl: bool) -> tuple[dict, dict]:
     return maps, history
 
 
+def held_out_options(options: dict) -> dict:
+    """A candidate's options on the held-out speeds: a cubature stays the one trained on the study's speeds (the
+    model chosen is run, not one retrained on runs at the held-out speeds)."""
+    from rotor37_rom.integrator import training_speeds
+
+    if options.get("cubature") is None:
+        return options
+    grid = np.linspace(*MAP["speeds"][:2], int(MAP["speeds"][2]))
+    return {**options, "cubature_speeds": tuple(training_speeds(grid).tolist())}
+
+
 def held_out_map(scene: dict, gnl: bool, tolerances=TOLERANCES) -> None:
     """Run the models chosen at each tolerance on the held-out speeds; a miss is recorded on the candidate, and the
     chooser then passes it over for the next cheapest (the loop goes on until a choice holds on the held-out case)."""
@@ -342,7 +362,7 @@ def held_out_map(scene: dict, gnl: bool, tolerances=TOLERANCES) -> None:
             cand = by_name[choice.name]
             if cand["held_out_error"] is not None:
                 break
-            run = run_map(choice.name, gnl, cand["options"], speeds=HELD_OUT_SPEEDS)
+            run = run_map(choice.name, gnl, held_out_options(cand["options"]), speeds=HELD_OUT_SPEEDS)
             cand["held_out_error"] = map_errors(run, ref, robust)["map"]
             print(f"held out at {tol:g}: {choice.name}: {cand['held_out_error']:.3g}")
             if cand["held_out_error"] <= tol:
@@ -419,6 +439,89 @@ def scene_paper_speedup(study: dict, tolerance: float = 0.05) -> dict:
                 per_step_ratio=per_step, step_ratio=step, speedup=per_step * step)
 
 
+# ## Cost against r per force method
+
+COST_R = (30, 45, 55, 85, 125, 189)
+CI_POINTS = 30_548           # the ci blade's quadrature points (degree 4: 14 on each of 2,182 cells)
+POINTS_PER_MODE = 10         # trained here: 8.5-13.5 points per mode at tolerance 1e-4, 19-20 at 1e-5 (`trained`)
+
+
+def _synthetic_cubature(r: int, n: int, precision: str, rng) -> "QuadratureForces":
+    from rotor37_rom.nonlinear_forces import QuadratureForces
+
+    return QuadratureForces(rng.standard_normal((n, r, 3, 3)) * 1e-3, rng.random(n) * 1e-9, 1.0e11, 7.0e10,
+                            precision=precision)
+
+
+def scene_cost_r(r_values=COST_R, P: int = 11, min_time: float = 0.4) -> dict:
+    """The integrator's cost per simulation-step against r for each force method, same run: no GNL forces (linear),
+    exact unique-monomial tensors, point cubature on all 30,548 quadrature points of the ci blade (exact, no
+    training) and on 10 points per mode (a trained cubature's size), float64 and float32; batch of the map's P
+    speeds. Synthetic models of each size: the cost of a step depends on the sizes, not on the values. The trained
+    cubatures of the map-gnl scene are timed as they are (their r and point count) to place them on the chart."""
+    from bench_integrator import synthetic_model, time_per_step
+
+    from rotor37_rom.integrator import CentralDifference
+    from rotor37_rom.reduction import load_reduced_model
+
+    rng = np.random.default_rng(3)
+    methods = {"linear (no GNL forces)": [], "exact tensors": [], "cubature, all points": [],
+               f"cubature, {POINTS_PER_MODE} r points": [], f"cubature, {POINTS_PER_MODE} r points, float32": []}
+
+    def cost(model, nonlinear=True) -> float:
+        sch = CentralDifference(model, nonlinear=nonlinear, h=PAPER_H, force=True)
+        Q = rng.standard_normal((model.r, P)) * 1e-6
+        return 1e6 * time_per_step(lambda: sch.predict(Q, Q.copy(), None), min_time=min_time) / P
+
+    for r in r_values:
+        model = synthetic_model(r)
+        methods["linear (no GNL forces)"].append(cost(model, nonlinear=False))
+        methods["exact tensors"].append(cost(model))
+        for name, n, precision in (("cubature, all points", CI_POINTS, "double"),
+                                   (f"cubature, {POINTS_PER_MODE} r points", POINTS_PER_MODE * r, "double"),
+                                   (f"cubature, {POINTS_PER_MODE} r points, float32", POINTS_PER_MODE * r, "single")):
+            methods[name].append(cost(dataclasses.replace(model, forces=_synthetic_cubature(r, n, precision, rng))))
+            print(f"r = {r}: {name}: {methods[name][-1]:.3g} us per simulation-step")
+        del model
+    trained = []
+    for path in sorted((WORK / "cubature_cache").glob("cubature_*.npz")):
+        if path.name.endswith(".states.npz"):
+            continue
+        model = load_reduced_model(path)
+        info = model.metadata.get("hyper_reduction", {})
+        for precision in ("double", "single"):
+            m = dataclasses.replace(model, forces=model.forces.with_precision(precision))
+            trained.append(dict(r=model.r, points=int(model.forces.w.size), tol=info.get("tol"), precision=precision,
+                                us_per_sim_step=cost(m)))
+    return dict(description=f"the integrator's prediction (linear step + forces) per simulation-step against r, "
+                            f"batch of {P} speeds; synthetic models of each size (the cost depends on the sizes only); "
+                            f"all points = the ci blade's {CI_POINTS:,} quadrature points",
+                r=list(r_values), P=P, methods=methods, trained=trained, points_per_mode=POINTS_PER_MODE,
+                all_points=CI_POINTS)
+
+
+def chart_cost_r(cost_r: dict) -> Path:
+    from rotor37_rom.charts import _pyplot, _save
+
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.8, 4.6))
+    for k, (name, values) in enumerate(cost_r["methods"].items()):
+        ax.loglog(cost_r["r"], values, "o-", color=f"C{k}", label=name)
+    for t in cost_r["trained"]:
+        k = 4 if t["precision"] == "single" else 3
+        ax.loglog([t["r"]], [t["us_per_sim_step"]], "*", color=f"C{k}", ms=11, mec="k", mew=0.5)
+        single = t["precision"] == "single"
+        ax.annotate(f"trained {t['tol']:g}: {t['points']} pts{', f32' if single else ''}",
+                    (t["r"], t["us_per_sim_step"]), fontsize=6.5, xytext=(6, -3) if single else (-6, 0),
+                    textcoords="offset points", ha="left" if single else "right")
+    ax.set_xlabel("r (reduced coordinates)")
+    ax.set_ylabel("µs per simulation-step")
+    ax.set_title(f"cost against r per force method (batch of {cost_r['P']} speeds)", fontsize=9)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7)
+    return _save(fig, IMG / "speed_accuracy_cost_r.png")
+
+
 # ## Charts and the file
 
 def chart(name: str, scene: dict) -> Path:
@@ -463,10 +566,16 @@ def render_markdown(study: dict) -> str:
     Pareto-optimal or not) and the models chosen at each tolerance, every number from the study file."""
     from rotor37_rom.model_choice import expected_error, pareto_front
 
-    full = [r for r in study.get("runs", []) if r["from_scratch"] and set(SCENES) <= set(r["scenes"])]
-    lines = [f"Generated by `{study['command']}` on {study['machine']}"
-             + (f"; the whole study from scratch (no cached runs) took {full[-1]['wall_s'] / 60:.0f} min" if full
-                else "") + ".", ""]
+    runs = study.get("runs", [])
+    full = [i for i, r in enumerate(runs) if r["from_scratch"]]
+    text = f"Generated by `{study['command']}` on {study['machine']}"
+    if full:
+        r = runs[full[-1]]
+        text += (f"; the study from scratch (no cached runs: scenes {', '.join(r['scenes'])}) took "
+                 f"{r['wall_s'] / 60:.0f} min")
+        added = [x["note"].removeprefix(PREFIX) for x in runs[full[-1] + 1:] if x.get("note")]
+        text += f"; {PREFIX}{'; '.join(added)}" if added else ""
+    lines = [text + ".", ""]
     for name, scene in study["scenes"].items():
         cands = scene["candidates"]
         front = pareto_front([c["cost"] for c in cands], [c["error"] for c in cands])
@@ -504,6 +613,18 @@ def render_markdown(study: dict) -> str:
                   f"simulation-step ({ps['per_step_ratio']:.3g}×), with a step {ps['step_ratio']:.3g}× larger "
                   f"(h = {rows['chosen']['h']:.3g} s): **{ps['speedup']:.3g}× less wall time per simulated second**.",
                   ""]
+    cr = study.get("cost_r")
+    if cr:
+        names = list(cr["methods"])
+        lines += ["### Cost against r per force method", "", cr["description"][0].upper() + cr["description"][1:]
+                  + " (µs per simulation-step).", "", "![cost against r](img/speed_accuracy_cost_r.png)", "",
+                  "| r | " + " | ".join(names) + " |", "|" + "---|" * (len(names) + 1)]
+        for i, r in enumerate(cr["r"]):
+            lines.append(f"| {r} | " + " | ".join(f"{cr['methods'][n][i]:.3g}" for n in names) + " |")
+        trained = "; ".join(f"r = {t['r']}, {t['points']} points (tolerance {t['tol']:g}), "
+                            f"{'float32' if t['precision'] == 'single' else 'float64'}: {t['us_per_sim_step']:.3g} µs"
+                            for t in cr["trained"])
+        lines += ["", f"The trained cubatures of the `map-gnl` scene, same run: {trained}.", ""]
     stab = study.get("stability")
     if stab:
         lines += ["### Scene `stability`", "", stab["description"][0].upper() + stab["description"][1:] + ".", ""]
@@ -568,6 +689,9 @@ def main(argv=None) -> int:
             study["stability"] = scene_stability()
         elif name == "paper-speedup":
             study["paper_speedup"] = scene_paper_speedup(study)
+        elif name == "cost-r":
+            study["cost_r"] = scene_cost_r()
+            FRESH.append(f"scene cost-r {time.perf_counter() - t0:.0f} s")
         print(f"scene {name}: {time.perf_counter() - t0:.0f} s")
         record_choices(study)
         study.update(schema=1, machine=machine_description(), command="python benchmarks/speed_accuracy.py",
@@ -578,8 +702,12 @@ def main(argv=None) -> int:
         chart(name, scene)
     if "stability" in study:
         chart_stability(study["stability"])
-    study.setdefault("runs", []).append(dict(scenes=list(todo), wall_s=time.perf_counter() - t_start,
-                                             from_scratch=fresh))
+    if "cost_r" in study:
+        chart_cost_r(study["cost_r"])
+    run = dict(scenes=list(todo), wall_s=time.perf_counter() - t_start, from_scratch=fresh)
+    if FRESH and not fresh:
+        run["note"] = PREFIX + ", ".join(FRESH)
+    study.setdefault("runs", []).append(run)
     args.json.write_text(json.dumps(study, indent=1, default=_finite))
     write_docs(study)
     for name, scene in study["scenes"].items():

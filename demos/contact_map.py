@@ -111,6 +111,9 @@ class ContactMapConfig:
         tangent_safety: with a cap, the GNL step is this x 2 / the largest tangent frequency, in (0, 1].
         cubature: GNL forces by point cubature trained to this relative tolerance, in (0, 1). None: exact tensors.
         precision: arithmetic of the cubature forces: 'double' or 'single' (float32; needs ``cubature``).
+        cubature_speeds: the speeds (rad/s) of the exact GNL runs the cubature is trained on (needs ``cubature``).
+            None: 6 of the map's speeds, both ends included. A map on other speeds with the same training speeds
+            reuses the same cubature (a held-out check runs the model as trained, not one retrained on its speeds).
         tolerance: choose r_c, the frequency cap, the step and the force evaluation of each setting (GNL off, on) as
             the cheapest model of the speed-accuracy study within this relative error (``model_choice.choose_model``
             on the scenes 'map-linear' and 'map-gnl', read from rotor37_rom/data/speed_accuracy.json), in (0, 1);
@@ -149,6 +152,7 @@ class ContactMapConfig:
     tangent_safety: float = 0.5
     cubature: float | None = None
     precision: str = "double"
+    cubature_speeds: tuple[float, ...] | None = None
     tolerance: float | None = None
     retry_diverged: int = 0
     mu: float = 0.15
@@ -259,6 +263,12 @@ class ContactMapConfig:
             raise ValueError(f"--precision must be one of {', '.join(PRECISIONS)}, got {self.precision!r}")
         if self.precision != "double" and self.cubature is None:
             raise ValueError("--precision single needs --cubature (the exact cubic tensors are evaluated in double)")
+        if self.cubature_speeds is not None:
+            if self.cubature is None:
+                raise ValueError("--cubature-speeds needs --cubature (they are the cubature's training runs)")
+            if not (len(self.cubature_speeds) >= 1 and all(w > 0 for w in self.cubature_speeds)):
+                raise ValueError(f"--cubature-speeds must be one or more speeds > 0 rad/s, got "
+                                 f"{list(self.cubature_speeds)}")
         if self.tolerance is not None:
             if not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
                 raise ValueError(f"--tolerance must be in (0, 1) (a relative error: 0.05 = 5 %), got {self.tolerance}")
@@ -296,6 +306,8 @@ class ContactMapConfig:
         object.__setattr__(self, "speeds", (float(start), float(stop), int(n)))
         if self.continuation_range is not None:
             object.__setattr__(self, "continuation_range", tuple(float(w) for w in self.continuation_range))
+        if self.cubature_speeds is not None:
+            object.__setattr__(self, "cubature_speeds", tuple(sorted(float(w) for w in self.cubature_speeds)))
         object.__setattr__(self, "out", Path(self.out))
         if self.model is not None:
             object.__setattr__(self, "model", Path(self.model))
@@ -533,7 +545,8 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
     <out>/cache: a restarted map does not retrain.
     Under MPI rank 0 trains (serial FE quadrature on its own copy of the mesh) while the others wait."""
     importlib.import_module("rotor37_rom.fem")    # on every rank: importing dolfinx initializes PETSc (collective)
-    train = training_speeds(config.speed_grid)
+    train = training_speeds(config.speed_grid) if config.cubature_speeds is None else \
+        np.asarray(config.cubature_speeds, float)
     revolutions = min(config.revolutions, 12.0)
     scheme = CentralDifference(model, nonlinear=True, safety=config.safety)
     key = hashlib.sha256(json.dumps([model.key, train.tolist(), revolutions, scheme.h, vars(config.casing),
@@ -951,6 +964,9 @@ def build_parser() -> ArgumentParser:
     parser.add_argument("--precision", choices=PRECISIONS,
                         help="with --cubature: arithmetic of the cubature forces (single: float32, 1.6-2.1x faster "
                              "in bench_contact_ecsw, within 4e-7 of the double force; default double)")
+    parser.add_argument("--cubature-speeds", type=float, nargs="+", metavar="OMEGA",
+                        help="with --cubature: train it on exact GNL runs at these speeds (rad/s) instead of 6 of the "
+                             "map's own")
     parser.add_argument("--tolerance", type=float, metavar="TOL",
                         help="choose r_c, the frequency cap, the step and the GNL forces as the cheapest model within "
                              "this relative error in the speed-accuracy study (docs/choosing-a-model.md), in (0, 1)")

@@ -56,6 +56,9 @@ def test_contact_map_command_line_is_the_config(contact_map, tmp_path):
                                                   gnl="off", mu=0, quiet=True, out=tmp_path)
     assert contact_map.ContactMapConfig(**vars(contact_map.build_parser().parse_args([]))) \
         == contact_map.ContactMapConfig()
+    argv = ["--cubature", "1e-4", "--cubature-speeds", "1500", "1300"]
+    assert contact_map.ContactMapConfig(**vars(contact_map.build_parser().parse_args(argv))) \
+        == contact_map.ContactMapConfig(cubature=1e-4, cubature_speeds=(1300, 1500))
 
 
 @pytest.mark.parametrize("fields, flag", [
@@ -66,7 +69,10 @@ def test_contact_map_command_line_is_the_config(contact_map, tmp_path):
     ({"disk": True, "mistuning": -0.01}, "--mistuning"), ({"disk": True, "mistuning": 1.0}, "--mistuning"),
     ({"mistuning": 0.02}, "--mistuning"), ({"disk": True, "sector": 36}, "--sector"), ({"sector": 1}, "--sector"),
     ({"disk": True, "sector": -1}, "--sector"), ({"disk": True, "r_cyclic": 0}, "--r-cyclic"),
-    ({"disk": True, "cubature": 1e-4}, "--cubature"), ({"stress": True}, "--stress")])
+    ({"disk": True, "cubature": 1e-4}, "--cubature"), ({"stress": True}, "--stress"),
+    ({"cubature_speeds": (1300.0,)}, "--cubature-speeds"),
+    ({"cubature": 1e-4, "cubature_speeds": ()}, "--cubature-speeds"),
+    ({"cubature": 1e-4, "cubature_speeds": (1300.0, -1.0)}, "--cubature-speeds")])
 def test_contact_map_config_names_the_option(contact_map, fields, flag):
     with pytest.raises(ValueError, match=f"^{flag}[ :]"):
         contact_map.ContactMapConfig(**fields)

@@ -75,6 +75,19 @@ def test_held_out_checks_ran_for_three_scenes():
     assert checked >= 3
 
 
+def test_held_out_maps_run_the_cubature_as_trained():
+    """A cubature candidate's held-out map reuses the cubature trained on the study's speeds (none of them a held-out
+    speed): retrained on runs at the held-out speeds it would be judged on its own training cases."""
+    module = _study_script()
+    options = module.held_out_options({"r_c": 15, "cubature": 1e-4, "precision": "single"})
+    start, stop, n = module.MAP["speeds"]
+    study_speeds = np.linspace(start, stop, int(n))
+    held_out = np.linspace(*module.HELD_OUT_SPEEDS[:2], int(module.HELD_OUT_SPEEDS[2]))
+    train = np.asarray(options["cubature_speeds"])
+    assert train.size == 6 and np.isin(train, study_speeds).all() and not np.isin(train, held_out).any()
+    assert module.held_out_options({"r_c": 25, "frequency_cap": 60.0}) == {"r_c": 25, "frequency_cap": 60.0}
+
+
 def test_docs_page_is_the_study_file():
     """docs/choosing-a-model.md's generated block is what the study script renders from the shipped file."""
     module = _study_script()
