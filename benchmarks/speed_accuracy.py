@@ -169,6 +169,8 @@ class MapRun:
     sweep_wall: float
     sim_steps: float
     h: float
+    config: object = None         # the map's ContactMapConfig
+    record_h: list = dataclasses.field(default_factory=list)     # the step each record ran at (retries: smaller)
 
 
 def perturbed(model, eps: float):
@@ -193,17 +195,30 @@ def model_file(r_c: int) -> Path:
     return path
 
 
+RETRIES = ", retries"
+
+
 def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_path: Path | None = None) -> MapRun:
-    """One map of the scene (run_contact_map of demos/contact_map.py), cached in results/speed_accuracy/<name>."""
+    """One map of the scene (run_contact_map of demos/contact_map.py), cached in results/speed_accuracy/<name>.
+    A candidate '<base>, retries' is its base candidate's map with the speeds that blew up run again at a smaller
+    step: it runs in the base's folder (the base's sweep is reused, only the retries run), and its cost is the base
+    map's plus the retries'."""
     from rotor37_rom.sweep import load_sweep
 
     cm = _demo("contact_map")
     opts = dict(options)
     r_c = opts.pop("r_c", 15)
     model_path = model_path or model_file(r_c)
+    base = None
+    if opts.get("retry_diverged"):
+        if not name.endswith(RETRIES):
+            raise ValueError(f"a candidate with retry_diverged is named '<base>{RETRIES}', got {name!r}")
+        base = run_map(name.removesuffix(RETRIES), gnl, {k: v for k, v in options.items() if k != "retry_diverged"},
+                       speeds, model_path)
+        name = name.removesuffix(RETRIES)
     tag = f"{'gnl' if gnl else 'linear'}_{name}_{int(speeds[0])}_{int(speeds[1])}_{int(speeds[2])}".replace(" ", "_")
     out = WORK / tag
-    done = out / "study_run.json"
+    done = out / ("study_run.json" if base is None else f"study_run_retries{opts['retry_diverged']}.json")
     config = cm.ContactMapConfig(**{**MAP, "speeds": speeds, "model": model_path, "gnl": "on" if gnl else "off",
                                     "out": out, **opts})
     setting = json.dumps([str(model_path), opts], sort_keys=True, default=str)
@@ -216,28 +231,34 @@ def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_pat
         t0 = time.perf_counter()
         result = cm.run_contact_map(config)
         wall = time.perf_counter() - t0
-        FRESH.append(f"{tag} {wall:.0f} s")
+        FRESH.append(f"{tag}{RETRIES if base else ''} {wall:.0f} s")
         run = next(iter(result.runs.values()))
-        done.write_text(json.dumps({"wall": wall, "sweep_wall": run.wall_s, "h": run.h, "folder": str(run.folder),
+        sweep_wall = run.wall_s if base is None else base.sweep_wall + run.wall_s
+        wall = wall if base is None else base.wall + wall
+        done.write_text(json.dumps({"wall": wall, "sweep_wall": sweep_wall, "h": run.h, "folder": str(run.folder),
                                     "setting": setting}))
     info = json.loads(done.read_text())
     grid = config.speed_grid
     # each speed's record: the map's, or the bounded one of its retries at a smaller step (their own sweep folders)
     records = {}
-    for folder in [Path(info["folder"])] + sorted(p for p in (out / "sweeps").iterdir() if p != Path(info["folder"])):
+    retries = [] if base is None else sorted(p for p in (out / "sweeps").iterdir() if p != Path(info["folder"]))
+    for folder in [Path(info["folder"])] + retries:
+        h = json.loads((folder / "spec.json").read_text())["h"]
         for r in load_sweep(folder):
             w = float(r["omega"])
-            if np.isclose(w, grid).any() and (w not in records or (int(records[w]["diverged_step"]) >= 0
+            if np.isclose(w, grid).any() and (w not in records or (int(records[w][0]["diverged_step"]) >= 0
                                                                     and int(r["diverged_step"]) < 0)):
-                records[w] = r
-    records = [records[w] for w in sorted(records)]
+                records[w] = (r, h)
+    record_h = [records[w][1] for w in sorted(records)]
+    records = [records[w][0] for w in sorted(records)]
     from rotor37_rom.sweep import interaction_map
 
     imap = interaction_map(records, config.node)
     steps = sum(config.revolutions * 2 * np.pi / w / info["h"] for w in grid)
     print(f"map {tag}: h = {info['h']:.3g} s, sweep {info['sweep_wall']:.1f} s "
           f"({1e6 * info['sweep_wall'] / steps:.1f} us/sim-step), diverged {int(imap.diverged.sum())}")
-    return MapRun(imap.nfrc, imap.speeds, imap.diverged, records, info["wall"], info["sweep_wall"], steps, info["h"])
+    return MapRun(imap.nfrc, imap.speeds, imap.diverged, records, info["wall"], info["sweep_wall"], steps, info["h"],
+                  config, record_h)
 
 
 def map_errors(run: MapRun, ref: MapRun, robust: np.ndarray) -> dict:
@@ -368,6 +389,80 @@ def held_out_map(scene: dict, gnl: bool, tolerances=TOLERANCES) -> None:
             if cand["held_out_error"] <= tol:
                 break
     scene["held_out_reference"] = dict(robust_speeds=ref.speeds[robust].tolist(), sweep_s=ref.sweep_wall)
+
+
+# ## von Mises at t_max
+
+@functools.lru_cache(maxsize=None)
+def _recovery(r_c: int):
+    """The ci blade's sector and the stress recovery of the r_c model's basis (made once per basis)."""
+    from mpi4py import MPI
+
+    from rotor37_rom import fem
+    from rotor37_rom.reduction import load_reduced_model
+    from rotor37_rom.stress import StressRecovery
+
+    model = load_reduced_model(model_file(r_c))
+    sector = fem.create_blade_sector(MPI.COMM_SELF, preset=MAP["preset"])
+    H, _, cells = fem.quadrature_gradients(sector, model.Phi.T)
+    return sector, model, StressRecovery(H, cells, *sector.material.lame)
+
+
+def stress_at_tmax(run: MapRun, options: dict, gnl: bool, speed: float) -> dict:
+    """von Mises at t_max of one revolution carried on from ``run``'s final state at ``speed`` (the report's
+    procedure: ``analysis.stress_at_peak``, the largest outside the contact nodes' tip band), with the wall time."""
+    from rotor37_rom.analysis import stress_at_peak
+    from rotor37_rom.integrator import simulate
+
+    cm = _demo("contact_map")
+    t0 = time.perf_counter()
+    sector, model, recovery = _recovery(int(options.get("r_c", 15)))
+    k = int(np.argmin(np.abs(run.speeds - speed)))
+    record, h = run.records[k], run.record_h[k]
+    scheme = cm.time_scheme(dataclasses.replace(run.config, h=h), model, gnl, None)
+    steps = int(np.ceil(run.config.revolutions * 2 * np.pi / speed / h))
+    casing = run.config.casing
+    res = simulate(scheme, [speed], casing, revolutions=1, initial=(record["q_final"], record["q_prev"]),
+                   duration=1e-12, phase=casing.rotation_sense * speed * steps * h,
+                   record_every=max(1, int(round(1e-6 / h))), record_q=True, on_blowup="flag")
+    if res.diverged_step[0] >= 0:
+        return dict(vm_max=math.inf, seconds=time.perf_counter() - t0)
+    peak = stress_at_peak(sector, model, recovery, res, gnl, magnitude=True)
+    return dict(vm_max=peak["vm_max"], u_le=peak["u_le"], seconds=time.perf_counter() - t0)
+
+
+def scene_stress(gnl: bool, maps: dict) -> dict:
+    """von Mises at t_max at the reference map's 1B/EO4 resonance (the report's speed: ``engine_order_resonance``),
+    for the map scene's reference and candidates (the same runs: the stress needs a map's final state); error
+    relative to the reference's maximum. On the ci mesh, whose clamped root corner is singular: a comparison of
+    models on one mesh, not a converged stress."""
+    from rotor37_rom.sweep import engine_order_resonance, interaction_map
+
+    ref_run = run_map("reference", gnl, maps["reference"]["options"])
+    speed = engine_order_resonance(interaction_map(ref_run.records, ref_run.config.node), 4, MAP["revolutions"])
+    if not np.isfinite(speed):                        # no speed dominated by EO4: the largest response
+        speed = maps["reference"]["peak_speed"]
+    ref = stress_at_tmax(ref_run, maps["reference"]["options"], gnl, speed)
+    cands = []
+    for c in maps["candidates"]:
+        if not np.isfinite(c["error"]):              # a map that lost a speed: no model for the scene
+            vm, seconds = math.inf, 0.0
+        else:
+            out = stress_at_tmax(run_map(c["name"], gnl, c["options"]), c["options"], gnl, speed)
+            vm, seconds = out["vm_max"], out["seconds"]
+        err = abs(vm - ref["vm_max"]) / ref["vm_max"] if np.isfinite(vm) else math.inf
+        print(f"stress {'gnl' if gnl else 'linear'} {c['name']}: {vm / 1e6:.4g} MPa ({_pct(err)})")
+        cands.append(dict(name=c["name"], options=c["options"], us_per_step=c["us_per_step"], h=c["h"],
+                          cost=c["cost"] + seconds, error=err, vm_max=vm, held_out_error=None))
+    kind = "GNL" if gnl else "GNL off"
+    return dict(description=f"largest von Mises stress (outside the contact nodes' tip band) at t_max of one "
+                            f"revolution carried on from the map's final state at the reference's 1B/EO4 resonance "
+                            f"({speed:g} rad/s), {kind}, the map scene's runs, ci mesh: relative error against the "
+                            f"reference's {ref['vm_max'] / 1e6:.4g} MPa (LE at {1e3 * abs(ref['u_le']):.3g} mm)",
+                cost_unit="s (sweep wall time of the map + the revolution carried on and the recovery)",
+                reference=dict(options=maps["reference"]["options"], speed=speed, vm_max=ref["vm_max"],
+                               u_le=ref["u_le"]),
+                candidates=cands, held_out_case=None)
 
 
 # ## Stability map: the stable step against the amplitude
@@ -685,6 +780,7 @@ def main(argv=None) -> int:
             maps, history = scene_map(gnl)
             held_out_map(maps, gnl)
             study["scenes"][name], study["scenes"][name.replace("map", "history")] = maps, history
+            study["scenes"][name.replace("map", "stress")] = scene_stress(gnl, maps)
         elif name == "stability":
             study["stability"] = scene_stability()
         elif name == "paper-speedup":

@@ -542,17 +542,19 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
                    ) -> tuple[ReducedModel, np.ndarray]:
     """The model with point-cubature GNL forces trained on exact GNL runs at 6 of the speeds (trajectory states), and
     the states the GNL step is taken over (those runs' 24 of largest tip motion and the training states). Cached in
-    <out>/cache: a restarted map does not retrain.
+    <out>/cache: a restarted map does not retrain, and another tolerance reuses the exact training runs.
     Under MPI rank 0 trains (serial FE quadrature on its own copy of the mesh) while the others wait."""
     importlib.import_module("rotor37_rom.fem")    # on every rank: importing dolfinx initializes PETSc (collective)
     train = training_speeds(config.speed_grid) if config.cubature_speeds is None else \
         np.asarray(config.cubature_speeds, float)
     revolutions = min(config.revolutions, 12.0)
     scheme = CentralDifference(model, nonlinear=True, safety=config.safety)
-    key = hashlib.sha256(json.dumps([model.key, train.tolist(), revolutions, scheme.h, vars(config.casing),
-                                     config.cubature, "step states: largest and training"],
+    runs = [model.key, train.tolist(), revolutions, scheme.h, vars(config.casing)]
+    key = hashlib.sha256(json.dumps(runs + [config.cubature, "step states: largest and training"],
                                     sort_keys=True, default=str).encode()).hexdigest()[:16]
     cache = config.out / "cache" / f"cubature_{key}.npz"
+    runs_cache = config.out / "cache" / \
+        f"training_runs_{hashlib.sha256(json.dumps(runs, sort_keys=True, default=str).encode()).hexdigest()[:16]}.npz"
     rank = 0 if comm is None else comm.rank
     if cache.is_file():
         if rank == 0:
@@ -561,7 +563,7 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
         error = None
         if rank == 0:
             try:
-                _train_cubature(config, model, scheme, train, revolutions, cache)
+                _train_cubature(config, model, scheme, train, revolutions, cache, runs_cache)
             except ValueError as exc:
                 error = str(exc)
         if comm is not None:
@@ -574,8 +576,9 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
 
 
 def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: CentralDifference, train: np.ndarray,
-                    revolutions: float, cache: Path) -> None:
-    """Train the point cubature on exact GNL runs at ``train`` and save it with the step states to ``cache``."""
+                    revolutions: float, cache: Path, runs_cache: Path) -> None:
+    """Train the point cubature on exact GNL runs at ``train`` (their states kept in ``runs_cache``, for another
+    tolerance) and save it with the step states to ``cache``."""
     from mpi4py import MPI
 
     from rotor37_rom import fem
@@ -584,7 +587,15 @@ def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: Centr
 
     casing = config.casing
     t0 = time.perf_counter()
-    Q_train, step_states = contact_training_states(scheme, train, casing, revolutions)
+    if runs_cache.is_file():
+        with np.load(runs_cache) as data:
+            Q_train, step_states = data["train"], data["step"]
+    else:
+        Q_train, step_states = contact_training_states(scheme, train, casing, revolutions)
+        runs_cache.parent.mkdir(parents=True, exist_ok=True)
+        partial = runs_cache.with_suffix(".partial.npz")
+        np.savez(partial, train=Q_train, step=step_states)
+        partial.replace(runs_cache)                      # complete or absent
     sector = fem.create_blade_sector(MPI.COMM_SELF, preset=config.preset)
     reduced, rep = hyper_reduce(sector, model, Q_train, tol=config.cubature, level="point",
                                 label=f"contact runs {train.tolist()} x {revolutions:g} rev, mu = {casing.mu:g}")
