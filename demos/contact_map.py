@@ -27,6 +27,7 @@ import hashlib
 import importlib
 import json
 import logging
+import numbers
 import sys
 import time
 from pathlib import Path
@@ -266,9 +267,11 @@ class ContactMapConfig:
         if self.cubature_speeds is not None:
             if self.cubature is None:
                 raise ValueError("--cubature-speeds needs --cubature (they are the cubature's training runs)")
-            if not (len(self.cubature_speeds) >= 1 and all(w > 0 for w in self.cubature_speeds)):
-                raise ValueError(f"--cubature-speeds must be one or more speeds > 0 rad/s, got "
-                                 f"{list(self.cubature_speeds)}")
+            speeds = self.cubature_speeds
+            if not (isinstance(speeds, (tuple, list, np.ndarray)) and len(speeds) >= 1
+                    and all(isinstance(w, numbers.Real) and np.isfinite(w) and w > 0 for w in speeds)):
+                raise ValueError(f"--cubature-speeds must be one or more finite speeds > 0 rad/s, got "
+                                 f"{self.cubature_speeds!r}")
         if self.tolerance is not None:
             if not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
                 raise ValueError(f"--tolerance must be in (0, 1) (a relative error: 0.05 = 5 %), got {self.tolerance}")
@@ -307,7 +310,7 @@ class ContactMapConfig:
         if self.continuation_range is not None:
             object.__setattr__(self, "continuation_range", tuple(float(w) for w in self.continuation_range))
         if self.cubature_speeds is not None:
-            object.__setattr__(self, "cubature_speeds", tuple(sorted(float(w) for w in self.cubature_speeds)))
+            object.__setattr__(self, "cubature_speeds", tuple(sorted({float(w) for w in self.cubature_speeds})))
         object.__setattr__(self, "out", Path(self.out))
         if self.model is not None:
             object.__setattr__(self, "model", Path(self.model))
@@ -549,7 +552,8 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
         np.asarray(config.cubature_speeds, float)
     revolutions = min(config.revolutions, 12.0)
     scheme = CentralDifference(model, nonlinear=True, safety=config.safety)
-    runs = [model.key, train.tolist(), revolutions, scheme.h, vars(config.casing)]
+    runs = [model.key, train.tolist(), revolutions, scheme.h, vars(config.casing),
+            "states every 1e-5 s; step states: largest and training"]
     key = hashlib.sha256(json.dumps(runs + [config.cubature, "step states: largest and training"],
                                     sort_keys=True, default=str).encode()).hexdigest()[:16]
     cache = config.out / "cache" / f"cubature_{key}.npz"

@@ -58,7 +58,7 @@ def test_contact_map_command_line_is_the_config(contact_map, tmp_path):
         == contact_map.ContactMapConfig()
     argv = ["--cubature", "1e-4", "--cubature-speeds", "1500", "1300"]
     assert contact_map.ContactMapConfig(**vars(contact_map.build_parser().parse_args(argv))) \
-        == contact_map.ContactMapConfig(cubature=1e-4, cubature_speeds=(1300, 1500))
+        == contact_map.ContactMapConfig(cubature=1e-4, cubature_speeds=(1300, 1500, 1300))
 
 
 @pytest.mark.parametrize("fields, flag", [
@@ -72,7 +72,9 @@ def test_contact_map_command_line_is_the_config(contact_map, tmp_path):
     ({"disk": True, "cubature": 1e-4}, "--cubature"), ({"stress": True}, "--stress"),
     ({"cubature_speeds": (1300.0,)}, "--cubature-speeds"),
     ({"cubature": 1e-4, "cubature_speeds": ()}, "--cubature-speeds"),
-    ({"cubature": 1e-4, "cubature_speeds": (1300.0, -1.0)}, "--cubature-speeds")])
+    ({"cubature": 1e-4, "cubature_speeds": (1300.0, -1.0)}, "--cubature-speeds"),
+    ({"cubature": 1e-4, "cubature_speeds": 1300.0}, "--cubature-speeds"),
+    ({"cubature": 1e-4, "cubature_speeds": (1300.0, float("inf"))}, "--cubature-speeds")])
 def test_contact_map_config_names_the_option(contact_map, fields, flag):
     with pytest.raises(ValueError, match=f"^{flag}[ :]"):
         contact_map.ContactMapConfig(**fields)
