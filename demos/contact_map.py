@@ -552,13 +552,13 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
         np.asarray(config.cubature_speeds, float)
     revolutions = min(config.revolutions, 12.0)
     scheme = CentralDifference(model, nonlinear=True, safety=config.safety)
-    runs = [model.key, train.tolist(), revolutions, scheme.h, vars(config.casing),
-            "states every 1e-5 s; step states: largest and training"]
+    runs = [model.key, train.tolist(), revolutions, scheme.h, vars(config.casing)]
     key = hashlib.sha256(json.dumps(runs + [config.cubature, "step states: largest and training"],
                                     sort_keys=True, default=str).encode()).hexdigest()[:16]
     cache = config.out / "cache" / f"cubature_{key}.npz"
-    runs_cache = config.out / "cache" / \
-        f"training_runs_{hashlib.sha256(json.dumps(runs, sort_keys=True, default=str).encode()).hexdigest()[:16]}.npz"
+    runs_key = json.dumps(runs + ["states every 1e-5 s; step states: largest and training"], sort_keys=True,
+                          default=str)
+    runs_cache = config.out / "cache" / f"training_runs_{hashlib.sha256(runs_key.encode()).hexdigest()[:16]}.npz"
     rank = 0 if comm is None else comm.rank
     if cache.is_file():
         if rank == 0:
