@@ -95,7 +95,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_integrator.py
 
 # the speed-accuracy study (docs/choosing-a-model.md): every scene's candidates, cost and error, the charts and the
-# file choose_model reads (rotor37_rom/data/speed_accuracy.json); ~50 min on 2 cores
+# file choose_model reads (rotor37_rom/data/speed_accuracy.json); 52 min from scratch on 2 cores
 speed-accuracy: $(STAMP)
 	$(PY) benchmarks/speed_accuracy.py
 

@@ -1,6 +1,6 @@
 """Speed against accuracy: per scene, the cost and the error of every candidate model, one study (issue #22).
 
-    python benchmarks/speed_accuracy.py                       # all scenes (~1 h on the 2-core machine)
+    python benchmarks/speed_accuracy.py                       # all scenes (52 min from scratch on the 2-core machine)
     python benchmarks/speed_accuracy.py --scene modes clearance map-linear
     make speed-accuracy                                       # the same as the first line
 

@@ -108,7 +108,7 @@ def choose_model(scene: str, tolerance: float, study: dict | None = None, fallba
     if best is None:
         smallest = min(expected_error(c) for c in data["candidates"])
         raise ValueError(f"tolerance {tolerance:g} is below every measured model of scene {scene!r} "
-                         f"(smallest expected error {smallest:.3g}); allowed: tolerance >= {smallest:.3g}")
+                         f"(smallest expected error {smallest:.4g}); allowed: tolerance >= {smallest:.4g}")
     return ModelChoice(scene, best["name"], dict(best["options"]), expected_error(best), float(best["error"]),
                        best.get("held_out_error"), float(best["cost"]), data["cost_unit"])
 
