@@ -358,12 +358,16 @@ def scene_map(gnl: bool) -> tuple[dict, dict]:
 def held_out_options(options: dict) -> dict:
     """A candidate's options on the held-out speeds: a cubature stays the one trained on the study's speeds (the
     model chosen is run, not one retrained on runs at the held-out speeds)."""
-    from rotor37_rom.integrator import training_speeds
-
     if options.get("cubature") is None:
         return options
-    grid = np.linspace(*MAP["speeds"][:2], int(MAP["speeds"][2]))
-    return {**options, "cubature_speeds": tuple(training_speeds(grid).tolist())}
+    return {**options, "cubature_speeds": study_training_speeds()}
+
+
+def study_training_speeds() -> tuple[float, ...]:
+    """The speeds a cubature of the map scenes is trained at (6 of the study's, as contact_map picks them)."""
+    from rotor37_rom.integrator import training_speeds
+
+    return tuple(training_speeds(_demo("contact_map").ContactMapConfig(**MAP).speed_grid).tolist())
 
 
 def held_out_map(scene: dict, gnl: bool, tolerances=TOLERANCES) -> None:
@@ -582,9 +586,7 @@ def scene_cost_r(r_values=COST_R, P: int = 11, min_time: float = 0.4) -> dict:
             methods[name].append(cost(dataclasses.replace(model, forces=_synthetic_cubature(r, n, precision, rng))))
             print(f"r = {r}: {name}: {methods[name][-1]:.3g} us per simulation-step")
         del model
-    from rotor37_rom.integrator import training_speeds
-
-    study_training = f"contact runs {training_speeds(np.linspace(*MAP['speeds'][:2], int(MAP['speeds'][2]))).tolist()}"
+    study_training = f"contact runs {list(study_training_speeds())}"
     trained = []
     for path in sorted((WORK / "cubature_cache").glob("cubature_*.npz")):
         if path.name.endswith(".states.npz"):
