@@ -241,13 +241,13 @@ def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_pat
     grid = config.speed_grid
     # each speed's record: the map's, or the bounded one of its retries at a smaller step (their own sweep folders)
     records = {}
-    main = json.loads((Path(info["folder"]) / "spec.json").read_text())
+    specs = {p: json.loads((p / "spec.json").read_text()) for p in (out / "sweeps").iterdir()
+             if (p / "spec.json").is_file()}
+    main = specs[Path(info["folder"])]
     retries = [] if base is None else sorted(      # the base's retries: its model, a smaller step
-        p for p in (out / "sweeps").iterdir() if p != Path(info["folder"]) and (p / "spec.json").is_file()
-        and json.loads((p / "spec.json").read_text())["model"] == main["model"]
-        and json.loads((p / "spec.json").read_text())["h"] < main["h"])
+        p for p, spec in specs.items() if spec["model"] == main["model"] and spec["h"] < main["h"])
     for folder in [Path(info["folder"])] + retries:
-        h = json.loads((folder / "spec.json").read_text())["h"]
+        h = specs[folder]["h"]
         for r in load_sweep(folder):
             w = float(r["omega"])
             if np.isclose(w, grid).any() and (w not in records or (int(records[w][0]["diverged_step"]) >= 0
@@ -420,7 +420,6 @@ def stress_at_tmax(run: MapRun, options: dict, gnl: bool, speed: float) -> dict:
     """von Mises at t_max of one revolution carried on from ``run``'s final state at ``speed`` (the report's
     procedure: ``analysis.stress_at_peak``, the largest outside the contact nodes' tip band), with the wall time."""
     from rotor37_rom.analysis import stress_at_peak
-    from rotor37_rom.integrator import simulate
 
     cm = _demo("contact_map")
     sector, model, recovery = _recovery(int(options.get("r_c", 15)))     # made once per basis, not timed
@@ -428,11 +427,7 @@ def stress_at_tmax(run: MapRun, options: dict, gnl: bool, speed: float) -> dict:
     record, h = run.records[k], run.record_h[k]
     scheme = cm.time_scheme(dataclasses.replace(run.config, h=h), model, gnl, None)    # the map's (cached cubature)
     t0 = time.perf_counter()
-    steps = int(np.ceil(run.config.revolutions * 2 * np.pi / speed / h))
-    casing = run.config.casing
-    res = simulate(scheme, [speed], casing, revolutions=1, initial=(record["q_final"], record["q_prev"]),
-                   duration=1e-12, phase=casing.rotation_sense * speed * steps * h,
-                   record_every=max(1, int(round(1e-6 / h))), record_q=True, on_blowup="flag")
+    res, _ = cm.carry_on_record(run.config, scheme, record, speed)
     if res.diverged_step[0] >= 0:
         return dict(vm_max=math.inf, seconds=time.perf_counter() - t0)
     peak = stress_at_peak(sector, model, recovery, res, gnl, magnitude=True)

@@ -787,13 +787,21 @@ def carry_on(config: ContactMapConfig, scheme: CentralDifference, result: MapRes
     time (s) the map's run ended at)."""
     run_scheme = scheme.with_step(result.retried[speed]) if speed in result.retried else scheme
     record = load_speed(sweep_folder(run_scheme, config.sweep_spec(scheme.model), config.out / "sweeps"), speed)
+    res, t_end = carry_on_record(config, run_scheme, record, speed, monitor)
+    return res, run_scheme, t_end
+
+
+def carry_on_record(config: ContactMapConfig, run_scheme: CentralDifference, record: dict, speed: float,
+                    monitor: Sequence[int] | None = None):
+    """One revolution from a sweep ``record``'s final state, run with the scheme (and step) it ran with, the casing
+    where it was. Returns (SimulationResult, the time (s) the record's run ended at)."""
     steps = int(np.ceil(config.revolutions * 2 * np.pi / speed / run_scheme.h))
     casing = config.casing
     res = simulate(run_scheme, [speed], casing, revolutions=1, initial=(record["q_final"], record["q_prev"]),
                    duration=1e-12, phase=casing.rotation_sense * speed * steps * run_scheme.h,
                    record_every=max(1, int(round(1e-6 / run_scheme.h))), record_q=True, on_blowup="flag",
                    monitor=monitor)
-    return res, run_scheme, steps * run_scheme.h
+    return res, steps * run_scheme.h
 
 
 def stress_mesh(config: ContactMapConfig, model: ReducedModel):
