@@ -129,6 +129,8 @@ class ContactMapConfig:
         continuation: speed step (rad/s) of a continuation up and down (0: none).
         continuation_range: (LOW, HIGH) speeds (rad/s) of the continuation; None: the map's range.
         steady_window: a continued run is steady when its max over the last N revolutions and the N before agree.
+        unsteady_step: the continuation's point when no halving is steady: 'smallest' (the paper read literally:
+            the step stays divided) or 'full' (the full step, marked not steady; ``sweep.continuation``).
         out: folder of the charts, summary.json, the sweeps' records and the caches.
         quiet: no progress bars and no sprag-slip note.
     """
@@ -164,6 +166,7 @@ class ContactMapConfig:
     continuation: float = 0.0
     continuation_range: tuple[float, float] | None = None
     steady_window: int = 1
+    unsteady_step: str = "smallest"
     out: Path = Path("results/contact_map")
     quiet: bool = False
 
@@ -298,6 +301,8 @@ class ContactMapConfig:
         if not 1 <= self.steady_window <= half:
             raise ValueError(f"--steady-window must be in 1..{int(half)} revolutions (half of a continued run), got "
                              f"{self.steady_window}")
+        if self.unsteady_step not in ("smallest", "full"):
+            raise ValueError(f"--unsteady-step must be 'smallest' or 'full', got {self.unsteady_step!r}")
 
     def _normalise(self) -> None:
         """Floats, tuples and paths, as the command line gives them (same cache keys from Python and the shell)."""
@@ -710,6 +715,7 @@ def continuation_branches(config: ContactMapConfig, scheme: CentralDifference, r
                                   first_revolutions=config.revolutions,
                                   revolutions=continued_revolutions(config.revolutions),
                                   out=config.out / "continuation" / tag, window=config.steady_window,
+                                  unsteady=config.unsteady_step,
                                   progress=not config.quiet)
             mine[name] = Branch(points, run_scheme.h, time.perf_counter() - t0)
     if comm is not None:
@@ -777,6 +783,7 @@ def summary_entry(config: ContactMapConfig, scheme: CentralDifference, result: M
         entry[f"continuation_{name}"] = [(p.omega, p.amplitude, p.steady, p.halvings) for p in branch.points]
         entry[f"continuation_{name}_h"], entry[f"continuation_{name}_wall_s"] = branch.h, branch.wall_s
         entry["continuation_steady_window"] = config.steady_window
+        entry["continuation_unsteady_step"] = config.unsteady_step
     return entry
 
 
@@ -1011,6 +1018,10 @@ def build_parser() -> ArgumentParser:
                         help="a continued run is steady when its max over the last N revolutions and the N before "
                              "agree to 2 %% (1, the paper's and the default: periodic with the rotor; N: periods up to "
                              "N T)")
+    parser.add_argument("--unsteady-step", choices=["smallest", "full"],
+                        help="the continuation's point where no halved step is steady: smallest (the paper read "
+                             "literally, the default: the step stays divided) or full (the full step, marked not "
+                             "steady: 8 times fewer points across an unsteady stretch)")
     parser.add_argument("--out", type=Path, help="output folder (default results/contact_map)")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     return parser

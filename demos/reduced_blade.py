@@ -9,6 +9,8 @@
 #     python demos/reduced_blade.py --preset ci                     # r_MD = 20, 80 and the 6 global MDs (minutes)
 #     python demos/reduced_blade.py --preset ci --r-md --r-c 25      # the contact studies' r = 55 model only
 #     python demos/reduced_blade.py --preset coarse --r-md 40 150    # closer to the paper's selection
+#     python demos/reduced_blade.py --tolerance 0.2                  # the cheapest model the speed-accuracy study
+#                                                                    # measured within 20 % (scene 'clearance')
 #
 # The study is one function, `run_reduced_blade(ReducedBladeConfig(...))`, returning a `ReducedBladeResult`; a bad
 # option is one line on stderr and exit status 2.
@@ -54,6 +56,9 @@ class ReducedBladeConfig:
         levels: load levels on each side of delta = 0 (1..50).
         global_md: also a model with r_MD = 0 and the modal derivatives of the first N clamped modes (0: none; 0..10).
         out: output folder (charts; the models are cached in <out>/cache).
+        tolerance: build only the cheapest reduced model the speed-accuracy study measured within this relative
+            error of the clearance consumption (scene 'clearance', its held-out amplitudes included; docs/choosing-
+            a-model.md), in (0, 1); it sets r_c, r_md, criterion and global_md, which must not be given with it.
     """
 
     preset: str = "ci"
@@ -65,8 +70,11 @@ class ReducedBladeConfig:
     levels: int = 10
     global_md: int = 3
     out: Path = Path("results/reduced_blade")
+    tolerance: float | None = None
 
     def __post_init__(self):
+        if self.tolerance is not None:
+            self._take_the_chosen_model()
         if self.preset not in MESH_PRESETS:
             raise ValueError(f"--preset must be one of {', '.join(MESH_PRESETS)}, got {self.preset!r}")
         if not self.r_c >= 1:
@@ -88,8 +96,37 @@ class ReducedBladeConfig:
         object.__setattr__(self, "out", Path(self.out))
         resolve_table(self.table)
 
+    def _take_the_chosen_model(self) -> None:
+        """Set r_c, r_md, criterion and global_md from the study's cheapest reduced model within ``tolerance``."""
+        from rotor37_rom.model_choice import choose_model, load_study
+
+        if not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
+            raise ValueError(f"--tolerance must be in (0, 1) (a relative error: 0.05 = 5 %), got {self.tolerance}")
+        defaults = {f.name: f.default for f in dataclasses.fields(self)}
+        given = [n for n in ("r_c", "r_md", "criterion", "global_md")
+                 if (tuple(getattr(self, n)) if n == "r_md" else getattr(self, n)) != defaults[n]]
+        if given:
+            raise ValueError(f"--tolerance chooses {', '.join('--' + n.replace('_', '-') for n in given)}: give "
+                             f"either the tolerance or the options")
+        study = load_study()
+        scene = study["scenes"]["clearance"]          # the reduced models only (the full-order linear is always drawn)
+        roms = dict(scene, candidates=[c for c in scene["candidates"] if "r_c" in c["options"]])
+        try:
+            choice = choose_model("clearance", self.tolerance, dict(study, scenes={"clearance": roms}))
+        except ValueError as exc:
+            raise ValueError(f"--tolerance: {exc}") from None
+        options = choice.options
+        object.__setattr__(self, "r_c", int(options["r_c"]))
+        object.__setattr__(self, "r_md", (int(options["r_md"]),))
+        object.__setattr__(self, "criterion", str(options["criterion"]))
+        object.__setattr__(self, "global_md", int(options["global_md"]))
+        object.__setattr__(self, "choice", choice)
+
     def variants(self) -> list[tuple[str, int, int]]:
-        """(name, r_MD, number of clamped modes whose MDs are added) of every model."""
+        """(name, r_MD, number of clamped modes whose MDs are added) of every model: with ``tolerance`` the chosen
+        one (its r_MD selected MDs and the global MDs in one basis)."""
+        if self.tolerance is not None:
+            return [(f"ROM {self.choice.name}", self.r_md[0], self.global_md)]
         rows = [(f"ROM r_MD={r_md}", r_md, 0) for r_md in self.r_md]
         if self.global_md:
             n = self.global_md
@@ -275,6 +312,10 @@ def build_parser() -> ArgumentParser:
     parser.add_argument("--global-md", type=int, default=3,
                         help="also build r_MD = 0 + the MDs of the first N clamped normal modes (0: skip; 0..10)")
     parser.add_argument("--out", type=Path, default=Path("results/reduced_blade"), help="output folder")
+    parser.add_argument("--tolerance", type=float, metavar="TOL",
+                        help="build only the cheapest reduced model within this relative error of the clearance "
+                             "consumption in the speed-accuracy study (docs/choosing-a-model.md), in (0, 1); it sets "
+                             "--r-c, --r-md, --criterion, --global-md")
     return parser
 
 
@@ -283,7 +324,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     config = ReducedBladeConfig(preset=args.preset, table=args.table, r_c=args.r_c, r_md=tuple(args.r_md),
                                 criterion=args.criterion, forces=args.forces, levels=args.levels,
-                                global_md=args.global_md, out=args.out)
+                                global_md=args.global_md, out=args.out, tolerance=args.tolerance)
+    if config.tolerance is not None:
+        print(f"--tolerance {config.tolerance:g}: {config.choice.describe()}")
     logging.basicConfig(level=logging.WARNING, force=True)
     logging.getLogger().handlers[0].setLevel(logging.WARNING)
     print_report(config, run_reduced_blade(config))

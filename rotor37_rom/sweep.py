@@ -334,7 +334,7 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
                  first_revolutions: float = 200.0, revolutions: float = 30.0, max_halvings: int = 3,
                  record_dt: float = 1e-5, tol: float = 0.02, progress: bool = False,
                  out: str | Path | None = None, window: int = 1, batch_halvings: bool = True,
-                 node: str = LE) -> list[ContinuationPoint]:
+                 node: str = LE, unsteady: str = "smallest") -> list[ContinuationPoint]:
     """Sequential continuation (§2.3.3): each speed starts from the final state of the previous one; the first
     runs ``first_revolutions``, the next ``revolutions``; when a run is not steady (``is_steady`` with ``tol`` and
     ``window``) the speed step is halved (at most ``max_halvings`` times) and the run redone from the last accepted
@@ -346,6 +346,12 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
     one-by-one procedure accepts (to the batch's round-off); a batch of a few costs little more than one run
     (``benchmarks/bench_integrator.py``: r = 55, 218 us per step alone).
 
+    When no candidate is steady, ``unsteady`` says which one is accepted (marked not steady): 'smallest' (the
+    paper's words read literally, the default: the step stays divided, so an unsteady stretch advances by
+    step / 2**max_halvings per point) or 'full' (the divisions did not make it steady, so the full step is kept, or
+    the largest one whose run did not blow up: the same resolution everywhere, up to 2**max_halvings times fewer
+    points across an unsteady stretch).
+
     The casing is fully ovalized from the start of every continued run (the ramp only applies to the first). A run
     that diverges ends the branch (its point has amplitude NaN). With ``out`` the branch is written after every
     accepted point (``<out>/continuation_<key>.npz``: the points, the state and the rotor angle), so a killed
@@ -356,12 +362,14 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
         raise ValueError(f"max_halvings must be >= 0, got {max_halvings}")
     if window < 1:
         raise ValueError(f"steadiness window must be >= 1 revolution, got {window}")
+    if unsteady not in ("smallest", "full"):
+        raise ValueError(f"unsteady must be 'smallest' or 'full', got {unsteady!r}")
     sign = 1.0 if stop >= start else -1.0
     record_every = max(1, int(round(record_dt / scheme.h)))
     path = None
     if out is not None:
         branch = [start, stop, step, revolutions, max_halvings, tol] + ([window] if window != 1 else []) \
-            + ([node] if node != LE else [])
+            + ([node] if node != LE else []) + ([unsteady] if unsteady != "smallest" else [])
         info = {"sweep": _key(scheme, SweepSpec(revolutions=first_revolutions, casing=casing, record_dt=record_dt)),
                 "branch": branch}
         digest = hashlib.sha256(json.dumps(info, sort_keys=True).encode()).hexdigest()[:16]
@@ -415,7 +423,11 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
                              for p, tg in enumerate(todo)})
             if any(runs[targets[k]][2] for k in ks):
                 break
-        k = next((k for k in range(max_halvings + 1) if targets[k] in runs and runs[targets[k]][2]), max_halvings)
+        k = next((k for k in range(max_halvings + 1) if targets[k] in runs and runs[targets[k]][2]), None)
+        if k is None and unsteady == "full":       # the largest step whose run did not blow up
+            k = next((k for k in range(max_halvings + 1) if targets[k] in runs
+                      and runs[targets[k]][0].diverged_step[runs[targets[k]][1]] < 0), None)
+        k = max_halvings if k is None else k
         target = targets[k]
         r, p, steady = runs[target]
         amp = last_revolution_max(r.t[p], r.u_r[p][r.row(node)], target) if r.diverged_step[p] < 0 else np.nan

@@ -111,15 +111,21 @@ def test_refusals(tmp_path):
     assert STUDY_FILE.is_file()
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--tolerance", "2"], "--tolerance must be in (0, 1)"),
-    (["--tolerance", "0.2", "--gnl", "off", "--frequency-cap", "60"], "--tolerance chooses --frequency-cap"),
-    (["--tolerance", "1e-9"], "--tolerance: tolerance 1e-09 is below every measured model"),
-    (["--tolerance", "0.05", "--disk"], "--tolerance: the speed-accuracy study has no bladed-disk map"),
+@pytest.mark.parametrize("demo, argv, message", [
+    ("contact_map", ["--tolerance", "2"], "--tolerance must be in (0, 1)"),
+    ("contact_map", ["--tolerance", "0.2", "--gnl", "off", "--frequency-cap", "60"],
+     "--tolerance chooses --frequency-cap"),
+    ("contact_map", ["--tolerance", "1e-9"], "--tolerance: tolerance 1e-09 is below every measured model"),
+    ("contact_map", ["--tolerance", "0.05", "--disk"], "--tolerance: the speed-accuracy study has no bladed-disk map"),
+    ("reduced_blade", ["--tolerance", "0"], "--tolerance must be in (0, 1)"),
+    ("reduced_blade", ["--tolerance", "0.5", "--r-c", "25"], "--tolerance chooses --r-c"),
+    ("reduced_blade", ["--tolerance", "0.5", "--r-md", "10", "--global-md", "0"],
+     "--tolerance chooses --r-md, --global-md"),
+    ("reduced_blade", ["--tolerance", "1e-9"], "--tolerance: tolerance 1e-09 is below every measured model"),
 ])
-def test_contact_map_tolerance_errors(argv, message):
-    proc = subprocess.run([sys.executable, str(ROOT / "demos" / "contact_map.py"), *argv], capture_output=True,
-                          text=True)
+def test_tolerance_errors(demo, argv, message):
+    """contact_map.py and reduced_blade.py refuse a bad --tolerance in one line, exit status 2."""
+    proc = subprocess.run([sys.executable, str(ROOT / "demos" / f"{demo}.py"), *argv], capture_output=True, text=True)
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr.count("\n") == 1 and message in proc.stderr, proc.stderr
 
@@ -148,6 +154,31 @@ def test_contact_map_takes_the_chosen_options():
             setting = config.setting(settings[scene])
             assert all(getattr(setting, k) == v for k, v in choice.options.items() if k != "r_c")
         assert config.modes[0] == max(choose_model(s, tol).options.get("r_c", 15) for s in used)
+
+
+def test_reduced_blade_builds_the_chosen_model():
+    """--tolerance builds only the study's cheapest reduced model of the clearance scene within it (one basis with
+    its selected and global MDs), read from the study file; never the full-order linear candidate."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from conftest import load_demo
+
+    rb = load_demo("reduced_blade")
+    study = load_study()
+    scene = study["scenes"]["clearance"]
+    roms = [c for c in scene["candidates"] if "r_c" in c["options"]]
+    for tol in (0.01, 0.05, 0.2, 0.5):
+        within = [c for c in roms if expected_error(c) <= tol]
+        if not within:
+            with pytest.raises(ValueError, match="--tolerance: tolerance"):
+                rb.ReducedBladeConfig(tolerance=tol)
+            continue
+        best = min(within, key=lambda c: c["cost"])
+        config = rb.ReducedBladeConfig(tolerance=tol)
+        assert config.choice.name == best["name"]
+        (name, r_md, n_global), = config.variants()
+        assert (config.r_c, r_md, n_global, config.criterion) == tuple(
+            best["options"][k] for k in ("r_c", "r_md", "global_md", "criterion"))
+        assert best["name"] in name
 
 
 def test_reference_model_is_the_yardstick():

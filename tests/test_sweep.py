@@ -232,6 +232,26 @@ def test_batched_halvings_accept_the_one_by_one_points(ci_rom, monkeypatch):
     assert len(calls) < n_one and max(calls) > 1
 
 
+@pytest.mark.slow
+def test_unsteady_points_keep_the_full_step_when_asked(ci_rom):
+    """unsteady='full': a speed where neither the full nor the halved step is steady is accepted at the full step,
+    marked not steady; the steady points are those of the paper's literal reading ('smallest', where the step stays
+    divided), which needs more points over the same range. Same case as the batched halvings (linear, mu = 0, runs
+    of 2 revolutions building up towards the 1B/EO4 resonance)."""
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
+    kwargs = dict(casing=Casing(mu=0.0), first_revolutions=2.0, revolutions=2.0, max_halvings=1)
+    full = sweep_mod.continuation(scheme, 1300.0, 1380.0, 40.0, unsteady="full", **kwargs)
+    smallest = sweep_mod.continuation(scheme, 1300.0, 1380.0, 40.0, **kwargs)
+    assert full[0].omega == 1300.0 and full[-1].omega == 1380.0
+    for prev, p in zip(full, full[1:]):
+        if not p.steady:
+            assert p.halvings == 0 and p.omega - prev.omega == min(40.0, 1380.0 - prev.omega)
+    assert any(not p.steady for p in full[1:])                 # the case has a stretch no halving makes steady
+    assert any(not p.steady and p.halvings == 1 for p in smallest[1:]) and len(smallest) > len(full)
+    with pytest.raises(ValueError, match="unsteady must be 'smallest' or 'full'"):
+        sweep_mod.continuation(scheme, 1300.0, 1380.0, 40.0, unsteady="half", **kwargs)
+
+
 def test_killed_continuation_resumes_where_it_stopped(ci_rom, tmp_path, monkeypatch):
     """A continuation killed at its third run resumes from the last accepted speed (the first run is not redone) and
     gives the points of an uninterrupted branch bit for bit; a finished branch is read back without running
