@@ -12,8 +12,8 @@ the steady ones, the wall time and the wall per rad/s crossed:
     python benchmarks/bench_continuation.py --per-step        # us per step of 1, 2, 4 runs in contact (serial; with
                                                               # the BLAS threads of the environment)
 
-Model: the speed-accuracy study's GNL map model at 20 % (r = 45 ci blade, point cubature trained to 1e-4 on exact
-GNL contact runs at the study's 6 training speeds, float32, 120 kHz frequency cap), mu = 0, normal e_x; the first
+Model: the speed-accuracy study's cheapest GNL map candidate (r = 45 ci blade, point cubature trained to 1e-4 on
+exact GNL contact runs at the study's 6 training speeds, float32, 120 kHz frequency cap), mu = 0, normal e_x; the first
 run 200 revolutions from rest, then 30 per speed (the paper's). The r = 45 model file is the study's
 (results/speed_accuracy/models/rom_rc15.npz, made by ``make speed-accuracy``; ``--model`` for another); the
 cubature is trained once (about 4 min) into <out>/cache. Results: results/bench_continuation.json.
@@ -29,10 +29,11 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import machine_description  # noqa: E402
+from _common import write_results  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 RULES = ("smallest", "full")
+RESULTS = Path("results/bench_continuation.json")
 
 
 def per_step(scheme, casing, omega: float, n: int = 3000) -> int:
@@ -46,22 +47,21 @@ def per_step(scheme, casing, omega: float, n: int = 3000) -> int:
     res = simulate(scheme, [omega], casing, revolutions=3)
     q, qp = res.q_final[:, 0], res.q_prev[:, 0]
     threads = os.environ.get("OPENBLAS_NUM_THREADS", "default")
+    record_every = max(1, int(round(1e-5 / scheme.h)))          # the continuation's recording cadence
     costs = {}
     for P in (1, 2, 4):
         speeds = omega + np.linspace(-2.0, 2.0, P) if P > 1 else [omega]
         t0 = time.perf_counter()
         run = simulate(scheme, speeds, casing, n_steps=n, initial=(np.tile(q[:, None], P), np.tile(qp[:, None], P)),
-                       duration=1e-12, record_every=26)
+                       duration=1e-12, record_every=record_every)
         costs[str(P)] = (time.perf_counter() - t0) / n * 1e6
         print(f"P = {P}: {costs[str(P)]:.1f} us per step ({costs[str(P)] / P:.1f} per simulation-step), "
               f"{int(run.contact_steps.min())}-{int(run.contact_steps.max())} of {n} steps in contact; "
               f"OPENBLAS_NUM_THREADS={threads}")
-    path = Path("results/bench_continuation.json")
-    store = json.loads(path.read_text()) if path.is_file() else {}
-    store.setdefault("per_step_us", {})[threads] = {"omega": omega, "h": scheme.h, "us": costs,
-                                                     "machine": machine_description()}
-    Path("results").mkdir(exist_ok=True)
-    path.write_text(json.dumps(store, indent=1))
+    store = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
+    per_step = {**store.pop("per_step_us", {}), threads: {"omega": omega, "h": scheme.h, "us": costs}}
+    write_results(RESULTS.stem, store.pop("rows", []), **{k: v for k, v in store.items() if k != "machine"},
+                  per_step_us=per_step)
     return 0
 
 
@@ -91,6 +91,9 @@ def main(argv=None) -> int:
 
     comm = cm.world_comm()
     rank, size = (0, 1) if comm is None else (comm.rank, comm.size)
+    if args.per_step and size > 1:
+        print("error: --per-step runs serially (it times one process's batches); drop mpirun", file=sys.stderr)
+        return 2
     config = cm.ContactMapConfig(model=args.model, gnl="on", frequency_cap=120.0, cubature=1e-4, precision="single",
                                  cubature_speeds=study_training_speeds(), mu=0.0, direction="x",
                                  speeds=(low, high, 2), revolutions=200.0, out=args.out, quiet=True)
@@ -111,25 +114,24 @@ def main(argv=None) -> int:
                      "amplitude_mm": [p.amplitude * 1e3 for p in points], "wall_s": wall})
         print(f"rank {rank}: rule {rule}: {len(points)} points in {wall:.0f} s", flush=True)
     if comm is not None:
-        rows = [row for part in comm.gather(rows, root=0) for row in part] if rank == 0 else []
+        gathered = comm.gather(rows, root=0)               # every rank takes part; rank 0 gets all the rows
+        rows = [row for part in gathered for row in part] if rank == 0 else []
     if rank != 0:
         return 0
     rows.sort(key=lambda row: RULES.index(row["rule"]))
-    result = {"machine": machine_description(), "model": str(args.model), "h": scheme.h, "range": [low, high],
-              "step": args.step, "ranks": size, "rows": rows}
-    Path("results").mkdir(exist_ok=True)
-    path = Path("results/bench_continuation.json")
-    if path.is_file() and "per_step_us" in json.loads(path.read_text()):
-        result["per_step_us"] = json.loads(path.read_text())["per_step_us"]
-    path.write_text(json.dumps(result, indent=1))
+    earlier = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
+    machine = write_results(RESULTS.stem, rows, model=str(args.model), h=scheme.h, range=[low, high], step=args.step,
+                            ranks=size, per_step_us=earlier.get("per_step_us", {}))
     print(f"GNL continuation up {low:g} -> {high:g} rad/s, step {args.step:g}, h = {scheme.h:.3g} s, {size} rank(s); "
-          f"machine: {result['machine']}")
+          f"machine: {machine}")
     print("| rule | points | steady | wall (s) | wall per rad/s (s) | largest response |")
     print("|---|---|---|---|---|---|")
     for row in rows:
-        k = int(np.nanargmax(row["amplitude_mm"]))
+        amp = np.asarray(row["amplitude_mm"], float)
+        largest = (f"{np.nanmax(amp):.2f} mm at {row['speeds'][int(np.nanargmax(amp))]:g} rad/s"
+                   if np.isfinite(amp).any() else "diverged")
         print(f"| {row['rule']} | {row['points']} | {row['steady']} | {row['wall_s']:.0f} | "
-              f"{row['wall_s'] / (high - low):.0f} | {row['amplitude_mm'][k]:.2f} mm at {row['speeds'][k]:g} rad/s |")
+              f"{row['wall_s'] / (high - low):.0f} | {largest} |")
     return 0
 
 

@@ -18,6 +18,7 @@
 # +
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import logging
 import sys
@@ -30,6 +31,7 @@ import numpy as np
 from rotor37_rom.cli import TABLE_HELP, ArgumentParser, resolve_table, run_main
 from rotor37_rom.clearance import ClearanceCurves, delta_range_within, relative_error
 from rotor37_rom.geometry.blade import MESH_PRESETS
+from rotor37_rom.model_choice import ModelChoice
 from rotor37_rom.reduction import CRITERIA, ReducedModel
 
 PAPER_LINEAR_RANGE = {"1B": (-0.25, 0.2), "1T": (-0.1, 0.1)}   # §2.3.2: linear within 10 % of GNL for delta in
@@ -58,7 +60,9 @@ class ReducedBladeConfig:
         out: output folder (charts; the models are cached in <out>/cache).
         tolerance: build only the cheapest reduced model the speed-accuracy study measured within this relative
             error of the clearance consumption (scene 'clearance', its held-out amplitudes included; docs/choosing-
-            a-model.md), in (0, 1); it sets r_c, r_md, criterion and global_md, which must not be given with it.
+            a-model.md), in (0, 1); it sets r_c, r_md, criterion and global_md, which must not be given with it, and
+            runs the study's setting (ci preset, built-in blade, exact cubic tensors).
+        choice: the study's model chosen for ``tolerance`` (set from it; None without a tolerance).
     """
 
     preset: str = "ci"
@@ -71,6 +75,7 @@ class ReducedBladeConfig:
     global_md: int = 3
     out: Path = Path("results/reduced_blade")
     tolerance: float | None = None
+    choice: ModelChoice | None = dataclasses.field(default=None, init=False, compare=False, repr=False)
 
     def __post_init__(self):
         if self.tolerance is not None:
@@ -97,17 +102,12 @@ class ReducedBladeConfig:
         resolve_table(self.table)
 
     def _take_the_chosen_model(self) -> None:
-        """Set r_c, r_md, criterion and global_md from the study's cheapest reduced model within ``tolerance``."""
+        """Set r_c, r_md, criterion, global_md and forces from the study's cheapest reduced model within
+        ``tolerance`` (a field given another value than its default or the chosen one is refused)."""
         from rotor37_rom.model_choice import choose_model, load_study
 
         if not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
             raise ValueError(f"--tolerance must be in (0, 1) (a relative error: 0.05 = 5 %), got {self.tolerance}")
-        defaults = {f.name: f.default for f in dataclasses.fields(self)}
-        given = [n for n in ("r_c", "r_md", "criterion", "global_md")
-                 if (tuple(getattr(self, n)) if n == "r_md" else getattr(self, n)) != defaults[n]]
-        if given:
-            raise ValueError(f"--tolerance chooses {', '.join('--' + n.replace('_', '-') for n in given)}: give "
-                             f"either the tolerance or the options")
         study = load_study()
         scene = study["scenes"]["clearance"]          # the reduced models only (the full-order linear is always drawn)
         roms = dict(scene, candidates=[c for c in scene["candidates"] if "r_c" in c["options"]])
@@ -116,10 +116,16 @@ class ReducedBladeConfig:
         except ValueError as exc:
             raise ValueError(f"--tolerance: {exc}") from None
         options = choice.options
-        object.__setattr__(self, "r_c", int(options["r_c"]))
-        object.__setattr__(self, "r_md", (int(options["r_md"]),))
-        object.__setattr__(self, "criterion", str(options["criterion"]))
-        object.__setattr__(self, "global_md", int(options["global_md"]))
+        chosen = {"r_c": int(options["r_c"]), "r_md": (int(options["r_md"]),), "criterion": str(options["criterion"]),
+                  "global_md": int(options["global_md"]), "forces": "intrusive"}   # the study's exact tensors
+        defaults = {f.name: f.default for f in dataclasses.fields(self)}
+        value = {n: tuple(self.r_md) if n == "r_md" else getattr(self, n) for n in [*chosen, "preset", "table"]}
+        given = [n for n, v in value.items() if v != defaults[n] and v != chosen.get(n, defaults[n])]
+        if given:
+            raise ValueError(f"--tolerance chooses {', '.join('--' + n.replace('_', '-') for n in given)}: give "
+                             f"either the tolerance or the options")
+        for name, v in chosen.items():
+            object.__setattr__(self, name, v)
         object.__setattr__(self, "choice", choice)
 
     def variants(self) -> list[tuple[str, int, int]]:
@@ -300,31 +306,37 @@ def print_report(config: ReducedBladeConfig, result: ReducedBladeResult) -> None
 
 
 def build_parser() -> ArgumentParser:
-    parser = ArgumentParser(description="reduced models of the blade and their clearance consumption")
-    parser.add_argument("--preset", default="ci", help=f"mesh preset: {', '.join(MESH_PRESETS)} (default ci)")
-    parser.add_argument("--table", default="none", help=TABLE_HELP + " (default none)")
-    parser.add_argument("--r-c", type=int, default=15, help="fixed-interface modes (>= 1, default 15)")
-    parser.add_argument("--r-md", type=int, nargs="*", default=[20, 80],
+    parser = ArgumentParser(description="reduced models of the blade and their clearance consumption",
+                            argument_default=argparse.SUPPRESS)        # an option not given keeps the config's default
+    parser.add_argument("--preset", help=f"mesh preset: {', '.join(MESH_PRESETS)} (default ci)")
+    parser.add_argument("--table", help=TABLE_HELP + " (default none)")
+    parser.add_argument("--r-c", type=int, help="fixed-interface modes (>= 1, default 15)")
+    parser.add_argument("--r-md", type=int, nargs="*",
                         help="one model per value, with that many selected modal derivatives (default 20 80)")
-    parser.add_argument("--criterion", default="MI2b", help=f"MD selection: {', '.join(CRITERIA)} (default MI2b)")
-    parser.add_argument("--forces", default="quadrature", help=f"reduced forces: {', '.join(FORCES)}")
-    parser.add_argument("--levels", type=int, default=10, help="load levels on each side of delta = 0 (1..50)")
-    parser.add_argument("--global-md", type=int, default=3,
+    parser.add_argument("--criterion", help=f"MD selection: {', '.join(CRITERIA)} (default MI2b)")
+    parser.add_argument("--forces", help=f"reduced forces: {', '.join(FORCES)}")
+    parser.add_argument("--levels", type=int, help="load levels on each side of delta = 0 (1..50)")
+    parser.add_argument("--global-md", type=int,
                         help="also build r_MD = 0 + the MDs of the first N clamped normal modes (0: skip; 0..10)")
-    parser.add_argument("--out", type=Path, default=Path("results/reduced_blade"), help="output folder")
+    parser.add_argument("--out", type=Path, help="output folder (default results/reduced_blade)")
     parser.add_argument("--tolerance", type=float, metavar="TOL",
                         help="build only the cheapest reduced model within this relative error of the clearance "
                              "consumption in the speed-accuracy study (docs/choosing-a-model.md), in (0, 1); it sets "
-                             "--r-c, --r-md, --criterion, --global-md")
+                             "--r-c, --r-md, --criterion, --global-md and runs the study's setting (ci, built-in "
+                             "blade, exact tensors)")
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Parse the options, run the study, print the tables; raises ValueError for a bad input."""
-    args = build_parser().parse_args(argv)
-    config = ReducedBladeConfig(preset=args.preset, table=args.table, r_c=args.r_c, r_md=tuple(args.r_md),
-                                criterion=args.criterion, forces=args.forces, levels=args.levels,
-                                global_md=args.global_md, out=args.out, tolerance=args.tolerance)
+    args = vars(build_parser().parse_args(argv))
+    if "r_md" in args:
+        args["r_md"] = tuple(args["r_md"])
+    given = [f"--{k.replace('_', '-')}" for k, v in args.items() if k in ("r_c", "r_md", "criterion", "global_md",
+                                                                              "preset", "table", "forces")]
+    if "tolerance" in args and given:
+        raise ValueError(f"--tolerance chooses {', '.join(given)}: give either the tolerance or the options")
+    config = ReducedBladeConfig(**args)
     if config.tolerance is not None:
         print(f"--tolerance {config.tolerance:g}: {config.choice.describe()}")
     logging.basicConfig(level=logging.WARNING, force=True)

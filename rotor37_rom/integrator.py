@@ -431,7 +431,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
     phase = np.broadcast_to(np.asarray(phase, float), (P,)).copy()
     nodes = scheme.model.nodes
     # u_n = N q at the contact nodes, S q along the sliding; the monitored nodes' normal displacements Nm q
-    # (sparse: one node's three entries of q per row; a disk has hundreds of contact nodes)
+    # (dense for a blade's few nodes, CSR for a disk's hundreds: one node's three entries of q per row; _row_operator)
     N, S, theta0, cidx = contact_matrices(nodes, r, None if casings is None else casings[0])
     N, S = _row_operator(N), _row_operator(S)
     nc = len(cidx)

@@ -122,6 +122,8 @@ def test_refusals(tmp_path):
     ("reduced_blade", ["--tolerance", "0.5", "--r-md", "10", "--global-md", "0"],
      "--tolerance chooses --r-md, --global-md"),
     ("reduced_blade", ["--tolerance", "1e-9"], "--tolerance: tolerance 1e-09 is below every measured model"),
+    ("reduced_blade", ["--tolerance", "0.5", "--preset", "coarse", "--r-c", "15"],
+     "--tolerance chooses --preset, --r-c"),
 ])
 def test_tolerance_errors(demo, argv, message):
     """contact_map.py and reduced_blade.py refuse a bad --tolerance in one line, exit status 2."""
@@ -178,7 +180,7 @@ def test_reduced_blade_builds_the_chosen_model():
         (name, r_md, n_global), = config.variants()
         assert (config.r_c, r_md, n_global, config.criterion) == tuple(
             best["options"][k] for k in ("r_c", "r_md", "global_md", "criterion"))
-        assert best["name"] in name
+        assert best["name"] in name and config.forces == "intrusive"             # the study's force evaluation
 
 
 def test_reference_model_is_the_yardstick():
