@@ -104,15 +104,12 @@ class ReducedBladeConfig:
     def _take_the_chosen_model(self) -> None:
         """Set r_c, r_md, criterion, global_md and forces from the study's cheapest reduced model within
         ``tolerance`` (a field given another value than its default or the chosen one is refused)."""
-        from rotor37_rom.model_choice import choose_model, load_study
+        from rotor37_rom.model_choice import choose_model
 
         if not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
             raise ValueError(f"--tolerance must be in (0, 1) (a relative error: 0.05 = 5 %), got {self.tolerance}")
-        study = load_study()
-        scene = study["scenes"]["clearance"]          # the reduced models only (the full-order linear is always drawn)
-        roms = dict(scene, candidates=[c for c in scene["candidates"] if "r_c" in c["options"]])
-        try:
-            choice = choose_model("clearance", self.tolerance, dict(study, scenes={"clearance": roms}))
+        try:                                           # the reduced models only (the full-order linear is always drawn)
+            choice = choose_model("clearance", self.tolerance, where=lambda c: "r_c" in c["options"])
         except ValueError as exc:
             raise ValueError(f"--tolerance: {exc}") from None
         options = choice.options

@@ -16,7 +16,7 @@ import dataclasses
 import json
 import math
 from pathlib import Path
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -86,8 +86,10 @@ def expected_error(candidate: dict) -> float:
     return err if held is None else max(err, float(held))
 
 
-def choose_model(scene: str, tolerance: float, study: dict | None = None, fallback: bool = False) -> ModelChoice:
-    """The cheapest measured candidate of ``scene`` whose expected error is <= ``tolerance`` (relative, in (0, 1)).
+def choose_model(scene: str, tolerance: float, study: dict | None = None, fallback: bool = False,
+                 where: Callable[[dict], bool] | None = None) -> ModelChoice:
+    """The cheapest measured candidate of ``scene`` whose expected error is <= ``tolerance`` (relative, in (0, 1)),
+    among the candidates (dicts of the study file) for which ``where`` holds (default: all).
 
     Raises ValueError naming the scene (unknown scene) or the tolerance (out of range, or below every candidate's
     expected error: then the message gives the smallest one measured, unless ``fallback``, which returns the scene's
@@ -98,15 +100,16 @@ def choose_model(scene: str, tolerance: float, study: dict | None = None, fallba
     if not (isinstance(tolerance, (int, float)) and 0 < tolerance < 1):
         raise ValueError(f"tolerance must be in (0, 1) (a relative error, 0.05 = 5 %), got {tolerance!r}")
     data = study["scenes"][scene]
+    candidates = [c for c in data["candidates"] if where is None or where(c)]
     best = None
-    for cand in data["candidates"]:
+    for cand in candidates:
         err = expected_error(cand)
         if err <= tolerance and (best is None or cand["cost"] < best["cost"]):
             best = cand
     if best is None and fallback:
         return reference_model(scene, study)
     if best is None:
-        smallest = min(expected_error(c) for c in data["candidates"])
+        smallest = min((expected_error(c) for c in candidates), default=math.inf)
         raise ValueError(f"tolerance {tolerance:g} is below every measured model of scene {scene!r} "
                          f"(smallest expected error {smallest:.4g}); allowed: tolerance >= {smallest:.4g}")
     return ModelChoice(scene, best["name"], dict(best["options"]), expected_error(best), float(best["error"]),
