@@ -36,7 +36,7 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse
 
-from rotor37_rom.casing import Casing, casing_clearance, contact_matrices, ramp_rate
+from rotor37_rom.casing import Casing, ContactSolver, casing_clearance, contact_matrices, ramp_rate
 from rotor37_rom.disk import HarmonicBlocks
 from rotor37_rom.nonlinear_forces import PolynomialForces, cubic_monomial_indices, quadratic_monomial_indices
 
@@ -450,7 +450,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         WN = -np.asarray((N @ scheme.W.T).T)                    # (r, nc)
         WT = -np.asarray((S @ scheme.W.T).T)                    # (r, nc)
         DN, DT = np.asarray(N @ WN), np.asarray(N @ WT)         # (nc, nc)
-        contact = _ContactSolver(DN, DT)
+        contact = ContactSolver(DN, DT)
 
     # state
     if state is None:
@@ -621,45 +621,3 @@ def _record(st, p, steps, h, record_every, omega, labels):
             "min_multiplier": float(st["min_lam"][p]), "friction_power": float(st["fric_pow"][p]),
             "contact_steps": int(st["contact_steps"][p]), "diverged_step": int(st["diverged"][p]),
             "work": st["work"][:, p].copy()}
-
-
-class _ContactSolver:
-    """Multipliers lambda >= 0 with D_AA lambda_A = g_A on the active set A and no remaining gap < 0 elsewhere, for
-    D = DN + mu DT (n_c, n_c), which maps multipliers to the change of the normal displacements (u_r += D lambda, so
-    gap -= D lambda); g: predicted gaps. Active-set iteration from the penetrating nodes, with the inverse of each
-    D_AA met kept (per mu and active set: a blade meets a few, a disk's blades passing the bumps more; at most
-    ``max_kept``, then the store starts again), since a sweep solves the same small systems millions of times."""
-
-    def __init__(self, DN: np.ndarray, DT: np.ndarray, max_iter: int = 64, max_kept: int = 4096):
-        self.DN, self.DT, self.max_iter, self.max_kept = DN, DT, max_iter, max_kept
-        self._inverses: dict = {}
-
-    def _inverse(self, mu: float, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        key = (float(mu), active.tobytes())
-        if key not in self._inverses:
-            if len(self._inverses) >= self.max_kept:          # a disk meets many sets as blades pass the bumps
-                self._inverses.clear()
-            A = np.nonzero(active)[0]
-            self._inverses[key] = (A, np.linalg.inv((self.DN + mu * self.DT)[np.ix_(A, A)]))
-        return self._inverses[key]
-
-    def solve(self, mu: float, g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(lambda, gaps after the correction) for predicted gaps g (n_c,)."""
-        active = g < 0.0
-        lam = np.zeros_like(g)
-        tol = 1e-14 * max(1e-3, float(np.abs(g).max()))
-        for _ in range(self.max_iter):
-            lam[:] = 0.0
-            if active.any():
-                A, inv = self._inverse(mu, active)
-                lam_A = inv @ g[A]
-                if (lam_A < 0).any():
-                    active[A[np.argmin(lam_A)]] = False
-                    continue
-                lam[A] = lam_A
-            gap = g - self.DN @ lam - mu * (self.DT @ lam) if mu else g - self.DN @ lam
-            viol = (~active) & (gap < -tol)
-            if not viol.any():
-                return lam, gap
-            active[np.argmin(np.where(viol, gap, np.inf))] = True
-        raise RuntimeError("contact active-set iteration did not converge")

@@ -1,11 +1,15 @@
-"""Full-order transient of a bladed disk under a load of N_d nodal diameters: the response repeats every
+"""Full-order implicit transients: a bladed disk under a load of N_d nodal diameters, whose response repeats every
 N / gcd(N, N_d) sectors, so that many sectors closed on themselves (``cyclic.repeating_sector_maps``) carry the whole
-disk's nonlinear response. Implicit Newmark (average acceleration) with Newton on the exact SVK tangent, every
-sector's forces and tangents from the one sector's compiled forms; the factorisation of the iteration matrix is kept
-across iterations and steps while Newton converges fast (modified Newton), refreshed when it does not.
+disk's nonlinear response; a single blade is the case of one sector without cyclic faces. Implicit Newmark (average
+acceleration) with Newton on the exact SVK tangent, every sector's forces and tangents from the one sector's compiled
+forms; the factorisation of the iteration matrix is kept across iterations and steps while Newton converges fast
+(modified Newton), refreshed when it does not. Optionally the tip nodes touch the casing of eqs. 37-38 (Lagrange
+multipliers, Coulomb sliding friction, ``casing.ContactSolver``): each Newton iterate is corrected by the multipliers
+that close every penetration at t_n+1 through the compliance of the iteration matrix, the implicit counterpart of
+the reduced scheme's forward-increment correction (eq. 27).
 
-Part of the dolfinx adapter (``rotor37_rom.fem``); serial. The reference the disk's reduced models are checked
-against (paper §3.3: full-order GNL responses, Fig. 16).
+Part of the dolfinx adapter (``rotor37_rom.fem``); serial. The references the reduced models are checked against
+(paper §3.3: full-order GNL responses, Fig. 16; and, beyond the paper, the blade in contact with GNL).
 """
 from __future__ import annotations
 
@@ -18,6 +22,7 @@ from typing import Callable
 import numpy as np
 import scipy.sparse as sp
 
+from rotor37_rom.casing import Casing, ContactSolver, casing_clearance, contact_frames, ramp_rate
 from rotor37_rom.cyclic import repeating_sector_maps
 
 from .operators import (SvkOperators, _require_serial, assemble_mass, assemble_stiffness, assemble_tangent_scipy,
@@ -25,7 +30,8 @@ from .operators import (SvkOperators, _require_serial, assemble_mass, assemble_s
 from .sector import Sector
 from .solvers import mumps_solver
 
-__all__ = ["RepeatingSectors", "RepeatingSectorResult", "solve_repeating_newmark", "sector_harmonic_load"]
+__all__ = ["RepeatingSectors", "RepeatingSectorResult", "ContactOperators", "solve_repeating_newmark",
+           "sector_harmonic_load"]
 
 LOG = logging.getLogger(__name__)
 
@@ -34,7 +40,10 @@ LOG = logging.getLogger(__name__)
 class RepeatingSectorResult:
     """t (n + 1,) s; tip (n + 1, n_repeat, n_tip, 3) tip-node displacements of each sector in its frame (m);
     fields: (n_snap, n_repeat, n_dofs) sector fields every ``snapshot_every`` steps, at t[snapshots]; iterations
-    (n,) Newton iterations per step; refreshes: factorisations; wall: s."""
+    (n,) Newton iterations per step; refreshes: factorisations; wall: s. With a casing: lam (n + 1, n_c) normal
+    multipliers (N) of the contact nodes (``ContactOperators.labels``), max_penetration (m) left after the steps'
+    corrections, friction_power (W) the largest power of friction on a sliding node (<= 0: it opposes the sliding);
+    without, None / NaN."""
 
     t: np.ndarray
     tip: np.ndarray
@@ -43,22 +52,42 @@ class RepeatingSectorResult:
     iterations: np.ndarray
     refreshes: int
     wall: float
+    lam: np.ndarray | None = None
+    max_penetration: float = float("nan")
+    friction_power: float = float("nan")
+
+
+@dataclasses.dataclass(frozen=True)
+class ContactOperators:
+    """The casing's contact rows over the unknown x of ``RepeatingSectors``: normal displacements N x and sliding
+    displacements S x (n_c, n_x) of the contact nodes of every sector carried (sector s turned by s 2 pi / N), their
+    angles at rest theta0 (n_c,) and radii (m), labels '<sector>:<node name>'."""
+
+    N: sp.csr_matrix
+    S: sp.csr_matrix
+    theta0: np.ndarray
+    radius: np.ndarray
+    labels: tuple
 
 
 class RepeatingSectors:
     """n_repeat sectors closed on themselves (``cyclic.repeating_sector_maps``) with the clamped DOFs removed: the
-    unknown x holds the free DOFs of all of them; ``fields(x)`` gives each sector's DOF vector in its own frame.
+    unknown x holds the free DOFs of all of them; ``fields(x)`` gives each sector's DOF vector in its own frame. A
+    sector without cyclic faces (a blade) is carried alone (n_repeat = 1).
 
     Attributes: maps [(n_dofs, n_x)] per sector; keep: the slots of x among the map's; K, M: linear stiffness and
     mass (n_x, n_x) CSR; free: (n_dofs,) bool, the sector's unclamped DOFs."""
 
     def __init__(self, sector: Sector, n_repeat: int, ops: SvkOperators | None = None):
         _require_serial(sector, "RepeatingSectors")
-        if sector.cyclic is None:
-            raise ValueError(f"{sector.source} is not a cyclic sector")
+        if sector.cyclic is None and n_repeat != 1:
+            raise ValueError(f"n_repeat must be 1 for {sector.source} (no cyclic faces), got {n_repeat}")
         self.sector, self.ops = sector, ops or create_svk_operators(sector)
         n = sector.n_dofs
-        maps, n_x = repeating_sector_maps(n, sector.cyclic, n_repeat)
+        if sector.cyclic is None:
+            maps, n_x = [sp.identity(n, format="csr")], n
+        else:
+            maps, n_x = repeating_sector_maps(n, sector.cyclic, n_repeat)
         self.free = np.zeros(n, bool)
         self.free[free_dofs(sector)] = True
         used = np.zeros(n_x, bool)
@@ -73,6 +102,28 @@ class RepeatingSectors:
 
     def _sum(self, A_sector):
         return sum(P.T @ self._restrict @ A_sector @ self._restrict @ P for P in self.maps).tocsr()
+
+    def contact_operators(self, casing: Casing) -> ContactOperators:
+        """The rows of the casing's contact nodes (``casing.contact_nodes`` among the sector's tip nodes, all by
+        default) in every sector carried, with the casing's normal and sliding directions (``casing.contact_frames``)."""
+        sector = self.sector
+        tip, rows = np.asarray(sector.tip_dofs), casing.node_indices(len(sector.tip_names))
+        if (tip < 0).any():
+            raise ValueError("the tip nodes' DOFs must all be on this rank (a serial sector)")
+        normals, slide, theta_local = contact_frames(sector.tip_nodes[rows], casing.direction, casing.rotation_sense,
+                                                     casing.cone_slope)
+        pitch = 0.0 if sector.cyclic is None else 2.0 * np.pi / sector.cyclic.n_sectors
+        N, S, theta0, labels = [], [], [], []
+        for s, P in enumerate(self.maps):
+            for k, node in enumerate(rows):
+                block = P[tip[node]]                          # (3, n_x): the node's three DOFs in sector s's frame
+                N.append(sp.csr_matrix(block.T @ normals[k]))
+                S.append(sp.csr_matrix(block.T @ slide[k]))
+                theta0.append(theta_local[k] + s * pitch)
+                labels.append(f"{s}:{sector.tip_names[node]}")
+        radius = np.tile(np.hypot(sector.tip_nodes[rows, 0], sector.tip_nodes[rows, 1]), len(self.maps))
+        return ContactOperators(N=sp.vstack(N).tocsr(), S=sp.vstack(S).tocsr(), theta0=np.array(theta0),
+                                radius=radius, labels=tuple(labels))
 
     def fields(self, x: np.ndarray) -> np.ndarray:
         """(n_repeat, n_dofs): each sector's displacement in its own frame."""
@@ -102,33 +153,60 @@ def _envelope(t: float, ramp: float) -> float:
     return 1.0 if t >= ramp else 0.5 * (1.0 - np.cos(np.pi * t / ramp))
 
 
-def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int, load: Callable[[float], np.ndarray],
-                            dt: float, n_steps: int, nonlinear: bool = True, rtol: float = 1e-8,
-                            snapshot_every: int = 20, max_iterations: int = 30, atol: float = 1e-6,
-                            ops: SvkOperators | None = None, checkpoint: str | Path | None = None,
-                            checkpoint_seconds: float = 60.0) -> RepeatingSectorResult:
-    """Implicit Newmark (beta = 1/4, gamma = 1/2, undamped) of n_repeat sectors closed on themselves, from rest.
+def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | None,
+                            load: Callable[[float], np.ndarray] | None, dt: float, n_steps: int,
+                            nonlinear: bool = True, rtol: float = 1e-8, snapshot_every: int = 20,
+                            max_iterations: int = 30, atol: float = 1e-6, ops: SvkOperators | None = None,
+                            checkpoint: str | Path | None = None, checkpoint_seconds: float = 60.0,
+                            casing: Casing | None = None, omega: float | None = None,
+                            duration: float | None = None) -> RepeatingSectorResult:
+    """Implicit Newmark (beta = 1/4, gamma = 1/2, undamped) of n_repeat sectors closed on themselves (or of one
+    blade), from rest.
 
     Args:
-        sector: a cyclic sector (serial); n_repeat: sectors carried (dividing N).
-        load_dof: the sector DOF loaded in every sector (e.g. node LE's e_z), in the sector's frame.
-        load: t -> (n_repeat,) force on each sector's load DOF (N), e.g. ``sector_harmonic_load``.
+        sector: a cyclic sector or a blade (serial); n_repeat: sectors carried (dividing N; 1 for a blade).
+        load_dof: the sector DOF loaded in every sector (e.g. node LE's e_z), in the sector's frame; None: no load.
+        load: t -> (n_repeat,) force on each sector's load DOF (N), e.g. ``sector_harmonic_load``; None: no load.
         dt, n_steps: time step (s) and steps; nonlinear: SVK (exact tangent) or linear K.
-        rtol, atol: Newton stops at |r| <= max(rtol x max(|f_int|, |M a|, |f|), atol) (atol in N: the floor that the
-            round-off of the internal forces sets while the load is still small).
+        rtol, atol: Newton stops at |r| <= max(rtol x max(|f_int|, |M a|, |f|, |f_contact|), atol) (atol in N: the
+            floor that the round-off of the internal forces sets while the load is still small).
         checkpoint: an .npz file the run saves its state to every ``checkpoint_seconds`` and resumes from (a file
             written for other arguments is refused).
+        casing, omega, duration: the tip nodes touch this casing, the rotor turning at omega (rad/s); the
+            ovalization ramp (eq. 38) is set for a run of ``duration`` s (default n_steps dt), as
+            ``integrator.simulate`` sets it.
     """
     if not (dt > 0 and n_steps >= 1):
         raise ValueError(f"dt must be > 0 s and n_steps >= 1, got {dt}, {n_steps}")
+    if casing is not None and not (omega is not None and np.isfinite(omega) and omega > 0):
+        raise ValueError(f"omega must be an angular speed > 0 rad/s with a casing, got {omega}")
+    if (load is None) != (load_dof is None):
+        raise ValueError("give load_dof and load together (or neither)")
     t_wall = time.perf_counter()
     system = RepeatingSectors(sector, n_repeat, ops)
     M, maps, keep = system.M, system.maps, system.keep
-    f_unit = [P.T @ np.eye(1, sector.n_dofs, load_dof).ravel() for P in maps]
     beta, gamma = 0.25, 0.5
+    if load is None:
+        def force(t):
+            return np.zeros(keep.size)
+    else:
+        f_unit = [P.T @ np.eye(1, sector.n_dofs, load_dof).ravel() for P in maps]
 
-    def force(t):
-        return sum(a * f for a, f in zip(load(t), f_unit))
+        def force(t):
+            return sum(a * f for a, f in zip(load(t), f_unit))
+
+    contact = None if casing is None else system.contact_operators(casing)
+    if contact is not None:
+        duration = n_steps * dt if duration is None else float(duration)
+        if not duration > 0:
+            raise ValueError(f"duration must be > 0 s, got {duration}")
+        alpha = float(ramp_rate(duration, casing.ramp_fraction, casing.ramp_level))
+        B = (contact.N + casing.mu * contact.S).T.tocsr()               # contact force on the sectors: -B lambda
+        n_c = contact.N.shape[0]
+
+        def clearance(t):
+            theta = contact.theta0 + casing.rotation_sense * omega * t
+            return casing_clearance(theta, t, casing.c0, casing.p0, alpha, casing.width)
 
     internal = system.internal if nonlinear else (lambda x: system.K @ x)
     tangent = system.tangent if nonlinear else (lambda x: system.K)
@@ -137,7 +215,12 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int, load: 
     refreshes = 0
     tip = np.asarray(sector.tip_dofs)
     tips, fields, snaps, its = [np.zeros((n_repeat,) + tip.shape)], [], [], []
-    signature = np.array([n_repeat, load_dof, dt, n_steps, float(nonlinear), snapshot_every, x.size, sector.n_dofs])
+    lams = [] if contact is None else [np.zeros(n_c)]
+    checks = np.array([0.0, -np.inf])                                  # max penetration, friction power
+    signature = np.array([n_repeat, -1 if load_dof is None else load_dof, dt, n_steps, float(nonlinear),
+                          snapshot_every, x.size, sector.n_dofs]
+                         + ([] if casing is None else [omega, duration, casing.c0, casing.h_b, casing.mu,
+                                                       "xrc".index(casing.direction[0]), casing.rotation_sense]))
     start, saved = 1, time.perf_counter()
     if checkpoint is not None and Path(checkpoint).is_file():
         with np.load(checkpoint) as data:
@@ -146,71 +229,120 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int, load: 
             x, v, a = data["x"], data["v"], data["a"]
             tips, fields = list(data["tips"]), list(data["fields"])
             snaps, its, refreshes = list(data["snaps"]), list(data["its"]), int(data["refreshes"])
+            lams = list(data["lams"]) if contact is not None else lams
+            checks = data["checks"] if "checks" in data.files else checks
             start = int(data["step"]) + 1
             t_wall -= float(data["elapsed"]) if "elapsed" in data.files else 0.0   # wall of the earlier parts
         LOG.info("resuming from %s at step %d", checkpoint, start)
     cache = {"h": None, "solve": None, "refreshes": refreshes}
 
+    def factorise(y, h):
+        """The iteration matrix at y, factorised; with a casing also its response to unit multipliers."""
+        cache["solve"] = mumps_solver((1.0 / (beta * h * h) * M + tangent(y)).tocsr())
+        cache["h"] = h
+        cache["refreshes"] += 1
+        if contact is not None:
+            WN = -cache["solve"](contact.N.T.toarray())
+            WT = -cache["solve"](contact.S.T.toarray())
+            cache["WB"] = WN + casing.mu * WT                            # the iterate's change per multiplier
+            cache["contact"] = ContactSolver(np.asarray(contact.N @ WN), np.asarray(contact.N @ WT))
+
     def advance(x, v, a, t_new, h):
-        """One Newmark step of length h to t_new: (x, v, a, iterations), or None where Newton fails."""
+        """One Newmark step of length h to t_new: (x, v, a, iterations, multipliers), or None where Newton fails."""
         c0 = 1.0 / (beta * h * h)
         f_ext = force(t_new)
         inertia = -M @ (c0 * x + v / (beta * h) + (0.5 / beta - 1.0) * a) - f_ext
+        gap_free = None if contact is None else clearance(t_new)
 
         def residual(y):
             return c0 * (M @ y) + internal(y) + inertia
 
+        def correct(y):
+            """y with the multipliers that close its penetrations through the kept compliance, and them."""
+            if contact is None:
+                return y, None
+            g = gap_free - contact.N @ y
+            if g.min() >= 0.0:
+                return y, np.zeros(n_c)
+            lam, _ = cache["contact"].solve(casing.mu, g)      # RuntimeError: no solution, the step is split
+            return y + cache["WB"] @ lam, lam
+
+        def total(r, lam):
+            return r if lam is None else r + B @ lam
+
+        def admissible(y):
+            return contact is None or (gap_free - contact.N @ y).min() >= -1e-12
+
         x_new = x + h * v + 0.5 * h * h * a                  # predictor
+        lam = None if contact is None else np.zeros(n_c)
         r = residual(x_new)
         norm = np.linalg.norm(r)
         for it in range(max_iterations + 1):
             acc = c0 * (x_new - x) - v / (beta * h) - (0.5 / beta - 1.0) * a
-            scale = max(np.linalg.norm(M @ acc), np.linalg.norm(f_ext), np.linalg.norm(r + f_ext - M @ acc), 1e-300)
+            f_c = 0.0 if lam is None else np.linalg.norm(B @ lam)
+            scale = max(np.linalg.norm(M @ acc), np.linalg.norm(f_ext), np.linalg.norm(r + f_ext - M @ acc), f_c,
+                        1e-300)
             LOG.debug("t %.6e it %d |r| = %.3e", t_new, it, norm)
-            if norm <= max(rtol * scale, atol):
-                return x_new, v + h * ((1 - gamma) * a + gamma * acc), acc, it
+            if norm <= max(rtol * scale, atol) and admissible(x_new):
+                return x_new, v + h * ((1 - gamma) * a + gamma * acc), acc, it, lam
             if it == max_iterations or not np.isfinite(norm):
                 return None
             trial = None
-            if cache["solve"] is not None and cache["h"] == h:   # modified Newton: the kept factorisation
-                trial = x_new - cache["solve"](r)
+            # in contact, Newton on the exact tangent (a kept factorisation's stale compliance at the contact nodes
+            # makes the multipliers oscillate between iterates: measured on the ci blade); else modified Newton
+            in_contact = nonlinear and lam is not None and (lam.any() or not admissible(x_new))
+            if cache["solve"] is not None and cache["h"] == h and not in_contact:   # the kept factorisation
+                trial, lam_t = correct(x_new - cache["solve"](r))
                 r_trial = residual(trial)
-                if np.linalg.norm(r_trial) > 0.25 * norm:        # too slow: refresh below
+                norm_t = np.linalg.norm(total(r_trial, lam_t))
+                # too slow: refresh below (from a penetrating iterate any admissible one is progress)
+                if norm_t > 0.25 * norm and admissible(x_new):
                     trial = None
             if trial is None:                                    # Newton with a backtracking line search
-                cache["solve"] = mumps_solver((c0 * M + tangent(x_new)).tocsr())
-                cache["h"] = h
-                cache["refreshes"] += 1
+                factorise(x_new, h)
                 step = cache["solve"](r)
                 for _ in range(6):
-                    trial = x_new - step
+                    trial, lam_t = correct(x_new - step)
                     r_trial = residual(trial)
-                    if np.linalg.norm(r_trial) < norm:
+                    norm_t = np.linalg.norm(total(r_trial, lam_t))
+                    # a change of the contact set is a finite step of the semi-smooth Newton (exact tangent)
+                    if norm_t < norm or not (admissible(x_new) and _same_set(lam, lam_t)):
                         break
                     step = 0.5 * step
                 else:
                     return None                                  # no descent: the step is too long
-            x_new, r, norm = trial, r_trial, np.linalg.norm(r_trial)
+            x_new, lam, r, norm = trial, lam_t, r_trial, norm_t
         return None
 
     def advance_adaptive(x, v, a, t_new, h, depth=0):
         """The step, split in halves (recursively, 5 levels) where Newton fails: the point load's local
         nonlinearity needs small load increments while the response does not."""
-        out = advance(x, v, a, t_new, h)
+        try:
+            out = advance(x, v, a, t_new, h)
+        except RuntimeError:                                     # the contact set found no admissible state
+            out = None
         if out is not None:
             return out
         if depth == 5:
             raise RuntimeError(f"Newmark-Newton did not converge at t = {t_new:.6e} s even with dt / 32")
         LOG.info("t = %.6e s: Newton failed, two half steps", t_new)
-        x, v, a, i1 = advance_adaptive(x, v, a, t_new - h / 2, h / 2, depth + 1)
-        x, v, a, i2 = advance_adaptive(x, v, a, t_new, h / 2, depth + 1)
-        return x, v, a, i1 + i2
+        x, v, a, i1, _ = advance_adaptive(x, v, a, t_new - h / 2, h / 2, depth + 1)
+        x, v, a, i2, lam = advance_adaptive(x, v, a, t_new, h / 2, depth + 1)
+        return x, v, a, i1 + i2, lam
 
     for k in range(start, n_steps + 1):
-        x, v, a, it = advance_adaptive(x, v, a, k * dt, dt)
+        x_old = x
+        x, v, a, it, lam = advance_adaptive(x, v, a, k * dt, dt)
         its.append(it)
         per_sector = system.fields(x)
         tips.append(per_sector[:, tip])
+        if contact is not None:
+            lams.append(lam)
+            checks[0] = max(checks[0], -(clearance(k * dt) - contact.N @ x).min())
+            on = lam > 0
+            if on.any():                                         # sliding speed: rotation + the node's own motion
+                slip = omega * contact.radius + contact.S @ (x - x_old) / dt
+                checks[1] = max(checks[1], float((-casing.mu * lam * slip)[on].max()))
         if k % snapshot_every == 0:
             fields.append(per_sector)
             snaps.append(k)
@@ -219,7 +351,7 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int, load: 
             np.savez(tmp, signature=signature, x=x, v=v, a=a, tips=np.array(tips),
                      fields=np.array(fields).reshape((-1, n_repeat, sector.n_dofs)),
                      snaps=np.array(snaps, np.int64), its=np.array(its, np.int64), refreshes=cache["refreshes"],
-                     step=k, elapsed=time.perf_counter() - t_wall)
+                     step=k, elapsed=time.perf_counter() - t_wall, lams=np.array(lams), checks=checks)
             tmp.replace(checkpoint)
             saved = time.perf_counter()
     refreshes = cache["refreshes"]
@@ -227,4 +359,12 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int, load: 
              time.perf_counter() - t_wall)
     return RepeatingSectorResult(t=np.arange(n_steps + 1) * dt, tip=np.array(tips), fields=np.array(fields),
                                  snapshots=np.array(snaps, dtype=np.int64), iterations=np.array(its),
-                                 refreshes=refreshes, wall=time.perf_counter() - t_wall)
+                                 refreshes=refreshes, wall=time.perf_counter() - t_wall,
+                                 lam=None if contact is None else np.array(lams),
+                                 max_penetration=float(max(checks[0], 0.0)) if contact is not None else float("nan"),
+                                 friction_power=float(checks[1]) if contact is not None else float("nan"))
+
+
+def _same_set(lam, other) -> bool:
+    """Whether two multiplier vectors (None without contact) have the same nodes in contact."""
+    return lam is None or other is None or np.array_equal(lam > 0, other > 0)

@@ -1,0 +1,185 @@
+"""The reduced blade against a full-order reference in casing contact (issue #23, items 3 and 4).
+
+The full-order reference is the ci blade's finite-element model (13,836 DOFs) integrated with implicit Newmark
+(average acceleration, ``fem.solve_repeating_newmark`` with a casing): the same eight tip nodes, casing (eqs.
+37-38), normal and Coulomb law as the reduced models, each Newton iterate corrected by the multipliers that close
+every penetration at t_n+1 (``casing.ContactSolver`` on the iteration matrix's compliance). Both sides run undamped
+from rest over the same ovalization ramp, so what differs is the reduction (and each side's time integration: the
+reference is run at several steps, the finest being the reference). Reduced models: Craig-Bampton with r_b = 24 tip
+DOFs, r_c fixed-interface modes, the 6 global modal derivatives and r_MD MI 2b modal derivatives of the constraint
+modes, explicit central differences (``integrator.simulate``) at half the stability limit, unscaled. Among reduced
+models alone (--no-full-order: convergence in r, the largest the reference) they keep their modal damping.
+
+Error measures on the LE normal displacement u(t) (m), recorded every --record seconds: the relative RMS error
+|u_rom - u_ref|_2 / |u_ref|_2 over the run, and the error of max |u| over the last revolution (the quantity a map is
+made of) relative to the reference's. Completed runs are kept in results/bench_contact_reference[_gnl][_rom].json
+and not repeated when the script is started again with the same settings.
+
+    python benchmarks/bench_contact_reference.py                          # linear: ~10 min
+    python benchmarks/bench_contact_reference.py --gnl --r-md 0 20 50     # GNL
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import machine_description  # noqa: E402
+
+
+def reference_run(sector, ops, casing, omega, duration, h, gnl, checkpoint):
+    """LE normal displacement of the full-order model every step, with the contact checks and the wall time."""
+    from rotor37_rom.casing import contact_frames
+    from rotor37_rom.fem.periodic import solve_repeating_newmark
+
+    n_steps = int(round(duration / h))
+    t0 = time.perf_counter()
+    res = solve_repeating_newmark(sector, 1, None, None, h, n_steps, nonlinear=gnl, ops=ops, casing=casing,
+                                  omega=omega, duration=duration, snapshot_every=n_steps, rtol=1e-6,
+                                  checkpoint=checkpoint)
+    normal = contact_frames(sector.tip_nodes[:1], casing.direction, casing.rotation_sense, casing.cone_slope)[0][0]
+    le = res.tip[:, 0, 0, :] @ normal
+    on = res.lam > 0
+    return {"t": res.t.tolist(), "u_le": le.tolist(), "wall_s": time.perf_counter() - t0, "h": h,
+            "steps": n_steps, "factorisations": int(res.refreshes), "newton_iterations": int(res.iterations.sum()),
+            "max_penetration": res.max_penetration, "friction_power": res.friction_power,
+            "min_multiplier": float(res.lam[on].min()) if on.any() else None,
+            "max_multiplier": float(res.lam.max()), "contact_steps": int(on.any(axis=1).sum())}
+
+
+def rom_runs(model, casing, speeds, duration, gnl, record, cap=None, h=None, damping=False):
+    """LE normal displacement of the reduced model at every speed (one batch): unscaled at 0.5 h_crit, or with the
+    frequency cap ``cap`` (rad/s) at step h; undamped unless ``damping``."""
+    from rotor37_rom.integrator import CentralDifference, simulate
+
+    scheme = CentralDifference(model, nonlinear=gnl, safety=0.5, damping=damping, frequency_cap=cap, h=h,
+                               force=True)
+    every = max(1, int(round(record / scheme.h)))
+    res = simulate(scheme, speeds, casing, n_steps=int(np.ceil(duration / scheme.h)), duration=duration,
+                   record_every=every, on_blowup="flag")
+    row = res.row("0:LE")
+    return [{"t": res.t[p].tolist(), "u_le": res.u_r[p][row].tolist(), "h": scheme.h, "wall_s": res.wall,
+             "diverged": bool(res.diverged_step[p] >= 0), "max_penetration": float(res.max_penetration[p])}
+            for p in range(len(speeds))]
+
+
+def errors(run, ref, omega):
+    """(relative RMS error over the run, relative error of the last revolution's max |u|) of run against ref."""
+    t, u = np.asarray(run["t"]), np.asarray(run["u_le"])
+    u_ref = np.interp(t, np.asarray(ref["t"]), np.asarray(ref["u_le"]))
+    last = t >= t[-1] - 2 * np.pi / omega
+    peak_ref = np.abs(u_ref[last]).max()
+    return (float(np.linalg.norm(u - u_ref) / np.linalg.norm(u_ref)),
+            float((np.abs(u[last]).max() - peak_ref) / peak_ref))
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--speeds", type=float, nargs="+", default=[1280.0, 1520.0], help="rad/s")
+    parser.add_argument("--revolutions", type=float, default=4.0)
+    parser.add_argument("--gnl", action="store_true", help="SVK on both sides (default: linear)")
+    parser.add_argument("--r-c", type=int, nargs="+", default=[25], help="fixed-interface modes of the ROMs")
+    parser.add_argument("--r-md", type=int, nargs="+", default=[0], help="MI 2b modal derivatives of the ROMs")
+    parser.add_argument("--h-full", type=float, nargs="+", default=[2e-6, 1e-6, 5e-7],
+                        help="steps of the full-order runs (s); the finest is the reference")
+    parser.add_argument("--bump", type=float, default=0.625, help="bump height h_b (mm; the paper's 0.625)")
+    parser.add_argument("--mu", type=float, default=0.0)
+    parser.add_argument("--record", type=float, default=2e-6, help="record interval of the ROMs (s)")
+    parser.add_argument("--no-full-order", action="store_true",
+                        help="no full-order runs: the ROM with the largest r is the reference (convergence in r); "
+                             "the ROMs then keep their modal damping (undamped, the GNL explicit scheme blows up at "
+                             "0.5 h_crit within 4 revolutions)")
+    parser.add_argument("--rom-cap", type=float, default=None, help="frequency cap of the ROMs (kHz; default none)")
+    parser.add_argument("--rom-step", type=float, default=None,
+                        help="step of the ROMs with --rom-cap (s; without a cap: 0.5 x the stability limit)")
+    args = parser.parse_args(argv)
+    for name, value, ok in (("--revolutions", args.revolutions, 0 < args.revolutions <= 50),
+                            ("--h-full", min(args.h_full), 1e-8 <= min(args.h_full) and max(args.h_full) <= 1e-4),
+                            ("--bump", args.bump, 0 <= args.bump < 5), ("--mu", args.mu, 0 <= args.mu <= 2),
+                            ("--speeds", min(args.speeds), 0 < min(args.speeds) and max(args.speeds) <= 5000)):
+        if not ok:
+            parser.exit(2, f"bench_contact_reference.py: {name} = {value} out of range (see --help)\n")
+    from rotor37_rom import fem
+    from rotor37_rom.builder import ReductionConfig, build_reduced_model
+    from rotor37_rom.casing import Casing
+
+    sector = fem.create_blade_sector(preset="ci")
+    ops = fem.create_svk_operators(sector)
+    casing = Casing(c0=0.5e-3, h_b=args.bump * 1e-3, mu=args.mu)
+    speeds = np.asarray(args.speeds, float)
+    results = Path("results/bench_contact_reference" + ("_gnl" if args.gnl else "")
+                   + ("_rom" if args.no_full_order else "") + ".json")
+    settings = {"speeds": speeds.tolist(), "revolutions": args.revolutions, "bump_mm": args.bump, "mu": args.mu,
+                "record": args.record, "rom_cap_khz": args.rom_cap, "rom_step": args.rom_step}
+    if (args.rom_cap is None) != (args.rom_step is None):
+        parser.exit(2, "bench_contact_reference.py: give --rom-cap and --rom-step together\n")
+    store = json.loads(results.read_text()) if results.exists() else {}
+    if store.get("settings") != settings:
+        store = {"settings": settings, "reference": {}, "roms": {}}
+    store["machine"] = machine_description()
+    results.parent.mkdir(exist_ok=True)
+    durations = {float(w): args.revolutions * 2 * np.pi / w for w in speeds}
+
+    def save():
+        results.write_text(json.dumps(store))
+
+    for w in [] if args.no_full_order else speeds:
+        for h in sorted(args.h_full, reverse=True):
+            key = f"{w:g} h {h:.3g}"
+            if key not in store["reference"]:
+                ckpt = results.with_name(f"{results.stem}_{w:g}_{h:.3g}.ckpt.npz")
+                store["reference"][key] = reference_run(sector, ops, casing, w, durations[float(w)], h, args.gnl,
+                                                        ckpt)
+                save()
+                ckpt.unlink(missing_ok=True)
+            ref = store["reference"][key]
+            print(f"full order {w:g} rad/s, h = {h:.3g} s: {ref['wall_s']:.0f} s, {ref['factorisations']} "
+                  f"factorisations, {ref['contact_steps']} steps in contact, largest multiplier "
+                  f"{ref['max_multiplier']:.0f} N, penetration left {ref['max_penetration']:.1e} m", flush=True)
+    for r_c in args.r_c:
+        for r_md in args.r_md:
+            label = f"r_c {r_c} r_md {r_md}"
+            if label not in store["roms"]:
+                config = ReductionConfig(r_c=r_c, r_md=r_md, criterion="MI2b", global_md_modes=3,
+                                         forces="intrusive" if args.gnl else "none")
+                model, _ = build_reduced_model(sector, config, ops=ops, cache_dir="results/cache")
+                runs = []
+                for w in speeds:                       # one speed at a time: each has its own run length
+                    runs += rom_runs(model, casing, [w], durations[float(w)], args.gnl, args.record,
+                                     None if args.rom_cap is None else 2e3 * np.pi * args.rom_cap, args.rom_step,
+                                     damping=args.no_full_order)
+                store["roms"][label] = {"r": model.r, "runs": runs}
+                save()
+    kind = "GNL" if args.gnl else "linear"
+    largest = max(store["roms"], key=lambda k: store["roms"][k]["r"])
+    against = f"the ROM {largest}" if args.no_full_order else f"the full order at h = {min(args.h_full):.3g} s"
+    print(f"\n{kind}, mu = {args.mu:g}, h_b = {args.bump:g} mm, {args.revolutions:g} revolutions from rest; "
+          f"errors of the LE normal displacement against {against}")
+    print(f"{'model':>20} {'r':>4} {'speed':>6} {'RMS err':>8} {'peak err':>9} {'wall (s)':>9}")
+    for i, w in enumerate(speeds):
+        if args.no_full_order:
+            ref = store["roms"][largest]["runs"][i]
+        else:
+            ref = store["reference"][f"{w:g} h {min(args.h_full):.3g}"]
+            for h in sorted(args.h_full, reverse=True):
+                run = store["reference"][f"{w:g} h {h:.3g}"]
+                e = errors(run, ref, w)
+                print(f"{f'full order h {h:.3g}':>20} {'':>4} {w:>6g} {e[0]:>8.3f} {e[1]:>+9.3f} "
+                      f"{run['wall_s']:>9.0f}")
+        for label, rom in store["roms"].items():
+            run = rom["runs"][i]
+            if run["diverged"]:
+                print(f"{label:>20} {rom['r']:>4} {w:>6g} diverged")
+                continue
+            e = errors(run, ref, w)
+            print(f"{label:>20} {rom['r']:>4} {w:>6g} {e[0]:>8.3f} {e[1]:>+9.3f} {run['wall_s']:>9.1f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
