@@ -98,12 +98,14 @@ def main(argv=None) -> int:
     parser.add_argument("--rom-step", type=float, default=None,
                         help="step of the ROMs with --rom-cap (s; without a cap: 0.5 x the stability limit)")
     args = parser.parse_args(argv)
-    for name, value, ok in (("--revolutions", args.revolutions, 0 < args.revolutions <= 50),
-                            ("--h-full", min(args.h_full), 1e-8 <= min(args.h_full) and max(args.h_full) <= 1e-4),
-                            ("--bump", args.bump, 0 <= args.bump < 5), ("--mu", args.mu, 0 <= args.mu <= 2),
-                            ("--speeds", min(args.speeds), 0 < min(args.speeds) and max(args.speeds) <= 5000)):
-        if not ok:
-            parser.exit(2, f"bench_contact_reference.py: {name} = {value} out of range (see --help)\n")
+    checks = (("--revolutions", [args.revolutions], 0.5, 50), ("--h-full", args.h_full, 1e-8, 1e-4),
+              ("--bump", [args.bump], 0.0, 4.9), ("--mu", [args.mu], 0.0, 2.0), ("--speeds", args.speeds, 1.0, 5000),
+              ("--record", [args.record], 1e-8, 1e-3), ("--r-c", args.r_c, 1, 500), ("--r-md", args.r_md, 0, 300),
+              ("--rom-cap", [] if args.rom_cap is None else [args.rom_cap], 1.0, 1e4),
+              ("--rom-step", [] if args.rom_step is None else [args.rom_step], 1e-9, 1e-5))
+    for name, values, lo, hi in checks:
+        if not all(np.isfinite(v) and lo <= v <= hi for v in values):
+            parser.exit(2, f"bench_contact_reference.py: {name} must be in [{lo:g}, {hi:g}], got {values}\n")
     from rotor37_rom import fem
     from rotor37_rom.builder import ReductionConfig, build_reduced_model
     from rotor37_rom.casing import Casing
@@ -114,19 +116,26 @@ def main(argv=None) -> int:
     speeds = np.asarray(args.speeds, float)
     results = Path("results/bench_contact_reference" + ("_gnl" if args.gnl else "")
                    + ("_rom" if args.no_full_order else "") + ".json")
-    settings = {"speeds": speeds.tolist(), "revolutions": args.revolutions, "bump_mm": args.bump, "mu": args.mu,
-                "record": args.record, "rom_cap_khz": args.rom_cap, "rom_step": args.rom_step}
     if (args.rom_cap is None) != (args.rom_step is None):
         parser.exit(2, "bench_contact_reference.py: give --rom-cap and --rom-step together\n")
+    # the case (a change starts the file again, its checkpoints removed) and the ROMs' settings (a change redoes them)
+    settings = {"speeds": speeds.tolist(), "revolutions": args.revolutions, "bump_mm": args.bump, "mu": args.mu}
+    rom_settings = {"record": args.record, "rom_cap_khz": args.rom_cap, "rom_step": args.rom_step}
     store = json.loads(results.read_text()) if results.exists() else {}
     if store.get("settings") != settings:
+        for stale in results.parent.glob(f"{results.stem}_*.ckpt.npz"):
+            stale.unlink()
         store = {"settings": settings, "reference": {}, "roms": {}}
+    if store.get("rom_settings") != rom_settings:
+        store["rom_settings"], store["roms"] = rom_settings, {}
     store["machine"] = machine_description()
     results.parent.mkdir(exist_ok=True)
     durations = {float(w): args.revolutions * 2 * np.pi / w for w in speeds}
 
     def save():
-        results.write_text(json.dumps(store))
+        tmp = results.with_suffix(".tmp")
+        tmp.write_text(json.dumps(store))
+        tmp.replace(results)
 
     for w in [] if args.no_full_order else speeds:
         for h in sorted(args.h_full, reverse=True):
@@ -156,7 +165,11 @@ def main(argv=None) -> int:
                 store["roms"][label] = {"r": model.r, "runs": runs}
                 save()
     kind = "GNL" if args.gnl else "linear"
-    largest = max(store["roms"], key=lambda k: store["roms"][k]["r"])
+    bounded = [k for k, rom in store["roms"].items() if not any(run["diverged"] for run in rom["runs"])]
+    if args.no_full_order and not bounded:
+        print("every reduced model diverged: no reference")
+        return 1
+    largest = max(bounded or store["roms"], key=lambda k: store["roms"][k]["r"])
     against = f"the ROM {largest}" if args.no_full_order else f"the full order at h = {min(args.h_full):.3g} s"
     print(f"\n{kind}, mu = {args.mu:g}, h_b = {args.bump:g} mm, {args.revolutions:g} revolutions from rest; "
           f"errors of the LE normal displacement against {against}")

@@ -11,7 +11,8 @@ import dataclasses
 import numpy as np
 
 __all__ = ["Casing", "casing_profile", "casing_clearance", "contact_frames", "contact_matrices", "ramp_rate",
-           "ContactSolver", "CONE_SLOPE", "DIRECTIONS"]
+           "ContactSolver", "ContactSetError", "CONE_SLOPE",
+           "DIRECTIONS"]
 
 
 def casing_profile(theta: np.ndarray, c0: float, p0: float, width: float = 0.15) -> np.ndarray:
@@ -152,6 +153,10 @@ class Casing:
         return idx
 
 
+class ContactSetError(RuntimeError):
+    """No contact set gives admissible multipliers (the active-set iteration cycled, or a D_AA is singular)."""
+
+
 class ContactSolver:
     """Multipliers lambda >= 0 of the casing contact with D_AA lambda_A = g_A on the active set A and no remaining
     gap < 0 elsewhere, for D = DN + mu DT (n_c, n_c), which maps multipliers to the change of the normal displacements
@@ -170,7 +175,10 @@ class ContactSolver:
             if len(self._inverses) >= self.max_kept:          # a disk meets many sets as blades pass the bumps
                 self._inverses.clear()
             A = np.nonzero(active)[0]
-            self._inverses[key] = (A, np.linalg.inv((self.DN + mu * self.DT)[np.ix_(A, A)]))
+            try:
+                self._inverses[key] = (A, np.linalg.inv((self.DN + mu * self.DT)[np.ix_(A, A)]))
+            except np.linalg.LinAlgError as exc:
+                raise ContactSetError(f"singular contact compliance on the nodes {A.tolist()}") from exc
         return self._inverses[key]
 
     def solve(self, mu: float, g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -192,4 +200,4 @@ class ContactSolver:
             if not viol.any():
                 return lam, gap
             active[np.argmin(np.where(viol, gap, np.inf))] = True
-        raise RuntimeError("contact active-set iteration did not converge")
+        raise ContactSetError("contact active-set iteration did not converge")

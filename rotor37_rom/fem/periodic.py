@@ -22,7 +22,7 @@ from typing import Callable
 import numpy as np
 import scipy.sparse as sp
 
-from rotor37_rom.casing import Casing, ContactSolver, casing_clearance, contact_frames, ramp_rate
+from rotor37_rom.casing import Casing, ContactSetError, ContactSolver, casing_clearance, contact_frames, ramp_rate
 from rotor37_rom.cyclic import repeating_sector_maps
 
 from .operators import (SvkOperators, _require_serial, assemble_mass, assemble_stiffness, assemble_tangent_scipy,
@@ -42,8 +42,8 @@ class RepeatingSectorResult:
     fields: (n_snap, n_repeat, n_dofs) sector fields every ``snapshot_every`` steps, at t[snapshots]; iterations
     (n,) Newton iterations per step; refreshes: factorisations; wall: s. With a casing: lam (n + 1, n_c) normal
     multipliers (N) of the contact nodes (``ContactOperators.labels``), max_penetration (m) left after the steps'
-    corrections, friction_power (W) the largest power of friction on a sliding node (<= 0: it opposes the sliding);
-    without, None / NaN."""
+    corrections, friction_power (W) the largest power of friction on a sliding node (<= 0: it opposes the sliding;
+    NaN if no node touched), both taken at the ends of the steps; without a casing, None / NaN."""
 
     t: np.ndarray
     tip: np.ndarray
@@ -220,7 +220,9 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | None,
     signature = np.array([n_repeat, -1 if load_dof is None else load_dof, dt, n_steps, float(nonlinear),
                           snapshot_every, x.size, sector.n_dofs]
                          + ([] if casing is None else [omega, duration, casing.c0, casing.h_b, casing.mu,
-                                                       "xrc".index(casing.direction[0]), casing.rotation_sense]))
+                                                       "xrc".index(casing.direction[0]), casing.rotation_sense,
+                                                       casing.ramp_fraction, casing.ramp_level, casing.width,
+                                                       casing.cone_slope, n_c, float(contact.theta0.sum())]))
     start, saved = 1, time.perf_counter()
     if checkpoint is not None and Path(checkpoint).is_file():
         with np.load(checkpoint) as data:
@@ -264,14 +266,14 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | None,
             g = gap_free - contact.N @ y
             if g.min() >= 0.0:
                 return y, np.zeros(n_c)
-            lam, _ = cache["contact"].solve(casing.mu, g)      # RuntimeError: no solution, the step is split
+            lam, _ = cache["contact"].solve(casing.mu, g)      # ContactSetError: refreshed, then the step split
             return y + cache["WB"] @ lam, lam
 
         def total(r, lam):
             return r if lam is None else r + B @ lam
 
-        def admissible(y):
-            return contact is None or (gap_free - contact.N @ y).min() >= -1e-12
+        def admissible(y):                                   # round-off of the correction: ~1e-20 m
+            return contact is None or (gap_free - contact.N @ y).min() >= -1e-15
 
         x_new = x + h * v + 0.5 * h * h * a                  # predictor
         lam = None if contact is None else np.zeros(n_c)
@@ -292,11 +294,14 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | None,
             # makes the multipliers oscillate between iterates: measured on the ci blade); else modified Newton
             in_contact = nonlinear and lam is not None and (lam.any() or not admissible(x_new))
             if cache["solve"] is not None and cache["h"] == h and not in_contact:   # the kept factorisation
-                trial, lam_t = correct(x_new - cache["solve"](r))
-                r_trial = residual(trial)
-                norm_t = np.linalg.norm(total(r_trial, lam_t))
+                try:
+                    trial, lam_t = correct(x_new - cache["solve"](r))
+                    r_trial = residual(trial)
+                    norm_t = np.linalg.norm(total(r_trial, lam_t))
+                except ContactSetError:                          # the stale compliance: refresh below
+                    trial = None
                 # too slow: refresh below (from a penetrating iterate any admissible one is progress)
-                if norm_t > 0.25 * norm and admissible(x_new):
+                if trial is not None and norm_t > 0.25 * norm and admissible(x_new):
                     trial = None
             if trial is None:                                    # Newton with a backtracking line search
                 factorise(x_new, h)
@@ -319,7 +324,7 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | None,
         nonlinearity needs small load increments while the response does not."""
         try:
             out = advance(x, v, a, t_new, h)
-        except RuntimeError:                                     # the contact set found no admissible state
+        except ContactSetError:                                  # no admissible contact set from this iterate
             out = None
         if out is not None:
             return out
@@ -362,7 +367,8 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | None,
                                  refreshes=refreshes, wall=time.perf_counter() - t_wall,
                                  lam=None if contact is None else np.array(lams),
                                  max_penetration=float(max(checks[0], 0.0)) if contact is not None else float("nan"),
-                                 friction_power=float(checks[1]) if contact is not None else float("nan"))
+                                 friction_power=float(checks[1]) if contact is not None and np.isfinite(checks[1])
+                                 else float("nan"))
 
 
 def _same_set(lam, other) -> bool:
