@@ -15,8 +15,10 @@ Error measures on the LE normal displacement u(t) (m), recorded every --record s
 made of) relative to the reference's. Completed runs are kept in results/bench_contact_reference[_gnl][_rom].json
 and not repeated when the script is started again with the same settings.
 
-    python benchmarks/bench_contact_reference.py                          # linear: ~10 min
-    python benchmarks/bench_contact_reference.py --gnl --r-md 0 20 50     # GNL
+    python benchmarks/bench_contact_reference.py --r-c 10 25 40 80        # linear: ~20 min
+    python benchmarks/bench_contact_reference.py --gnl --no-full-order --speeds 1280 --r-md 0 20 50
+        # GNL among reduced models: ~11 h, the modal derivatives of the constraint modes shrink the explicit step
+    python benchmarks/bench_contact_reference.py --gnl --speeds 1280 --r-md 0    # GNL full order: out of reach
 """
 from __future__ import annotations
 
