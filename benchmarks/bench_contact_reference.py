@@ -108,6 +108,8 @@ def main(argv=None) -> int:
     for name, values, lo, hi in checks:
         if not all(np.isfinite(v) and lo <= v <= hi for v in values):
             parser.exit(2, f"bench_contact_reference.py: {name} must be in [{lo:g}, {hi:g}], got {values}\n")
+    if (args.rom_cap is None) != (args.rom_step is None):
+        parser.exit(2, "bench_contact_reference.py: give --rom-cap and --rom-step together\n")
     from rotor37_rom import fem
     from rotor37_rom.builder import ReductionConfig, build_reduced_model
     from rotor37_rom.casing import Casing
@@ -118,8 +120,6 @@ def main(argv=None) -> int:
     speeds = np.asarray(args.speeds, float)
     results = Path("results/bench_contact_reference" + ("_gnl" if args.gnl else "")
                    + ("_rom" if args.no_full_order else "") + ".json")
-    if (args.rom_cap is None) != (args.rom_step is None):
-        parser.exit(2, "bench_contact_reference.py: give --rom-cap and --rom-step together\n")
     # the case (a change starts the file again, its checkpoints removed) and the ROMs' settings (a change redoes them)
     settings = {"speeds": speeds.tolist(), "revolutions": args.revolutions, "bump_mm": args.bump, "mu": args.mu}
     rom_settings = {"record": args.record, "rom_cap_khz": args.rom_cap, "rom_step": args.rom_step}
