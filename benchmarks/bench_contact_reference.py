@@ -12,13 +12,20 @@ models alone (--no-full-order: convergence in r, the largest the reference) they
 
 Error measures on the LE normal displacement u(t) (m), recorded every --record seconds: the relative RMS error
 |u_rom - u_ref|_2 / |u_ref|_2 over the run, and the error of max |u| over the last revolution (the quantity a map is
-made of) relative to the reference's. Completed runs are kept in results/bench_contact_reference[_gnl][_rom].json
-and not repeated when the script is started again with the same settings.
+made of) relative to the reference's. Completed runs are kept per model and speed in
+results/bench_contact_reference[_gnl][_rom].json and not repeated when the script is started again with the same
+case (revolutions, bump, mu), so a later command can add speeds, models or steps; the report compares the runs the
+command names. With --rom-cap the reduced models run at the given steps with the frequency cap (the maps' setting);
+several steps give the step's own error, and the reference is the largest model at the smallest step.
 
     python benchmarks/bench_contact_reference.py --r-c 10 25 40 80        # linear: ~20 min
-    python benchmarks/bench_contact_reference.py --gnl --no-full-order --speeds 1280 --r-md 0 20 50
-        # GNL among reduced models: ~11 h, the modal derivatives of the constraint modes shrink the explicit step
+    python benchmarks/bench_contact_reference.py --gnl --no-full-order --speeds 1280 1520 --r-md 0 20 50 \
+        --rom-cap 120 --rom-step 4e-7     # GNL convergence in r_MD at the maps' 120 kHz cap: 15 min
+    python benchmarks/bench_contact_reference.py --gnl --no-full-order --speeds 1280 --r-md 0 20 50 100 \
+        --rom-cap 120 --rom-step 4e-7     # r_MD = 100 (r = 155) too: + ~50 min (exact tensors, 9 min offline)
     python benchmarks/bench_contact_reference.py --gnl --speeds 1280 --r-md 0    # GNL full order: out of reach
+Unscaled (no --rom-cap) the modal derivatives of the constraint modes shrink the explicit step 67 times from r_MD = 0
+to 100 (docs/results.md).
 """
 from __future__ import annotations
 
@@ -80,6 +87,12 @@ def errors(run, ref, omega):
             float((np.abs(u[last]).max() - peak_ref) / peak_ref))
 
 
+def last_peak(run, omega):
+    """The last revolution's max |u| of a run (m)."""
+    t, u = np.asarray(run["t"]), np.asarray(run["u_le"])
+    return float(np.abs(u[t >= t[-1] - 2 * np.pi / omega]).max())
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--speeds", type=float, nargs="+", default=[1280.0, 1520.0], help="rad/s")
@@ -97,14 +110,16 @@ def main(argv=None) -> int:
                              "the ROMs then keep their modal damping (undamped, the GNL explicit scheme blows up at "
                              "0.5 h_crit within 4 revolutions)")
     parser.add_argument("--rom-cap", type=float, default=None, help="frequency cap of the ROMs (kHz; default none)")
-    parser.add_argument("--rom-step", type=float, default=None,
-                        help="step of the ROMs with --rom-cap (s; without a cap: 0.5 x the stability limit)")
+    parser.add_argument("--rom-step", type=float, nargs="+", default=None,
+                        help="steps of the ROMs with --rom-cap (s; several: each model at each step, the smallest "
+                             "one's run of the largest model the reference; without a cap: 0.5 x the stability "
+                             "limit)")
     args = parser.parse_args(argv)
     checks = (("--revolutions", [args.revolutions], 0.5, 50), ("--h-full", args.h_full, 1e-8, 1e-4),
               ("--bump", [args.bump], 0.0, 4.9), ("--mu", [args.mu], 0.0, 2.0), ("--speeds", args.speeds, 1.0, 5000),
               ("--record", [args.record], 1e-8, 1e-3), ("--r-c", args.r_c, 1, 500), ("--r-md", args.r_md, 0, 300),
               ("--rom-cap", [] if args.rom_cap is None else [args.rom_cap], 1.0, 1e4),
-              ("--rom-step", [] if args.rom_step is None else [args.rom_step], 1e-9, 1e-5))
+              ("--rom-step", args.rom_step or [], 1e-9, 1e-5))
     for name, values, lo, hi in checks:
         if not all(np.isfinite(v) and lo <= v <= hi for v in values):
             parser.exit(2, f"bench_contact_reference.py: {name} must be in [{lo:g}, {hi:g}], got {values}\n")
@@ -120,9 +135,10 @@ def main(argv=None) -> int:
     speeds = np.asarray(args.speeds, float)
     results = Path("results/bench_contact_reference" + ("_gnl" if args.gnl else "")
                    + ("_rom" if args.no_full_order else "") + ".json")
-    # the case (a change starts the file again, its checkpoints removed) and the ROMs' settings (a change redoes them)
-    settings = {"speeds": speeds.tolist(), "revolutions": args.revolutions, "bump_mm": args.bump, "mu": args.mu}
-    rom_settings = {"record": args.record, "rom_cap_khz": args.rom_cap, "rom_step": args.rom_step}
+    # the case (a change starts the file again, its checkpoints removed) and the ROMs' settings (a change redoes them);
+    # runs are kept per speed, so a later command can add speeds or models without repeating the others
+    settings = {"revolutions": args.revolutions, "bump_mm": args.bump, "mu": args.mu}
+    rom_settings = {"record": args.record}
     store = json.loads(results.read_text()) if results.exists() else {}
     if store.get("settings") != settings:
         for stale in results.parent.glob(f"{results.stem}_*.ckpt.npz"):
@@ -152,47 +168,54 @@ def main(argv=None) -> int:
             print(f"full order {w:g} rad/s, h = {h:.3g} s: {ref['wall_s']:.0f} s, {ref['factorisations']} "
                   f"factorisations, {ref['contact_steps']} steps in contact, largest multiplier "
                   f"{ref['max_multiplier']:.0f} N, penetration left {ref['max_penetration']:.1e} m", flush=True)
-    for r_c in args.r_c:
-        for r_md in args.r_md:
-            label = f"r_c {r_c} r_md {r_md}"
-            if label not in store["roms"]:
-                config = ReductionConfig(r_c=r_c, r_md=r_md, criterion="MI2b", global_md_modes=3,
-                                         forces="intrusive" if args.gnl else "none")
-                model, _ = build_reduced_model(sector, config, ops=ops, cache_dir="results/cache")
-                runs = []
-                for w in speeds:                       # one speed at a time: each has its own run length
-                    runs += rom_runs(model, casing, [w], durations[float(w)], args.gnl, args.record,
-                                     None if args.rom_cap is None else 2e3 * np.pi * args.rom_cap, args.rom_step,
-                                     damping=args.no_full_order)
-                store["roms"][label] = {"r": model.r, "runs": runs}
+    steps = [None] if args.rom_step is None else sorted(args.rom_step, reverse=True)
+
+    def rom_label(r_c, r_md, h):
+        return f"r_c {r_c} r_md {r_md}" + ("" if h is None else f" cap {args.rom_cap:g} h {h:.3g}")
+
+    for r_c, r_md, h in ((r_c, r_md, h) for r_c in args.r_c for r_md in args.r_md for h in steps):
+        label = rom_label(r_c, r_md, h)
+        todo = [w for w in speeds if f"{w:g}" not in store["roms"].get(label, {}).get("runs", {})]
+        if todo:
+            config = ReductionConfig(r_c=r_c, r_md=r_md, criterion="MI2b", global_md_modes=3,
+                                     forces="intrusive" if args.gnl else "none")
+            model, _ = build_reduced_model(sector, config, ops=ops, cache_dir="results/cache")
+            store["roms"].setdefault(label, {"r": model.r, "runs": {}})
+            for w in todo:                         # one speed at a time: each has its own run length
+                run, = rom_runs(model, casing, [w], durations[float(w)], args.gnl, args.record,
+                                None if args.rom_cap is None else 2e3 * np.pi * args.rom_cap, h,
+                                damping=args.no_full_order)
+                store["roms"][label]["runs"][f"{w:g}"] = run
                 save()
     kind = "GNL" if args.gnl else "linear"
-    bounded = [k for k, rom in store["roms"].items() if not any(run["diverged"] for run in rom["runs"])]
-    if args.no_full_order and not bounded:
-        print("every reduced model diverged: no reference")
-        return 1
-    largest = max(bounded or store["roms"], key=lambda k: store["roms"][k]["r"])
-    against = f"the ROM {largest}" if args.no_full_order else f"the full order at h = {min(args.h_full):.3g} s"
-    print(f"\n{kind}, mu = {args.mu:g}, h_b = {args.bump:g} mm, {args.revolutions:g} revolutions from rest; "
-          f"errors of the LE normal displacement against {against}")
-    print(f"{'model':>20} {'r':>4} {'speed':>6} {'RMS err':>8} {'peak err':>9} {'wall (s)':>9}")
-    for i, w in enumerate(speeds):
+    labels = [rom_label(r_c, r_md, h) for r_c in args.r_c for r_md in args.r_md for h in steps]
+    print(f"\n{kind}, mu = {args.mu:g}, h_b = {args.bump:g} mm, {args.revolutions:g} revolutions from rest; errors "
+          f"of the LE normal displacement against "
+          + ("the largest reduced model bounded at that speed" if args.no_full_order
+             else f"the full order at h = {min(args.h_full):.3g} s"))
+    print(f"{'model':>34} {'r':>4} {'speed':>6} {'RMS err':>8} {'peak err':>9} {'LE peak':>9} {'wall (s)':>9}")
+    for w in speeds:
+        runs = {k: (store["roms"][k]["r"], store["roms"][k]["runs"][f"{w:g}"]) for k in labels}
         if args.no_full_order:
-            ref = store["roms"][largest]["runs"][i]
+            bounded = [k for k, (_, run) in runs.items() if not run["diverged"]]
+            if not bounded:
+                print(f"every reduced model diverged at {w:g} rad/s: no reference")
+                continue
+            ref = runs[max(bounded, key=lambda k: (runs[k][0], -runs[k][1]["h"]))][1]
         else:
             ref = store["reference"][f"{w:g} h {min(args.h_full):.3g}"]
             for h in sorted(args.h_full, reverse=True):
                 run = store["reference"][f"{w:g} h {h:.3g}"]
                 e = errors(run, ref, w)
-                print(f"{f'full order h {h:.3g}':>20} {'':>4} {w:>6g} {e[0]:>8.3f} {e[1]:>+9.3f} "
-                      f"{run['wall_s']:>9.0f}")
-        for label, rom in store["roms"].items():
-            run = rom["runs"][i]
+                print(f"{f'full order h {h:.3g}':>34} {'':>4} {w:>6g} {e[0]:>8.3f} {e[1]:>+9.3f} "
+                      f"{last_peak(run, w) * 1e3:>6.3f} mm {run['wall_s']:>9.0f}")
+        for label, (r, run) in runs.items():
             if run["diverged"]:
-                print(f"{label:>20} {rom['r']:>4} {w:>6g} diverged")
+                print(f"{label:>34} {r:>4} {w:>6g} diverged")
                 continue
             e = errors(run, ref, w)
-            print(f"{label:>20} {rom['r']:>4} {w:>6g} {e[0]:>8.3f} {e[1]:>+9.3f} {run['wall_s']:>9.1f}")
+            print(f"{label:>34} {r:>4} {w:>6g} {e[0]:>8.3f} {e[1]:>+9.3f} {last_peak(run, w) * 1e3:>6.3f} mm "
+                  f"{run['wall_s']:>9.1f}")
     return 0
 
 
