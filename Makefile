@@ -92,6 +92,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_contact_rom_size.py
 	$(PY) benchmarks/bench_contact_rom_size.py --gnl --r-c 10 15 25 40
 	$(PY) benchmarks/bench_contact_reference.py --r-c 10 25 40 80
+	$(PY) benchmarks/bench_contact_reference.py --gnl --no-full-order --speeds 1280 1520 --r-md 0 20 50 --rom-cap 120 --rom-step 4e-7
 	$(PY) benchmarks/bench_contact_ecsw.py
 	$(PY) benchmarks/bench_integrator.py
 
