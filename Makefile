@@ -49,7 +49,8 @@ contact-map: $(STAMP)
 	$(PY) demos/contact_map.py --r-c 25 --mu 0 --speeds 1200 1600 21 --revolutions 20
 
 # the suite in two halves side by side, one BLAS thread each (one per core): most tests are single-threaded Python,
-# so this halves the wall time; each half prints its own summary, and the target fails if either does
+# so this halves the wall time; each half prints its own summary and its 12 slowest tests, and the target fails if
+# either does
 TEST_HALF := tests/test_clearance.py tests/test_sweep.py tests/test_report.py tests/test_report_browser.py \
              tests/test_readme.py tests/test_demos.py tests/test_demo_errors.py tests/test_inputs_and_demo.py \
              tests/test_model_choice.py tests/test_static_transient.py tests/test_cantilever.py tests/test_stress.py \
@@ -57,8 +58,8 @@ TEST_HALF := tests/test_clearance.py tests/test_sweep.py tests/test_report.py te
 TEST_OTHER = $(filter-out $(TEST_HALF),$(wildcard tests/test_*.py))
 test: $(STAMP) $(CHROMIUM)
 	@mkdir -p results && echo "tests in two halves side by side: results/test_half_1.log, results/test_half_2.log"
-	OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -q -ra -p no:cacheprovider $(TEST_HALF) > results/test_half_1.log 2>&1 & \
-	  one=$$!; OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -q -ra -p no:cacheprovider $(TEST_OTHER) \
+	OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -q -ra --durations=12 -p no:cacheprovider $(TEST_HALF) > results/test_half_1.log 2>&1 & \
+	  one=$$!; OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -q -ra --durations=12 -p no:cacheprovider $(TEST_OTHER) \
 	  > results/test_half_2.log 2>&1; two=$$?; wait $$one; one=$$?; \
 	  cat results/test_half_1.log results/test_half_2.log; test $$one -eq 0 && test $$two -eq 0
 

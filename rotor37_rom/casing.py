@@ -10,7 +10,8 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["Casing", "casing_profile", "casing_clearance", "contact_frames", "contact_matrices", "ramp_rate",
+__all__ = ["Casing", "casing_profile", "casing_clearance", "node_angles", "friction_power", "contact_frames",
+           "contact_matrices", "ramp_rate",
            "ContactSolver", "ContactSetError", "CONE_SLOPE",
            "DIRECTIONS"]
 
@@ -26,6 +27,19 @@ def casing_clearance(theta, t: float, c0, p0, alpha, width: float = 0.15) -> np.
     """c0 - (1 - exp(-alpha t)) f(theta): the gap of eq. 38 before the node's own displacement. Arrays broadcast
     (e.g. theta (nodes, P) with c0, p0, alpha (P,))."""
     return c0 - (1.0 - np.exp(-alpha * t)) * casing_profile(theta, c0, p0, width)
+
+
+def node_angles(theta0, omega, t: float, rotation_sense: int, phase=0.0) -> np.ndarray:
+    """theta_b(t) = theta_0 + phase + sense * Omega * t: the tip nodes' angular positions on the casing. Arrays
+    broadcast (e.g. theta0 (nodes, 1), omega and phase (1, P) for P runs)."""
+    return theta0 + phase + rotation_sense * omega * t
+
+
+def friction_power(mu_lambda, omega, radius, slide_velocity) -> np.ndarray:
+    """The power -mu lambda (Omega r + v_s) of the friction force on a node that slides on the casing at
+    Omega r (the rotation) plus its own velocity v_s along the sliding direction s: <= 0 when friction opposes
+    the sliding. Arrays broadcast as in ``node_angles``."""
+    return -mu_lambda * (omega * radius + slide_velocity)
 
 
 def ramp_rate(duration: np.ndarray, fraction: float = 0.2, level: float = 0.99) -> np.ndarray:

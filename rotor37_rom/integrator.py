@@ -36,7 +36,8 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse
 
-from rotor37_rom.casing import Casing, ContactSolver, casing_clearance, contact_matrices, ramp_rate
+from rotor37_rom.casing import (Casing, ContactSolver, casing_clearance, contact_matrices, friction_power, node_angles,
+                                ramp_rate)
 from rotor37_rom.disk import HarmonicBlocks
 from rotor37_rom.nonlinear_forces import PolynomialForces, cubic_monomial_indices, quadratic_monomial_indices
 
@@ -512,7 +513,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
             if casings is not None:
                 om = omega[active]
                 ur = N @ Qn
-                theta = theta0[:, None] + phase[active][None, :] + sense * om[None, :] * t1
+                theta = node_angles(theta0[:, None], om[None, :], t1, sense, phase[active][None, :])
                 g = casing_clearance(theta, t1, c0[active], p0[active], alpha[active], casings[0].width) - ur
                 # a run already past the blow-up limit gets no contact solve (it is stopped at the next check)
                 sane = np.isfinite(g).all(axis=0) & (np.abs(ur).max(axis=0) <= blowup_limit)
@@ -536,7 +537,8 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                     st["contact_steps"][ps] += touched
                     # sliding velocity of the node on the casing: rotation + its own tangential velocity along s_k
                     v = (S @ (Qn[:, hits] - Qa[:, hits])) / h
-                    power = np.where(on, -mlam * (om[hits][None, :] * radius[:, None] + v), -np.inf).max(axis=0)
+                    power = friction_power(mlam, om[hits][None, :], radius[:, None], v)
+                    power = np.where(on, power, -np.inf).max(axis=0)
                     st["fric_pow"][ps] = np.where(touched, np.maximum(st["fric_pow"][ps], power), st["fric_pow"][ps])
                     lam_now[:, ps] = lam
             if F is not None or energy:

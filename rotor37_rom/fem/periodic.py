@@ -22,7 +22,8 @@ from typing import Callable
 import numpy as np
 import scipy.sparse as sp
 
-from rotor37_rom.casing import Casing, ContactSetError, ContactSolver, casing_clearance, contact_frames, ramp_rate
+from rotor37_rom.casing import (Casing, ContactSetError, ContactSolver, casing_clearance, contact_frames,
+                                friction_power, node_angles, ramp_rate)
 from rotor37_rom.cyclic import repeating_sector_maps
 
 from .operators import (SvkOperators, _require_serial, assemble_mass, assemble_stiffness, assemble_tangent_scipy,
@@ -205,7 +206,7 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | None,
         n_c = contact.N.shape[0]
 
         def clearance(t):
-            theta = contact.theta0 + casing.rotation_sense * omega * t
+            theta = node_angles(contact.theta0, omega, t, casing.rotation_sense)
             return casing_clearance(theta, t, casing.c0, casing.p0, alpha, casing.width)
 
     internal = system.internal if nonlinear else (lambda x: system.K @ x)
@@ -345,9 +346,9 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | None,
             lams.append(lam)
             checks[0] = max(checks[0], -(clearance(k * dt) - contact.N @ x).min())
             on = lam > 0
-            if on.any():                                         # sliding speed: rotation + the node's own motion
-                slip = omega * contact.radius + contact.S @ (x - x_old) / dt
-                checks[1] = max(checks[1], float((-casing.mu * lam * slip)[on].max()))
+            if on.any():                                         # sliding: rotation + the node's own motion
+                power = friction_power(casing.mu * lam, omega, contact.radius, contact.S @ (x - x_old) / dt)
+                checks[1] = max(checks[1], float(power[on].max()))
         if k % snapshot_every == 0:
             fields.append(per_sector)
             snaps.append(k)
