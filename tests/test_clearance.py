@@ -26,11 +26,12 @@ def test_clearance_change_geometry():
 
 
 @pytest.mark.slow
-def test_clearance_consumption_full_and_reduced(ci_blade, ci_ops):
+def test_clearance_consumption_full_and_reduced(ci_blade, ci_ops, ci_rom):
     """ci preset, 1B (zeta = 1 mm) and 1T (0.5 mm) along e_x, delta = k / 10 for k = -10..10.
 
     Paper criteria (10 %, §2.3.2; acceptance levels, not numerical tolerances): the reduced model (r_b = 24,
-    r_c = 15 and the 6 modal derivatives of the first three clamped normal modes, r = 45) stays within 10 % of the
+    r_c = 15 and the 6 modal derivatives of the first three clamped normal modes, r = 45; exact cubic tensors, equal
+    to the tensor-free quadrature forces to round-off: test_reduction) stays within 10 % of the
     full-order nonlinear curve over delta in [-1, 1] (measured 1.4 % and 6.9 %), and the full-order linear model is
     within 10 % of the nonlinear one at least for |delta| <= 0.1 (paper: [-0.25, 0.2] and [-0.1, 0.1]; measured
     [-0.1, 0.2] and [-0.1, 0.1]). Both are deterministic to ~1e-10 (Newton-converged statics), far inside the margins.
@@ -46,9 +47,8 @@ def test_clearance_consumption_full_and_reduced(ci_blade, ci_ops):
     D(0.1) ~ 6e-6 m and A(0.1) >= 1.4e-7 m are far above the statics' error (Newton to 1e-10, ~1e-12 m)."""
     from rotor37_rom.builder import ReductionConfig, build_reduced_model, clearance_consumption_study
 
-    rom, _ = build_reduced_model(ci_blade, ReductionConfig(r_c=15, r_md=0, forces="quadrature", global_md_modes=3),
-                                 ops=ci_ops)
-    no_md, _ = build_reduced_model(ci_blade, ReductionConfig(r_c=15, r_md=0, forces="quadrature"), ops=ci_ops)
+    rom = ci_rom                                                          # exact cubic tensors (conftest)
+    no_md, _ = build_reduced_model(ci_blade, ReductionConfig(r_c=15, r_md=0), ops=ci_ops)
     for mode, zeta in (("1B", 1e-3), ("1T", 0.5e-3)):
         c = clearance_consumption_study(ci_blade, mode, zeta, n_levels=10, ops=ci_ops, roms={"rom": rom,
                                                                                              "no MD": no_md})
