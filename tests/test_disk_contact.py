@@ -62,11 +62,11 @@ def test_tuned_disk_contact_is_a_travelling_wave(disk_model, gnl):
     delayed by j (2 pi / 36) / Omega (a whole number of steps, so the discrete schemes are exactly shifted too) to
     1e-3 of its amplitude (the transient's bound, with a margin of 50 for the contact's nonlinearity). With GNL the
     same ramp runs at half the step, 4.8e-6 s, for 0.3 s (``gnl_time_step`` on the runs' largest states: 9.2e-6 to
-    1.0e-5 s): at the full step, on that limit, this ramp leaves a component not locked to the rotor that does not decay (5.4e-2 of the
-    amplitude, flat from 0.2 to 0.45 s, on an AMD EPYC; 3e-5 on an Intel Xeon: round-off decides), a step artefact -
-    at h/2 and h/4 the same ramp decays to the travelling wave, and a 3 times slower ramp does at every step from h to
-    h/8 (docs/verification.md). The slowest decay measured over those runs, 26 /s, takes the 0.17 departure at the
-    ramp's end (31 ms) to 1.5e-4 by 0.3 s: 1e-3 holds with a margin of 7.
+    1.0e-5 s): at the full step, on that limit, this ramp leaves a component not locked to the rotor that does not
+    decay (5.4e-2 of the amplitude, flat from 0.2 to 0.45 s, on an AMD EPYC; 3e-5 on an Intel Xeon: round-off
+    decides), a step artefact - at h/2 and h/4 the same ramp decays to the travelling wave, and a 3 times slower ramp
+    does at every step from h to h/8 (docs/verification.md). The slowest decay measured over those runs, 26 /s,
+    takes the 0.17 departure at the ramp's end (31 ms) to 1.5e-4 by 0.3 s: 1e-3 holds with a margin of 7.
     Contact checks of the blade, GNL off and on: no penetration after the correction (1e-12 m, round-off),
     lambda >= 0, friction power <= 0 (opposes the sliding); GNL off: the discrete energy changes by the contact and
     damping works to 1e-9 of the largest energy (round-off of 15,600 steps, as the blade's test)."""
@@ -103,8 +103,8 @@ def test_tuned_disk_contact_is_a_travelling_wave(disk_model, gnl):
 
 def test_mistuning_factors():
     """Log-normal stiffness factors: mean 1 and standard deviation sigma (checked on 2e5 draws to 5 standard errors
-    of the estimators, the log-normal's kurtosis in that of the standard deviation), all > 0 even at sigma = 0.9, the same disk for the same seed; sigma outside [0, 1)
-    refused naming the scatter."""
+    of the estimators, the log-normal's kurtosis in that of the standard deviation), all > 0 even at sigma = 0.9,
+    the same disk for the same seed; sigma outside [0, 1) refused naming the scatter."""
     for sigma in (0.01, 0.05, 0.9):
         x = mistuning_factors(200_000, sigma, seed=3)
         se = sigma / np.sqrt(x.size)
