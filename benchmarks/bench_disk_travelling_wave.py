@@ -31,6 +31,7 @@ from _common import write_results  # noqa: E402
 
 from rotor37_rom import fem  # noqa: E402
 from rotor37_rom.casing import Casing  # noqa: E402
+from rotor37_rom.disk import travelling_wave_departure  # noqa: E402
 from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
 from rotor37_rom.integrator import CentralDifference, gnl_time_step, largest_states, simulate  # noqa: E402
 from rotor37_rom.reduction import modal_damping  # noqa: E402
@@ -47,9 +48,7 @@ def departures(u: np.ndarray) -> np.ndarray:
     rev = 36 * BASE
     out = []
     for k in range(1, u.shape[1] // rev):
-        w = np.arange(k * rev, (k + 1) * rev)
-        amp = np.abs(u[0, w]).max()
-        worst = max(np.abs(u[j, w] - u[0, w - j * BASE]).max() for j in range(1, 36))
+        worst, amp = travelling_wave_departure(u, np.arange(k * rev, (k + 1) * rev), BASE)
         out.append(((k + 1) * rev * SHIFT / BASE, amp, worst / amp if amp > 0 else np.nan))
     return np.array(out)
 

@@ -28,6 +28,7 @@ from rotor37_rom.cyclic import harmonic_indices
 
 __all__ = ["SectorForces", "SectorMatrices", "DiskBasis", "HarmonicBlocks", "interface_modes", "assemble_disk_matrices",
            "disk_node_map", "sector_harmonics", "harmonic_node_load", "repeat_count", "performance_indicator",
+           "travelling_wave_departure",
            "INDICATOR_CRITERIA", "mistuning_factors"]
 
 
@@ -347,6 +348,18 @@ def sector_harmonics(V: np.ndarray, blocks: np.ndarray) -> np.ndarray:
     folded = spectrum[: N // 2 + 1].copy()
     folded[1:(N + 1) // 2] += spectrum[N - 1:N // 2:-1]             # k and N - k are the same pattern
     return np.argmax(folded, axis=0)
+
+
+def travelling_wave_departure(u: np.ndarray, window: np.ndarray, shift: int) -> tuple[float, float]:
+    """How far the N blades' histories u (N, n), sampled evenly, are from a travelling wave: the largest
+    |u_j(t_i) - u_0(t_i - j shift)| over the sample indices i of ``window`` and j = 1 .. N - 1 (``shift``: samples per
+    sector turn of the rotor), and blade 0's amplitude max |u_0| over the window. Returns (departure, amplitude)."""
+    window = np.asarray(window)
+    if window.min() < (u.shape[0] - 1) * shift:
+        raise ValueError(f"window must start at sample >= (N - 1) shift = {(u.shape[0] - 1) * shift}, "
+                         f"got {window.min()}")
+    worst = max(np.abs(u[j, window] - u[0, window - j * shift]).max() for j in range(1, u.shape[0]))
+    return float(worst), float(np.abs(u[0, window]).max())
 
 
 def repeat_count(n_sectors: int, n_diameters: int) -> int:
