@@ -9,8 +9,15 @@ checkpointed under the output directory, resumed when run again). Reduced models
 same step, so the error is the reduction's. Each pair is scored by the performance indicator I
 (``disk.performance_indicator``: loaded node, tip nodes, field and strain-energy criteria).
 
+A 400 N point force on the ci mesh's thin leading edge makes the GNL reference collapse locally (St. Venant-Kirchhoff
+softens in compression; a point force on a continuum has no finite limit): ``--patch MM`` spreads the same 400 N as
+an e_z traction over the boundary facets within MM mm of node LE (``fem.patch_load``), for the reference and the
+reduced models alike; the models then carry the patch's static load correction (``--load-correction on``, one
+vector per sector, ``DiskReductionConfig.load_patch``) or not (``off``).
+
     python benchmarks/bench_disk_forced.py [--preset ci] [--cases 0:4000 9:4000 ...] [--criteria MI2b MMI ...]
         [--r-md 0 5 10 20] [--periods 10] [--steps-per-period 100] [--gnl-reference 0:4000]
+        [--patch 3 --load-correction on off]
 
 Results: results/disk_forced_<preset>.json; reference histories and models cached under results/disk_forced/<preset>/.
 """
@@ -28,7 +35,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import write_results  # noqa: E402
 
 from rotor37_rom import fem  # noqa: E402
-from rotor37_rom.disk import harmonic_node_load, performance_indicator, repeat_count  # noqa: E402
+from rotor37_rom.disk import (harmonic_field_load, harmonic_node_load, performance_indicator,  # noqa: E402
+                               repeat_count)
 from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
 from rotor37_rom.fem.periodic import RepeatingSectors, sector_harmonic_load, solve_repeating_newmark  # noqa: E402
 from rotor37_rom.reduction import CRITERIA, simulate_newmark  # noqa: E402
@@ -44,12 +52,22 @@ def parse_case(text: str) -> tuple[int, float]:
         raise ValueError(f"a case reads '<N_d>:<omega rad/s>', e.g. 9:13000; got {text!r}") from None
 
 
-def reference(sector, system, case, nonlinear, periods, spp, ramp, out: Path, partial: bool = False) -> dict:
+def sector_load(sector, patch_mm: float):
+    """The sector's load per unit amplitude: node LE's e_z DOF (``patch_mm`` = 0), else the e_z traction over the
+    boundary facets within ``patch_mm`` of node LE (``fem.patch_load``, unit resultant)."""
+    if patch_mm == 0:
+        return int(sector.tip_dofs[sector.tip_names.index("LE"), 2])
+    return fem.patch_load(sector, sector.tip_nodes[sector.tip_names.index("LE")], 1e-3 * patch_mm, component=2)
+
+
+def reference(sector, system, case, nonlinear, periods, spp, ramp, out: Path, partial: bool = False,
+              patch_mm: float = 0.0) -> dict:
     """The full-order history of one case (cached as .npz; GNL runs checkpoint). With ``partial``, an unfinished
     run's checkpoint is used as it stands (the window it covers, a whole number of snapshots) instead of running on."""
     nd, omega = case
     n_rep = repeat_count(sector.cyclic.n_sectors, nd)
-    tag = f"fom_nd{nd}_w{omega:g}_{'gnl' if nonlinear else 'lin'}_p{periods:g}_s{spp}_r{ramp:g}"
+    tag = (f"fom_nd{nd}_w{omega:g}_{'gnl' if nonlinear else 'lin'}_p{periods:g}_s{spp}_r{ramp:g}"
+           + (f"_patch{patch_mm:g}" if patch_mm else ""))
     path = out / f"{tag}.npz"
     if path.is_file():
         with np.load(path) as d:
@@ -62,11 +80,10 @@ def reference(sector, system, case, nonlinear, periods, spp, ramp, out: Path, pa
                     "fields": d["fields"], "snapshots": d["snaps"],
                     "wall": np.float64(d["elapsed"]) if "elapsed" in d.files else np.float64(np.nan),
                     "partial": True}
-    le_z = int(sector.tip_dofs[sector.tip_names.index("LE"), 2])
     T = 2 * np.pi / omega
     steps = int(round(periods * spp))
     t0 = time.perf_counter()
-    res = solve_repeating_newmark(sector, n_rep, le_z,
+    res = solve_repeating_newmark(sector, n_rep, sector_load(sector, patch_mm),
                                   sector_harmonic_load(n_rep, sector.cyclic.n_sectors, nd, AMPLITUDE, omega, ramp * T),
                                   T / spp, steps, nonlinear=nonlinear, rtol=1e-7, atol=1e-8 * AMPLITUDE,
                                   snapshot_every=max(spp // 10, 1),
@@ -78,11 +95,14 @@ def reference(sector, system, case, nonlinear, periods, spp, ramp, out: Path, pa
     return data
 
 
-def reduced(model, sector, case, nonlinear, periods, spp, ramp, ref) -> dict:
+def reduced(model, sector, case, nonlinear, periods, spp, ramp, ref, patch_mm: float = 0.0) -> dict:
     nd, omega = case
     T = 2 * np.pi / omega
     steps = ref["tip"].shape[0] - 1                  # the reference's window (all periods, or a partial run's)
-    load = harmonic_node_load(model.nodes, model.r, AMPLITUDE, omega, nd, ramp=ramp * T)
+    if patch_mm:
+        load = harmonic_field_load(model.sectors, sector_load(sector, patch_mm), AMPLITUDE, omega, nd, ramp=ramp * T)
+    else:
+        load = harmonic_node_load(model.nodes, model.r, AMPLITUDE, omega, nd, ramp=ramp * T)
     t0 = time.perf_counter()
     _, Q = simulate_newmark(model.M, np.zeros_like(model.M), model.K, load, T / spp, steps,
                             forces=model.forces if nonlinear else None)
@@ -114,6 +134,12 @@ def main(argv=None) -> int:
                         help="cases that also get the (expensive) GNL full-order reference")
     parser.add_argument("--ramp", type=float, default=1.0,
                         help="periods over which the load rises smoothly from 0 (0: a step where the phase is not 0)")
+    parser.add_argument("--patch", type=float, default=0.0,
+                        help="mm: spread the 400 N over the boundary facets within this radius of node LE (0: on the "
+                             "node, the paper's point load)")
+    parser.add_argument("--load-correction", nargs="+", default=["on"], choices=["on", "off"],
+                        help="with --patch: the models get the patch load's static correction vector per sector "
+                             "(DiskReductionConfig.load_patch), or not (the point-load models)")
     parser.add_argument("--partial", action="store_true",
                         help="score against an unfinished GNL reference (its checkpoint's window), not run it on")
     parser.add_argument("--out", default="results/disk_forced")
@@ -131,6 +157,8 @@ def main(argv=None) -> int:
             raise ValueError(f"criteria must be among {CRITERIA}, got {bad}")
         if not (args.periods > 0 and args.steps_per_period >= 20 and 0 <= args.ramp < args.periods):
             raise ValueError("periods must be > 0, steps-per-period >= 20 and ramp in [0, periods)")
+        if not 0 <= args.patch <= 20:
+            raise ValueError(f"patch must be in [0, 20] mm, got {args.patch:g}")
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -149,15 +177,18 @@ def main(argv=None) -> int:
             if nonlinear and case not in gnl_cases:
                 continue
             refs[case, nonlinear] = reference(sector, system, case, nonlinear, args.periods,
-                                              args.steps_per_period, args.ramp, out, partial=args.partial)
+                                              args.steps_per_period, args.ramp, out, partial=args.partial,
+                                              patch_mm=args.patch)
             print(f"reference N_d = {case[0]}, omega = {case[1]:g}, {'GNL' if nonlinear else 'linear'}: "
                   f"{float(refs[case, nonlinear]['wall']):.1f} s", flush=True)
     rows = []
-    configs = [(c, r, i) for i in args.interface for c in args.criteria for r in args.r_md]
-    for criterion, r_md, interface in configs:
+    corrections = [c == "on" for c in args.load_correction] if args.patch else [False]
+    configs = [(c, r, i, lc) for lc in corrections for i in args.interface for c in args.criteria for r in args.r_md]
+    for criterion, r_md, interface, correction in configs:
         config = DiskReductionConfig(tip_nodes="LE", r_c=args.r_c, r_md=r_md, criterion=criterion,
                                      r_cyclic=args.r_cyclic, interface=interface,
-                                     forces="intrusive" if r_md else "none")
+                                     forces="intrusive" if r_md else "none",
+                                     load_patch=1e-3 * args.patch if correction else 0.0)
         tb = time.perf_counter()
         model, report = build_disk_model(sector, config, ops=ops, cache_dir=out / "models")
         build = time.perf_counter() - tb
@@ -166,15 +197,17 @@ def main(argv=None) -> int:
                 continue
             try:
                 rom = reduced(model, sector, case, nonlinear and model.forces is not None, args.periods,
-                              args.steps_per_period, args.ramp, ref)
+                              args.steps_per_period, args.ramp, ref, patch_mm=args.patch)
             except RuntimeError as exc:                   # Newton failed even at dt / 32: a failure, reported
-                rows.append({"criterion": criterion, "r_md": r_md, "interface": interface, "r": model.r,
+                rows.append({"patch_mm": args.patch, "load_correction": correction, "criterion": criterion,
+                             "r_md": r_md, "interface": interface, "r": model.r,
                              "N_d": case[0], "omega": case[1], "gnl": nonlinear, "failed": str(exc)})
                 print(f"{criterion} r_md {r_md} N_d {case[0]} omega {case[1]:g}: failed ({exc})", flush=True)
                 continue
             score = performance_indicator(ref["tip"], rom["tip"], ref["fields"], rom["fields"], K_s, M_s,
                                           loaded=(sector.tip_names.index("LE"), 2))
-            row = {"ramp_periods": args.ramp, "criterion": criterion, "r_md": r_md, "interface": interface,
+            row = {"ramp_periods": args.ramp, "patch_mm": args.patch, "load_correction": correction,
+                   "criterion": criterion, "r_md": r_md, "interface": interface,
                    "r": model.r, "N_d": case[0], "omega": case[1],
                    "gnl": nonlinear, "window_periods": (ref["tip"].shape[0] - 1) / args.steps_per_period,
                    "rom_gnl": bool(nonlinear and model.forces is not None),
@@ -183,7 +216,7 @@ def main(argv=None) -> int:
                    "build_cached": bool(report.get("cached")), "fom_wall_s": float(ref["wall"]),
                    "max_le_z_mm": 1e3 * float(np.abs(ref["tip"][:, :, sector.tip_names.index("LE"), 2]).max())}
             rows.append(row)
-            print(f"{interface:7s} {criterion:6s} r_md {r_md:3d} r {model.r:5d}  N_d {case[0]:2d} omega {case[1]:7g} "
+            print(f"{interface:7s} {'S ' if correction else ''}{criterion:6s} r_md {r_md:3d} r {model.r:5d}  N_d {case[0]:2d} omega {case[1]:7g} "
                   f"{'GNL' if nonlinear else 'lin'}  I = {score['I']:.4f}  "
                   + " ".join(f"{k}: {v:.2e}" for k, v in score["errors"].items())
                   + f"  ROM {rom['wall']:.2f} s, FOM {float(ref['wall']):.0f} s", flush=True)

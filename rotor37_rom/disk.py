@@ -27,9 +27,8 @@ import scipy.sparse.csgraph
 from rotor37_rom.cyclic import harmonic_indices
 
 __all__ = ["SectorForces", "SectorMatrices", "DiskBasis", "HarmonicBlocks", "interface_modes", "assemble_disk_matrices",
-           "disk_node_map", "sector_harmonics", "harmonic_node_load", "repeat_count", "performance_indicator",
-           "travelling_wave_departure",
-           "INDICATOR_CRITERIA", "mistuning_factors"]
+           "disk_node_map", "sector_harmonics", "harmonic_node_load", "harmonic_field_load", "repeat_count",
+           "performance_indicator", "travelling_wave_departure", "INDICATOR_CRITERIA", "mistuning_factors"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -115,6 +114,19 @@ class DiskBasis:
         uL = self.Pi @ q[self.blocks.size:]
         return (self.Phi_s[rows] @ q[self.blocks[n]] + self.Psi_L[rows] @ uL[n * nL:(n + 1) * nL]
                 + self.Psi_Rr[rows] @ uL[((n + 1) % N) * nL:((n + 1) % N + 1) * nL])
+
+    def project(self, f: np.ndarray, n: int) -> np.ndarray:
+        """The reduced force (r,) of a force f (n_dofs,) on sector n in its own frame: the transpose of
+        ``sector_field`` (the work of f on sector n's field equals that of the result on q)."""
+        N, nL = self.n_sectors, self.Psi_L.shape[1]
+        if not 0 <= n < N:
+            raise ValueError(f"sector must be in 0 ... {N - 1}, got {n}")
+        out = np.zeros(self.blocks.size + self.Pi.shape[1])
+        out[self.blocks[n]] = self.Phi_s.T @ f
+        right = (n + 1) % N
+        out[self.blocks.size:] = (self.Pi[n * nL:(n + 1) * nL].T @ (self.Psi_L.T @ f)
+                                  + self.Pi[right * nL:(right + 1) * nL].T @ (self.Psi_Rr.T @ f))
+        return out
 
 
 def _harmonic_blocks(s: SectorMatrices, A: np.ndarray, k: int, n_sectors: int) -> np.ndarray:
@@ -376,22 +388,39 @@ def harmonic_node_load(nodes, r: int, amplitude: float, omega: float, n_diameter
     q (a boundary node of the model's NodeMap): its row of the basis is the unit vector of its entry of q, so the
     reduced force is the nodal force itself. ``ramp`` (s): the envelope (1 - cos(pi t / ramp)) / 2 up to t = ramp
     (0: none; sectors whose phase is not 0 then start with a step). Returns t -> (r,)."""
-    if not ramp >= 0:
-        raise ValueError(f"ramp must be >= 0 s, got {ramp}")
     N = max(nodes.n_sectors, 1)
     repeat_count(N, n_diameters)
     if name not in nodes.names:
         raise ValueError(f"load node {name!r} is not in the model's boundary set {sorted(set(nodes.names))}")
     if component not in (0, 1, 2):
         raise ValueError(f"component must be 0, 1 or 2 (x, y, z), got {component}")
-    entries = np.array([nodes.q_index[nodes.row(name, s), component] for s in range(N)])
-    phase = np.arange(N) * n_diameters * 2 * np.pi / N
+    P = np.zeros((r, N))
+    P[[nodes.q_index[nodes.row(name, s), component] for s in range(N)], np.arange(N)] = 1.0
+    return _travelling_load(P, amplitude, omega, n_diameters, ramp)
+
+
+def harmonic_field_load(basis: DiskBasis, f: np.ndarray, amplitude: float, omega: float, n_diameters: int,
+                        ramp: float = 0.0):
+    """The reduced force of a travelling N_d-diameter load A sin(omega t - s N_d 2 pi / N) f on every sector s, f
+    (n_dofs,) a sector load vector per unit amplitude in the sector's frame (e.g. ``fem.patch_load``), projected by
+    ``DiskBasis.project``; the envelope as in ``harmonic_node_load``. Returns t -> (r,)."""
+    N = basis.n_sectors
+    repeat_count(N, n_diameters)
+    if np.shape(f) != (basis.Phi_s.shape[0],):
+        raise ValueError(f"the load vector must have the sector's {basis.Phi_s.shape[0]} DOFs, got {np.shape(f)}")
+    P = np.stack([basis.project(np.asarray(f, dtype=float), s) for s in range(N)], axis=1)
+    return _travelling_load(P, amplitude, omega, n_diameters, ramp)
+
+
+def _travelling_load(P: np.ndarray, amplitude: float, omega: float, n_diameters: int, ramp: float):
+    """t -> P (A e(t) sin(omega t - s N_d 2 pi / N))_s: P (r, N) the reduced force of a unit load on each sector."""
+    if not ramp >= 0:
+        raise ValueError(f"ramp must be >= 0 s, got {ramp}")
+    phase = np.arange(P.shape[1]) * n_diameters * 2 * np.pi / P.shape[1]
 
     def load(t: float) -> np.ndarray:
-        f = np.zeros(r)
         envelope = 1.0 if t >= ramp else 0.5 * (1.0 - np.cos(np.pi * t / ramp))
-        f[entries] = amplitude * envelope * np.sin(omega * t - phase)
-        return f
+        return P @ (amplitude * envelope * np.sin(omega * t - phase))
 
     return load
 

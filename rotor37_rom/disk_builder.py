@@ -47,6 +47,11 @@ class DiskReductionConfig:
             4000 rad/s, one period, a 0-diameter load: the training runs on the sector with its faces tied for k = 0).
         mistuning: None (tuned) or one stiffness factor per sector (e.g. 1 + scatter), each > 0.
         seed: of the 'random' criterion.
+        load_patch: 0 (the paper's point load at node LE), or a radius (m): the training force spread as a traction
+            over the boundary facets within it of node LE (``fem.patch_load``), and that load's static response with
+            the boundary fixed added to every sector's basis after the fixed-interface modes (the static load
+            correction of component mode synthesis: a load off the boundary set has a local field that neither the
+            constraint modes nor the lowest fixed-interface modes carry), its modal derivatives among the candidates.
     """
 
     tip_nodes: str = "all"
@@ -60,6 +65,7 @@ class DiskReductionConfig:
     training_omega: float = 4000.0
     mistuning: tuple | None = None
     seed: int = 0
+    load_patch: float = 0.0
 
     def __post_init__(self):
         if self.tip_nodes not in ("all", "LE"):
@@ -75,6 +81,21 @@ class DiskReductionConfig:
             raise ValueError(f"forces must be 'intrusive', 'quadrature' or 'none', got {self.forces!r}")
         if self.mistuning is not None and (len(self.mistuning) == 0 or min(self.mistuning) <= 0):
             raise ValueError("mistuning: one stiffness factor > 0 per sector")
+        if not (np.isfinite(self.load_patch) and 0 <= self.load_patch <= 0.02):
+            raise ValueError(f"load_patch must be in [0, 0.02] m, got {self.load_patch}")
+
+
+def _static_load_correction(K_f, M_f, boundary: np.ndarray, f: np.ndarray, Theta: np.ndarray) -> np.ndarray:
+    """The static response to f with the boundary DOFs held (zero there), M-orthogonal to the fixed-interface modes
+    Theta (M-orthonormal) and of unit M-norm: the part of the load's local field that they do not carry."""
+    interior = np.setdiff1d(np.arange(K_f.shape[0]), boundary)
+    x = np.zeros(K_f.shape[0])
+    x[interior] = fem.mumps_solver(K_f[interior][:, interior].tocsc())(f[interior])
+    x -= Theta @ (Theta.T @ (M_f @ x))
+    norm = float(np.sqrt(x @ (M_f @ x)))
+    if not norm > 0:
+        raise ValueError("load_patch: the load's static response lies in the fixed-interface modes' span")
+    return x / norm
 
 
 def _positions(free: np.ndarray, dofs: np.ndarray, what: str) -> np.ndarray:
@@ -86,7 +107,7 @@ def _positions(free: np.ndarray, dofs: np.ndarray, what: str) -> np.ndarray:
 
 def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig(), ops=None,
                      cache_dir: str | Path | None = None) -> tuple[ReducedModel, dict]:
-    """The disk's reduced model (r = N (r_b + r_c + r_MD) + r_cyclic, eq. 53) from a cyclic sector (serial).
+    """The disk's reduced model (r = N (r_b + r_c + r_load + r_MD) + r_cyclic, eq. 53) from a cyclic sector (serial).
 
     Returns (model, report): the model is a ReducedModel like a blade's (its ``nodes`` cover all sectors' tip
     nodes, its forces are ``disk.SectorForces``, ``model.sectors`` the DiskBasis); the report has the timings, the
@@ -106,6 +127,8 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     metadata = {"config": dataclasses.asdict(config), "mesh": mesh_signature(sector), "source": sector.source,
                 "version": __version__, "kind": "disk", "n_sectors": N,
                 "damping": "5e-4 on the 3 N lowest modes"}
+    if config.load_patch:
+        metadata["load_correction"] = "one static vector per sector, its modal derivatives among the candidates"
     cache, cached = cached_model(metadata, cache_dir, "disk")
     if cached is not None:
         return cached, {"cached": True}
@@ -122,13 +145,20 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     R_blk = np.kron(np.eye(nL // 3), rotation_z(pairs.angle))          # u_R = R u_L of the next sector, per node
     Psi_tip, Psi_L, Psi_Rr = Psi_f[:, :nb], Psi_f[:, nb:nb + nL], Psi_f[:, nb + nL:] @ R_blk
     lap("craig_bampton")
+    le = sector.tip_names.index("LE")
+    S_f = np.zeros((free.size, 0))
+    if config.load_patch:                    # the patch's static correction, a fixed-interface vector like Theta's
+        f_free = fem.patch_load(sector, sector.tip_nodes[le], config.load_patch, component=2)[free]
+        S_f = _static_load_correction(K_f, M_f, pos, f_free, Theta_f)[:, None]
     # training (§3.3.1): the 0-diameter load at node LE along e_z, on the sector with its faces tied for k = 0
-    lin = np.hstack([Psi_tip, Theta_f])
+    lin = np.hstack([Psi_tip, Theta_f, S_f])
     tied = np.hstack([lin, Psi_L + Psi_Rr])
     K0, M0 = tied.T @ (K_f @ tied), tied.T @ (M_f @ tied)
     C0, _ = modal_damping(K0, M0)
-    le_z = np.flatnonzero(boundary == sector.tip_dofs[sector.tip_names.index("LE"), 2])[0]
-    f_shape = config.training_force * tied[le_z]
+    if config.load_patch:
+        f_shape = config.training_force * (tied.T @ f_free)
+    else:
+        f_shape = config.training_force * tied[np.flatnonzero(boundary == sector.tip_dofs[le, 2])[0]]
     period = 2 * np.pi / config.training_omega
     t, q_train = simulate_linear_newmark(M0, C0, K0, lambda tt: f_shape * np.sin(config.training_omega * tt),
                                          period / 400, 400)
@@ -143,15 +173,15 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     chosen = select_pairs(W, config.r_md)
     report["weights"], report["pairs"] = W, chosen
     lap("selection")
-    # modal derivatives of [Psi_tip, Theta], made zero on the tip and both faces by all constraint modes (eq. 20)
-    Psi_full, Theta_full = np.zeros((n_full, Psi_f.shape[1])), np.zeros((n_full, Theta_f.shape[1]))
-    Psi_full[free], Theta_full[free] = Psi_f, Theta_f
+    # modal derivatives of [Psi_tip, Theta, S], made zero on the tip and both faces by all constraint modes (eq. 20)
+    Psi_full, Theta_full = np.zeros((n_full, Psi_f.shape[1])), np.zeros((n_full, Theta_f.shape[1] + S_f.shape[1]))
+    Psi_full[free], Theta_full[free] = Psi_f, np.hstack([Theta_f, S_f])
     basis = CraigBamptonBasis(Psi=Psi_full, Theta=Theta_full, omega_c=omega_c, boundary_dofs=boundary)
-    index = np.r_[np.arange(nb), Psi_f.shape[1] + np.arange(Theta_f.shape[1])]   # lin's columns in basis.linear
+    index = np.r_[np.arange(nb), Psi_f.shape[1] + np.arange(Theta_full.shape[1])]   # lin's columns in basis.linear
     Z = compute_modal_derivatives(sector, ops, basis, index[chosen] if len(chosen) else chosen, "exact",
                                   solve=fem.mumps_solver(K_f))
     Z, md_scale = _m_normalise(Z, M_f, free) if Z.shape[1] else (Z, np.zeros(0))
-    Phi_s = np.hstack([Psi_full[:, :nb], Theta_full, Z])
+    Phi_s = np.hstack([Psi_full[:, :nb], Theta_full, Z])                 # Theta_full ends with S
     r_s = Phi_s.shape[1]
     lap("modal_derivatives")
     B = np.hstack([Phi_s[free], Psi_L, Psi_Rr])
@@ -176,8 +206,8 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     Psi_L_full[free], Psi_Rr_full[free] = Psi_L, Psi_Rr
     model = ReducedModel(M=M, C=C, K=K, forces=forces, boundary_dofs=tip_dofs,
                          nodes=disk_node_map(sector_nodes, N, r_s),
-                         sizes={"r_b": nb, "r_c": config.r_c, "r_md": Z.shape[1], "n_sectors": N,
-                                "r_cyclic": Pi.shape[1]},
+                         sizes={"r_b": nb, "r_c": config.r_c, "r_load": S_f.shape[1], "r_md": Z.shape[1],
+                                "n_sectors": N, "r_cyclic": Pi.shape[1]},
                          md_pairs=chosen, Phi=None, metadata=metadata,
                          sectors=DiskBasis(Phi_s, Psi_L_full, Psi_Rr_full, Pi, blocks, N))
     if cache is not None:

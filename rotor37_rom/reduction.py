@@ -427,7 +427,8 @@ class ReducedModel:
         forces: PolynomialForces (exact tensors) or QuadratureForces (exact or ECSW), or None (linear).
         boundary_dofs: (r_b,) full-DOF indices (of one sector's mesh) kept physical in q.
         nodes: NodeMap: which entries of q are which node's displacement (the contact nodes).
-        sizes: {'r_b', 'r_c', 'r_md'} per sector; md_pairs: (r_md, 2).
+        sizes: {'r_b', 'r_c', 'r_md'} per sector (a disk's also 'r_load', 'n_sectors', 'r_cyclic'); md_pairs:
+            (r_md, 2).
         Phi: (n, r) basis to rebuild fields (optional).
         metadata: parameters, mesh signature, version; ``key`` hashes them.
         sectors: for a disk model, the per-sector basis that rebuilds each sector's field (``disk.DiskBasis``);

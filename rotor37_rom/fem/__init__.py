@@ -18,7 +18,8 @@ from .fields import (cell_midpoints, cells_touching_points, displacement_functio
 from .operators import (JIT_PARAMS, MASS_DIAGONAL, SvkOperators, assemble_free_operators, assemble_mass,
                         assemble_scalar, assemble_stiffness, assemble_tangent_scipy, assemble_vector,
                         create_svk_operators, evaluate_forces, evaluate_second_derivative, facet_centroid,
-                        free_dofs, gather_dof_values, petsc_to_scipy, quadrature_gradients, scipy_to_petsc)
+                        free_dofs, gather_dof_values, patch_load, petsc_to_scipy, quadrature_gradients,
+                        scipy_to_petsc)
 from .periodic import RepeatingSectors, sector_harmonic_load, solve_repeating_newmark
 from .sector import (Sector, build_on_rank0, clamp_cell_group, create_blade_sector, create_sector_from_file,
                      create_sector_from_gmsh, create_sector_from_mesh, locate_cyclic_pairs, tip_node_names,
@@ -39,5 +40,5 @@ __all__ = [
     "create_disk_sector", "create_annular_sector", "locate_cyclic_pairs", "assemble_cyclic_operators", "CyclicModes",
     "solve_cyclic_modes", "sector_fields", "clamp_cell_group", "build_on_rank0", "CyclicOperators",
     "RepeatingSectors", "solve_repeating_newmark", "sector_harmonic_load", "write_sector_mesh", "facet_centroid",
-    "static_compliance",
+    "patch_load", "static_compliance",
 ]

@@ -23,9 +23,9 @@ if TYPE_CHECKING:
     from .sector import Sector
 
 __all__ = ["SvkOperators", "create_svk_operators", "assemble_stiffness", "assemble_mass", "assemble_vector",
-           "assemble_scalar", "facet_centroid", "gather_dof_values", "free_dofs", "petsc_to_scipy", "scipy_to_petsc",
-           "assemble_free_operators", "evaluate_forces", "evaluate_second_derivative", "assemble_tangent_scipy",
-           "quadrature_gradients", "MASS_DIAGONAL", "JIT_PARAMS"]
+           "assemble_scalar", "facet_centroid", "patch_load", "gather_dof_values", "free_dofs", "petsc_to_scipy",
+           "scipy_to_petsc", "assemble_free_operators", "evaluate_forces", "evaluate_second_derivative",
+           "assemble_tangent_scipy", "quadrature_gradients", "MASS_DIAGONAL", "JIT_PARAMS"]
 
 MASS_DIAGONAL = 1.0e-14
 JIT_PARAMS = {"cffi_extra_compile_args": ["-O2", "-march=native"], "cffi_libraries": ["m"]}
@@ -126,6 +126,32 @@ def facet_centroid(sector: Sector, group: str) -> np.ndarray:
     if not area > 0:
         raise ValueError(f"group {group!r} has no facets")
     return np.array([assemble_scalar(x[i] * ds, sector.comm) for i in range(3)]) / area
+
+
+def patch_load(sector: Sector, center: np.ndarray, radius: float, component: int = 2) -> np.ndarray:
+    """Consistent nodal forces (n_dofs,) of a uniform traction along e_component over the boundary facets whose
+    midpoints lie within ``radius`` (m) of ``center``, scaled to a unit resultant: the point load's replacement where
+    a point force on a 3-D continuum has no finite limit (a force of F N is F times this vector). Serial."""
+    from dolfinx import mesh as dmesh
+
+    _require_serial(sector, "patch_load")
+    if component not in (0, 1, 2):
+        raise ValueError(f"component must be 0, 1 or 2 (x, y, z), got {component}")
+    if not (np.isfinite(radius) and radius > 0):
+        raise ValueError(f"radius must be > 0 m, got {radius}")
+    msh = sector.mesh
+    fdim = msh.topology.dim - 1
+    msh.topology.create_connectivity(fdim, msh.topology.dim)
+    facets = dmesh.exterior_facet_indices(msh.topology)
+    near = facets[np.linalg.norm(dmesh.compute_midpoints(msh, fdim, facets) - np.asarray(center), axis=1) < radius]
+    if near.size == 0:
+        raise ValueError(f"radius must reach a boundary facet: none has its midpoint within {radius} m of {center}")
+    tags = dmesh.meshtags(msh, fdim, np.sort(near).astype(np.int32), np.ones(near.size, dtype=np.int32))
+    ds = ufl.Measure("ds", domain=msh, subdomain_data=tags)(1)
+    area = assemble_scalar(ufl.as_ufl(1.0) * ds, sector.comm)
+    b = assemble_vector(fem.form(ufl.TestFunction(sector.V)[component] * ds, jit_params=JIT_PARAMS))
+    n = sector.V.dofmap.index_map.size_local * sector.V.dofmap.index_map_bs
+    return b.array[:n].copy() / area
 
 
 def gather_dof_values(sector: Sector, values: np.ndarray, dofs: np.ndarray) -> np.ndarray:

@@ -154,7 +154,7 @@ def _envelope(t: float, ramp: float) -> float:
     return 1.0 if t >= ramp else 0.5 * (1.0 - np.cos(np.pi * t / ramp))
 
 
-def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | None,
+def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.ndarray | None,
                             load: Callable[[float], np.ndarray] | None, dt: float, n_steps: int,
                             nonlinear: bool = True, rtol: float = 1e-8, snapshot_every: int = 20,
                             max_iterations: int = 30, atol: float = 1e-6, ops: SvkOperators | None = None,
@@ -166,7 +166,8 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | None,
 
     Args:
         sector: a cyclic sector or a blade (serial); n_repeat: sectors carried (dividing N; 1 for a blade).
-        load_dof: the sector DOF loaded in every sector (e.g. node LE's e_z), in the sector's frame; None: no load.
+        load_dof: the sector DOF loaded in every sector (e.g. node LE's e_z), in the sector's frame, or a sector
+            load vector (n_dofs,) per unit amplitude (e.g. ``patch_load``); None: no load.
         load: t -> (n_repeat,) force on each sector's load DOF (N), e.g. ``sector_harmonic_load``; None: no load.
         dt, n_steps: time step (s) and steps; nonlinear: SVK (exact tangent) or linear K.
         rtol, atol: Newton stops at |r| <= max(rtol x max(|f_int|, |M a|, |f|, |f_contact|), atol) (atol in N: the
@@ -183,6 +184,15 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | None,
         raise ValueError(f"omega must be an angular speed > 0 rad/s with a casing, got {omega}")
     if (load is None) != (load_dof is None):
         raise ValueError("give load_dof and load together (or neither)")
+    load_key = -1.0
+    if load_dof is not None:
+        if np.ndim(load_dof) == 0:
+            unit, load_key = np.eye(1, sector.n_dofs, int(load_dof)).ravel(), float(load_dof)
+        else:
+            unit = np.asarray(load_dof, dtype=float)
+            if unit.shape != (sector.n_dofs,):
+                raise ValueError(f"a load vector must have the sector's {sector.n_dofs} DOFs, got {unit.shape}")
+            load_key = -2.0 - float(unit @ np.linspace(1.0, 2.0, unit.size))      # a vector's fingerprint
     t_wall = time.perf_counter()
     system = RepeatingSectors(sector, n_repeat, ops)
     M, maps, keep = system.M, system.maps, system.keep
@@ -191,7 +201,7 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | None,
         def force(t):
             return np.zeros(keep.size)
     else:
-        f_unit = [P.T @ np.eye(1, sector.n_dofs, load_dof).ravel() for P in maps]
+        f_unit = [P.T @ unit for P in maps]
 
         def force(t):
             return sum(a * f for a, f in zip(load(t), f_unit))
@@ -218,7 +228,7 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | None,
     tips, fields, snaps, its = [np.zeros((n_repeat,) + tip.shape)], [], [], []
     lams = [] if contact is None else [np.zeros(n_c)]
     checks = np.array([0.0, -np.inf])                                  # max penetration, friction power
-    signature = np.array([n_repeat, -1 if load_dof is None else load_dof, dt, n_steps, float(nonlinear),
+    signature = np.array([n_repeat, load_key, dt, n_steps, float(nonlinear),
                           snapshot_every, x.size, sector.n_dofs]
                          + ([] if casing is None else [omega, duration, casing.c0, casing.h_b, casing.mu,
                                                        "xrc".index(casing.direction[0]), casing.rotation_sense,
