@@ -129,6 +129,8 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
                 "damping": "5e-4 on the 3 N lowest modes"}
     if config.load_patch:
         metadata["load_correction"] = "one static vector per sector, its modal derivatives among the candidates"
+    else:                                    # models cached before the point load was put on node LE are not read
+        metadata["training_load"] = "node LE, e_z"
     cache, cached = cached_model(metadata, cache_dir, "disk")
     if cached is not None:
         return cached, {"cached": True}
@@ -155,10 +157,10 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     tied = np.hstack([lin, Psi_L + Psi_Rr])
     K0, M0 = tied.T @ (K_f @ tied), tied.T @ (M_f @ tied)
     C0, _ = modal_damping(K0, M0)
-    if config.load_patch:
-        f_shape = config.training_force * (tied.T @ f_free)
-    else:
-        f_shape = config.training_force * tied[np.flatnonzero(boundary == sector.tip_dofs[le, 2])[0]]
+    if not config.load_patch:                # the unit force on node LE's e_z, a free DOF (rows of tied are free DOFs)
+        f_free = np.zeros(free.size)
+        f_free[pos[np.flatnonzero(boundary == sector.tip_dofs[le, 2])[0]]] = 1.0
+    f_shape = config.training_force * (tied.T @ f_free)
     period = 2 * np.pi / config.training_omega
     t, q_train = simulate_linear_newmark(M0, C0, K0, lambda tt: f_shape * np.sin(config.training_omega * tt),
                                          period / 400, 400)
