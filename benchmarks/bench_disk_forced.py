@@ -182,6 +182,12 @@ def main(argv=None) -> int:
             print(f"reference N_d = {case[0]}, omega = {case[1]:g}, {'GNL' if nonlinear else 'linear'}: "
                   f"{float(refs[case, nonlinear]['wall']):.1f} s", flush=True)
     rows = []
+    name = f"disk_forced_{args.preset}{args.name}"
+
+    def save() -> str:                                 # after every row: a stopped run keeps what it measured
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        return write_results(name, rows, preset=args.preset, dofs_per_sector=sector.n_dofs, periods=args.periods,
+                             steps_per_period=args.steps_per_period, setup_s=setup, peak_rss_mb=peak)
     corrections = [c == "on" for c in args.load_correction] if args.patch else [False]
     configs = [(c, r, i, lc) for lc in corrections for i in args.interface for c in args.criteria for r in args.r_md]
     for criterion, r_md, interface, correction in configs:
@@ -203,6 +209,7 @@ def main(argv=None) -> int:
                              "r_md": r_md, "interface": interface, "r": model.r,
                              "N_d": case[0], "omega": case[1], "gnl": nonlinear, "failed": str(exc)})
                 print(f"{criterion} r_md {r_md} N_d {case[0]} omega {case[1]:g}: failed ({exc})", flush=True)
+                save()
                 continue
             score = performance_indicator(ref["tip"], rom["tip"], ref["fields"], rom["fields"], K_s, M_s,
                                           loaded=(sector.tip_names.index("LE"), 2))
@@ -214,16 +221,17 @@ def main(argv=None) -> int:
                    "I": score["I"], "errors": score["errors"], "rom_wall_s": rom["wall"],
                    "rom_us_per_step": 1e6 * rom["wall"] / rom["steps"], "build_s": build,
                    "build_cached": bool(report.get("cached")), "fom_wall_s": float(ref["wall"]),
-                   "max_le_z_mm": 1e3 * float(np.abs(ref["tip"][:, :, sector.tip_names.index("LE"), 2]).max())}
+                   "max_le_z_mm": 1e3 * float(np.abs(ref["tip"][:, :, sector.tip_names.index("LE"), 2]).max()),
+                   "rom_max_le_z_mm": 1e3 * float(np.abs(rom["tip"][:, :, sector.tip_names.index("LE"), 2]).max())}
             rows.append(row)
-            print(f"{interface:7s} {'S ' if correction else ''}{criterion:6s} r_md {r_md:3d} r {model.r:5d}  N_d {case[0]:2d} omega {case[1]:7g} "
+            save()
+            print(f"{interface:7s} {'S ' if correction else ''}{criterion:6s} r_md {r_md:3d} r {model.r:5d}  "
+                  f"N_d {case[0]:2d} omega {case[1]:7g} "
                   f"{'GNL' if nonlinear else 'lin'}  I = {score['I']:.4f}  "
                   + " ".join(f"{k}: {v:.2e}" for k, v in score["errors"].items())
                   + f"  ROM {rom['wall']:.2f} s, FOM {float(ref['wall']):.0f} s", flush=True)
+    machine = save()
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    name = f"disk_forced_{args.preset}{args.name}"
-    machine = write_results(name, rows, preset=args.preset, dofs_per_sector=sector.n_dofs, periods=args.periods,
-                            steps_per_period=args.steps_per_period, setup_s=setup, peak_rss_mb=peak)
     print(f"{machine}; peak RSS {peak:.0f} MB; results in results/{name}.json")
     return 0
 
