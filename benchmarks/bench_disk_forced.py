@@ -155,6 +155,8 @@ def main(argv=None) -> int:
         bad = [c for c in args.criteria if c not in CRITERIA]
         if bad:
             raise ValueError(f"criteria must be among {CRITERIA}, got {bad}")
+        if min(args.r_md) < 0 or args.r_c < 1:
+            raise ValueError(f"r-md must be >= 0 and r-c >= 1, got r-md {args.r_md}, r-c {args.r_c}")
         if not (args.periods > 0 and args.steps_per_period >= 20 and 0 <= args.ramp < args.periods):
             raise ValueError("periods must be > 0, steps-per-period >= 20 and ramp in [0, periods)")
         if not 0 <= args.patch <= 20:
@@ -231,8 +233,8 @@ def main(argv=None) -> int:
                   + " ".join(f"{k}: {v:.2e}" for k, v in score["errors"].items())
                   + f"  ROM {rom['wall']:.2f} s, FOM {float(ref['wall']):.0f} s", flush=True)
     machine = save()
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    print(f"{machine}; peak RSS {peak:.0f} MB; results in results/{name}.json")
+    print(f"{machine}; peak RSS {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB; "
+          f"results in results/{name}.json")
     return 0
 
 

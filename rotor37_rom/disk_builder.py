@@ -152,14 +152,14 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     if config.load_patch:                    # the patch's static correction, a fixed-interface vector like Theta's
         f_free = fem.patch_load(sector, sector.tip_nodes[le], config.load_patch, component=2)[free]
         S_f = _static_load_correction(K_f, M_f, pos, f_free, Theta_f)[:, None]
+    else:                                    # the unit force on node LE's e_z (a free DOF: the rows of tied below)
+        f_free = np.zeros(free.size)
+        f_free[pos[np.flatnonzero(boundary == sector.tip_dofs[le, 2])[0]]] = 1.0
     # training (§3.3.1): the 0-diameter load at node LE along e_z, on the sector with its faces tied for k = 0
     lin = np.hstack([Psi_tip, Theta_f, S_f])
     tied = np.hstack([lin, Psi_L + Psi_Rr])
     K0, M0 = tied.T @ (K_f @ tied), tied.T @ (M_f @ tied)
     C0, _ = modal_damping(K0, M0)
-    if not config.load_patch:                # the unit force on node LE's e_z, a free DOF (rows of tied are free DOFs)
-        f_free = np.zeros(free.size)
-        f_free[pos[np.flatnonzero(boundary == sector.tip_dofs[le, 2])[0]]] = 1.0
     f_shape = config.training_force * (tied.T @ f_free)
     period = 2 * np.pi / config.training_omega
     t, q_train = simulate_linear_newmark(M0, C0, K0, lambda tt: f_shape * np.sin(config.training_omega * tt),
