@@ -428,6 +428,45 @@ def _travelling_load(P: np.ndarray, amplitude: float, omega: float, n_diameters:
 INDICATOR_CRITERIA = ("loaded node", "tip nodes", "field", "strain energy")
 
 
+def best_approximation(basis: DiskBasis, field_ref: np.ndarray, K, M) -> dict:
+    """The smallest errors that any state of a disk model can have against reference fields: the lower bounds of
+    ``performance_indicator``'s global criteria, which tell the basis's share of a reduced model's error from the
+    share of its reduced dynamics (Galerkin projection, force approximation, time integration).
+
+    Each snapshot of sector n is projected, in the M norm ('field') and in the K norm ('strain energy'), on the
+    fields that sector n can take: span[Phi_s, Psi_L Pi_n + Psi_R' Pi_(n+1)] (``DiskBasis.sector_field``'s image;
+    the snapshots are treated independently, so the bound holds for every q history). Normalised as the indicator
+    (max over snapshots and sectors of the error norm / max of the reference's).
+
+    Args: field_ref (n_snap, n_s, n_dofs) snapshots of sectors 0 ... n_s - 1; K, M the sector's stiffness and mass
+    (as for the indicator). Returns {'field': e_M, 'strain energy': e_K}."""
+    field_ref = np.asarray(field_ref, float)
+    N, nL = basis.n_sectors, basis.Psi_L.shape[1]
+    if field_ref.ndim != 3 or field_ref.shape[2] != basis.Phi_s.shape[0] or not 1 <= field_ref.shape[1] <= N:
+        raise ValueError(f"reference fields must be (snapshots, 1 ... {N} sectors, {basis.Phi_s.shape[0]} DOFs), got "
+                         f"{field_ref.shape}")
+    out = {}
+    for name, A in (("field", M), ("strain energy", K)):
+        worst, ref_max = 0.0, 0.0
+        for n in range(field_ref.shape[1]):
+            m = (n + 1) % N
+            B = np.hstack([basis.Phi_s, basis.Psi_L @ basis.Pi[n * nL:(n + 1) * nL]
+                           + basis.Psi_Rr @ basis.Pi[m * nL:(m + 1) * nL]])
+            AB = np.asarray(A @ B)
+            d = np.sqrt(np.maximum(np.einsum("ij,ij->j", B, AB), 1e-300))   # columns scaled to unit A-norm
+            w, V = np.linalg.eigh(0.5 * (B.T @ AB + AB.T @ B) / np.outer(d, d))
+            keep = w > 1e-14 * w.max()      # an A-orthonormal basis of the span; directions at round-off (eigh's
+            #                                 1e-16 w_max) out, a field's part along them <= 1e-7 of its norm
+            T = V[:, keep] / np.sqrt(w[keep]) / d[:, None]
+            U = field_ref[:, n, :].T
+            E = U - B @ (T @ (T.T @ (AB.T @ U)))
+            E -= B @ (T @ (T.T @ (AB.T @ E)))           # once more: the projection's round-off projected out
+            norm = lambda X: np.sqrt(np.maximum(np.einsum("ij,ij->j", X, np.asarray(A @ X)), 0.0))  # noqa: E731
+            worst, ref_max = max(worst, norm(E).max()), max(ref_max, norm(U).max())
+        out[name] = float(worst / max(ref_max, 1e-300))
+    return out
+
+
 def performance_indicator(tip_ref: np.ndarray, tip_rom: np.ndarray, field_ref: np.ndarray, field_rom: np.ndarray,
                           K, M, loaded: tuple = (0, 2)) -> dict:
     """The performance indicator I in [0, 1] of a reduced model's transient against a full-order reference, in the

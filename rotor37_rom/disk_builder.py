@@ -85,12 +85,13 @@ class DiskReductionConfig:
             raise ValueError(f"load_patch must be in [0, 0.02] m, got {self.load_patch}")
 
 
-def _static_load_correction(K_f, M_f, boundary: np.ndarray, f: np.ndarray, Theta: np.ndarray) -> np.ndarray:
+def _static_load_correction(M_f, boundary: np.ndarray, f: np.ndarray, Theta: np.ndarray, solve_ii) -> np.ndarray:
     """The static response to f with the boundary DOFs held (zero there), M-orthogonal to the fixed-interface modes
-    Theta (M-orthonormal) and of unit M-norm: the part of the load's local field that they do not carry."""
-    interior = np.setdiff1d(np.arange(K_f.shape[0]), boundary)
-    x = np.zeros(K_f.shape[0])
-    x[interior] = fem.mumps_solver(K_f[interior][:, interior].tocsc())(f[interior])
+    Theta (M-orthonormal) and of unit M-norm: the part of the load's local field that they do not carry.
+    ``solve_ii``: B -> K_ii^-1 B on the interior DOFs (ascending), Craig-Bampton's own factorisation."""
+    interior = np.setdiff1d(np.arange(M_f.shape[0]), boundary)
+    x = np.zeros(M_f.shape[0])
+    x[interior] = solve_ii(f[interior])
     x -= Theta @ (Theta.T @ (M_f @ x))
     norm = float(np.sqrt(x @ (M_f @ x)))
     if not norm > 0:
@@ -141,8 +142,12 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     left, right = pairs.left.ravel(), pairs.right.ravel()
     boundary = np.concatenate([tip_dofs, left, right])
     pos = _positions(free, boundary, "tip and cyclic DOFs")
-    Psi_f, Theta_f, omega_c = craig_bampton(K_f, M_f, pos, config.r_c, solve=fem.mumps_solver,
-                                            eigensolve=fem.slepc_eigenpairs)
+    factorised = []                          # K_ii's factorisation, kept for the load correction below
+
+    def solve(A):
+        factorised.append(fem.mumps_solver(A))
+        return factorised[-1]
+    Psi_f, Theta_f, omega_c = craig_bampton(K_f, M_f, pos, config.r_c, solve=solve, eigensolve=fem.slepc_eigenpairs)
     nb, nL = tip_dofs.size, left.size
     R_blk = np.kron(np.eye(nL // 3), rotation_z(pairs.angle))          # u_R = R u_L of the next sector, per node
     Psi_tip, Psi_L, Psi_Rr = Psi_f[:, :nb], Psi_f[:, nb:nb + nL], Psi_f[:, nb + nL:] @ R_blk
@@ -151,10 +156,11 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     S_f = np.zeros((free.size, 0))
     if config.load_patch:                    # the patch's static correction, a fixed-interface vector like Theta's
         f_free = fem.patch_load(sector, sector.tip_nodes[le], config.load_patch, component=2)[free]
-        S_f = _static_load_correction(K_f, M_f, pos, f_free, Theta_f)[:, None]
+        S_f = _static_load_correction(M_f, pos, f_free, Theta_f, factorised[-1])[:, None]
     else:                                    # the unit force on node LE's e_z (a free DOF: the rows of tied below)
         f_free = np.zeros(free.size)
         f_free[pos[np.flatnonzero(boundary == sector.tip_dofs[le, 2])[0]]] = 1.0
+    factorised.clear()                       # MUMPS frees K_ii's factors
     # training (§3.3.1): the 0-diameter load at node LE along e_z, on the sector with its faces tied for k = 0
     lin = np.hstack([Psi_tip, Theta_f, S_f])
     tied = np.hstack([lin, Psi_L + Psi_Rr])

@@ -6,6 +6,7 @@
   up to 2B at k = 0, 1, 9, 18;
 - the disk's reduced force equals Phi^T g(Phi q) of the full-order sector forms per sector (eq. 61) to round-off;
 - save/load, the travelling load and the performance indicator; bad input;
+- the best approximation of reference fields in the model's span (the basis's share of the indicator's error);
 - a load spread over a patch (the GNL reference's load): its reduced force is the transpose of the field rebuild, and
   the static load correction gives the model the patch's local field.
 """
@@ -17,8 +18,8 @@ import scipy.sparse.linalg as spla
 
 from rotor37_rom import fem
 from rotor37_rom.cyclic import assemble_full_structure, to_global_frame
-from rotor37_rom.disk import (harmonic_field_load, harmonic_node_load, performance_indicator, repeat_count,
-                              sector_harmonics)
+from rotor37_rom.disk import (best_approximation, harmonic_field_load, harmonic_node_load, performance_indicator,
+                              repeat_count, sector_harmonics)
 from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
 from rotor37_rom.reduction import load_reduced_model, save_reduced_model, simulate_newmark
 
@@ -145,6 +146,36 @@ def test_disk_model_save_load_and_response(tmp_path, disk_model):
     eye = sp.identity(6)
     assert performance_indicator(tip, tip, fields, fields, eye, eye)["I"] == 1.0
     assert performance_indicator(tip, 0 * tip, fields, 0 * fields, eye, eye)["I"] == 0.0
+
+
+def test_best_approximation_bounds_every_state(ci_disk, ci_disk_ops, disk_model):
+    """disk.best_approximation, the basis's share of a reduced model's error: fields that sectors 0 and 1 of the
+    model can take (one state q) are approximated to round-off in both norms; a field off the model's span is
+    approximated no worse than by the state it was made from or by any other state (the projection in a norm is
+    the best approximation in that norm), and not exactly."""
+    model, _ = disk_model
+    basis = model.sectors
+    K = fem.petsc_to_scipy(fem.assemble_stiffness(ci_disk, ci_disk_ops, clamped=False))
+    M = fem.petsc_to_scipy(fem.assemble_mass(ci_disk, ci_disk_ops, clamped=False))
+    rng = np.random.default_rng(5)
+    q = rng.standard_normal(model.r)
+    inside = np.stack([basis.sector_field(q, n) for n in (0, 1)])[None]           # (1 snapshot, 2 sectors, n)
+    for e in best_approximation(basis, inside, K, M).values():
+        assert e < 1e-6         # the span's directions below 1e-14 of the Gram's largest eigenvalue are dropped as
+        #                         round-off: a field's part along them is <= sqrt(1e-14) = 1e-7 of its norm
+    fields = inside[0, :1]
+    noise = rng.standard_normal(fields.shape) * (fields[0] != 0)                 # free DOFs only
+    target = (fields + 0.05 * np.abs(fields).max() * noise)[None]
+    best = best_approximation(basis, target, K, M)
+
+    def error(candidate, A):
+        d = target[0, 0] - candidate
+        return np.sqrt(d @ (A @ d)) / np.sqrt(target[0, 0] @ (A @ target[0, 0]))
+    for name, A in (("field", M), ("strain energy", K)):
+        assert 0 < best[name] <= error(fields[0], A) * (1 + 1e-10)
+        for _ in range(3):
+            other = basis.sector_field(q + 1e-3 * np.abs(q).max() * rng.standard_normal(model.r), 0)
+            assert best[name] <= error(other, A) * (1 + 1e-10)
 
 
 def test_patch_load_and_its_static_correction(ci_disk, ci_disk_ops, disk_model):

@@ -1,0 +1,150 @@
+"""Where the disk models' GNL error comes from (issue #20): the basis, or the nonlinear force's coupling (eq. 61).
+
+The disk model's nonlinear force of sector n acts on its q^n part only (Phi_s q^n, eq. 61: "linear coupling through
+the disk"); the part of the sector's field carried by the cyclic faces' constraint modes (Psi_L u_L^n + Psi_R'
+u_L^(n+1)) enters the linear matrices but not the nonlinear force. For a 0-diameter load every sector moves alike and
+the disk model reduces exactly to one sector with its faces tied: q^n the same for all n, u_L = Pi_0 eta on the k = 0
+interface modes only. On that tied sector (the disk model's own Phi_s, Psi_L, Psi_R' and k = 0 interface modes, r =
+r_s + 6 on the ci sector) this script integrates the patch-load GNL case of ``bench_disk_forced.py`` three ways, with
+the same Newmark at the same step as the full-order reference:
+
+- "eq. 61": the nonlinear force of Phi_s q^n only, as the disk model (its I matches the 36-sector model's);
+- "whole sector field": the nonlinear force of the whole sector field, faces included (exact tensors of [Phi_s,
+  (Psi_L + Psi_R') Pi_0]);
+- "linear": no nonlinear force;
+
+and reports each one's performance indicator (``disk.performance_indicator``) next to the smallest errors any state
+of the basis can have (``disk.best_approximation``). The full-order GNL reference is ``bench_disk_forced.py``'s
+(cached under results/disk_forced/<preset>/; computed, about 20 min on the ci preset, when missing) and the disk
+models are its cached ones (built when missing):
+
+    python benchmarks/bench_disk_gnl_coupling.py [--preset ci] [--r-md 10 20 40] [--patch 3] [--name SUFFIX]
+
+Results: results/disk_gnl_coupling_<preset><SUFFIX>.json.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import write_results  # noqa: E402
+from bench_disk_forced import AMPLITUDE, reference, sector_load  # noqa: E402
+
+from rotor37_rom import fem  # noqa: E402
+from rotor37_rom.disk import best_approximation, performance_indicator  # noqa: E402
+from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
+from rotor37_rom.fem.periodic import RepeatingSectors  # noqa: E402
+from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces  # noqa: E402
+from rotor37_rom.reduction import CRITERIA, simulate_newmark  # noqa: E402
+
+OMEGA, PERIODS, SPP, RAMP = 4000.0, 10, 100, 1.0
+
+
+class _Leading:
+    """The nonlinear force of the leading ``n`` coordinates of q only, zero elsewhere (eq. 61 on the tied sector)."""
+
+    def __init__(self, forces, r: int, n: int):
+        self.forces, self.r, self.n = forces, r, n
+
+    def evaluate(self, Q):
+        Q = np.asarray(Q, float).reshape(self.r, -1)
+        out = np.zeros_like(Q)
+        out[:self.n] = self.forces.evaluate(Q[:self.n])
+        return out
+
+    def jacobian(self, q):
+        J = np.zeros((self.r, self.r))
+        J[:self.n, :self.n] = self.forces.jacobian(np.asarray(q, float)[:self.n])
+        return J
+
+
+def tied_basis(model) -> tuple[np.ndarray, int]:
+    """Sector 0's fields of the disk model under a 0-diameter state: [Phi_s, (Psi_L + Psi_R') Pi_0] on the k = 0
+    interface modes (those equal on every sector), and r_s."""
+    b = model.sectors
+    N, nL = b.n_sectors, b.Psi_L.shape[1]
+    blocks = b.Pi.reshape(N, nL, -1)
+    k0 = np.abs(blocks - blocks[0]).max(axis=(0, 1)) <= 1e-9 * np.abs(b.Pi).max()
+    return np.hstack([b.Phi_s, (b.Psi_L + b.Psi_Rr) @ blocks[0][:, k0]]), b.Phi_s.shape[1]
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--preset", default="ci", choices=["ci", "coarse", "paper"])
+    parser.add_argument("--r-md", nargs="+", type=int, default=[10, 20, 40])
+    parser.add_argument("--criterion", default="MI2b")
+    parser.add_argument("--patch", type=float, default=3.0, help="load patch radius (mm), in (0, 20]")
+    parser.add_argument("--out", default="results/disk_forced")
+    parser.add_argument("--name", default="", help="results file suffix: results/disk_gnl_coupling_<preset><name>.json")
+    args = parser.parse_args(argv)
+    if min(args.r_md) < 1:
+        print(f"error: r-md must be >= 1 (the coupling acts through the modal derivatives), got {args.r_md}",
+              file=sys.stderr)
+        return 2
+    if args.criterion not in CRITERIA:
+        print(f"error: criterion must be one of {CRITERIA}, got {args.criterion!r}", file=sys.stderr)
+        return 2
+    if not 0 < args.patch <= 20:
+        print(f"error: patch must be in (0, 20] mm, got {args.patch:g}", file=sys.stderr)
+        return 2
+    out = Path(args.out) / args.preset
+    out.mkdir(parents=True, exist_ok=True)
+    sector = fem.create_disk_sector(preset=args.preset)
+    system = RepeatingSectors(sector, 1)
+    ops = system.ops
+    K_s = fem.petsc_to_scipy(fem.assemble_stiffness(sector, ops, clamped=False))
+    M_s = fem.petsc_to_scipy(fem.assemble_mass(sector, ops, clamped=False))
+    ref = reference(sector, system, (0, OMEGA), True, PERIODS, SPP, RAMP, out, patch_mm=args.patch)
+    le = sector.tip_names.index("LE")
+    tip_dofs = np.asarray(sector.tip_dofs)
+    f = sector_load(sector, args.patch)
+    T = 2 * np.pi / OMEGA
+    rows = []
+    for r_md in args.r_md:
+        config = DiskReductionConfig(tip_nodes="LE", r_c=10, r_md=r_md, criterion=args.criterion, r_cyclic=144,
+                                     forces="intrusive", load_patch=1e-3 * args.patch)
+        model, _ = build_disk_model(sector, config, ops=ops, cache_dir=out / "models")
+        B, r_s = tied_basis(model)
+        K0, M0 = B.T @ (K_s @ B), B.T @ (M_s @ B)
+        P = B.T @ f
+
+        def load(t, P=P):
+            envelope = 1.0 if t >= RAMP * T else 0.5 * (1.0 - np.cos(np.pi * t / (RAMP * T)))
+            return P * (AMPLITUDE * envelope * np.sin(OMEGA * t))
+        t0 = time.perf_counter()
+        H, w, _ = fem.quadrature_gradients(sector, B.T)
+        lame = sector.material.lame
+        whole = compute_polynomial_forces(QuadratureForces(H, w, *lame))
+        leading = _Leading(compute_polynomial_forces(QuadratureForces(np.ascontiguousarray(H[:, :r_s]), w, *lame)),
+                           B.shape[1], r_s)
+        del H
+        tensors = time.perf_counter() - t0
+        best = best_approximation(model.sectors, ref["fields"], K_s, M_s)
+        for name, forces in (("whole sector field", whole), ("eq. 61", leading), ("linear", None)):
+            t0 = time.perf_counter()
+            _, Q = simulate_newmark(M0, np.zeros_like(M0), K0, load, T / SPP, PERIODS * SPP, forces=forces)
+            wall = time.perf_counter() - t0
+            tip = (B[tip_dofs.ravel()] @ Q).T.reshape(-1, 1, *tip_dofs.shape)
+            fields = (B @ Q[:, ref["snapshots"]]).T[:, None, :]
+            score = performance_indicator(ref["tip"], tip, ref["fields"], fields, K_s, M_s, loaded=(le, 2))
+            rows.append({"criterion": args.criterion, "r_md": r_md, "r_disk": model.r, "r_tied": B.shape[1],
+                         "forces": name, "I": score["I"], "errors": score["errors"], "best_approximation": best,
+                         "rom_wall_s": wall, "tensors_s": tensors, "fom_wall_s": float(ref["wall"]),
+                         "rom_max_le_z_mm": 1e3 * float(np.abs(tip[:, 0, le, 2]).max()),
+                         "max_le_z_mm": 1e3 * float(np.abs(ref["tip"][:, 0, le, 2]).max())})
+            machine = write_results(f"disk_gnl_coupling_{args.preset}{args.name}", rows, patch_mm=args.patch,
+                                    omega=OMEGA, periods=PERIODS, steps_per_period=SPP)
+            print(f"r_md {r_md:3d} (disk r {model.r}, tied r {B.shape[1]}) {name:18s} I = {score['I']:.4f}  "
+                  + " ".join(f"{k}: {v:.3f}" for k, v in score["errors"].items())
+                  + f"  (basis alone: {best['field']:.3f} / {best['strain energy']:.3f})  {wall:.0f} s", flush=True)
+    print(f"{machine}; results in results/disk_gnl_coupling_{args.preset}{args.name}.json")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
