@@ -16,11 +16,12 @@ A 400 N point force on the ci mesh's thin leading edge makes the GNL reference c
 softens in compression; a point force on a continuum has no finite limit): ``--patch MM`` spreads the same 400 N as
 an e_z traction over the boundary facets within MM mm of node LE (``fem.patch_load``), for the reference and the
 reduced models alike; the models then carry the patch's static load correction (``--load-correction on``, one
-vector per sector, ``DiskReductionConfig.load_patch``) or not (``off``).
+vector per sector, ``DiskReductionConfig.load_patch``) or not (``off``). ``--face-shapes N_F`` builds the models
+with the faces in the nonlinear force on N_F shapes (``DiskReductionConfig.face_shapes``; default 0: eq. 61).
 
     python benchmarks/bench_disk_forced.py [--preset ci] [--cases 0:4000 9:4000 ...] [--criteria MI2b MMI ...]
         [--r-md 0 5 10 20] [--periods 10] [--steps-per-period 100] [--gnl-reference 0:4000]
-        [--patch 3 --load-correction on off]
+        [--patch 3 --load-correction on off] [--face-shapes N_F]
 
 Results: results/disk_forced_<preset>.json; reference histories and models cached under results/disk_forced/<preset>/.
 """
@@ -145,6 +146,8 @@ def main(argv=None) -> int:
                              "(DiskReductionConfig.load_patch), or not (the point-load models)")
     parser.add_argument("--partial", action="store_true",
                         help="score against an unfinished GNL reference (its checkpoint's window), not run it on")
+    parser.add_argument("--face-shapes", type=int, default=0,
+                        help="0: eq. 61's nonlinear force of q^n only; n_f >= 1: the faces in it on n_f shapes")
     parser.add_argument("--out", default="results/disk_forced")
     parser.add_argument("--name", default="", help="results file suffix: results/disk_forced_<preset><name>.json")
     args = parser.parse_args(argv)
@@ -158,6 +161,8 @@ def main(argv=None) -> int:
         bad = [c for c in args.criteria if c not in CRITERIA]
         if bad:
             raise ValueError(f"criteria must be among {CRITERIA}, got {bad}")
+        if args.face_shapes < 0:
+            raise ValueError(f"face-shapes must be >= 0, got {args.face_shapes}")
         if min(args.r_md) < 0 or args.r_c < 1:
             raise ValueError(f"r-md must be >= 0 and r-c >= 1, got r-md {args.r_md}, r-c {args.r_c}")
         if not (args.periods > 0 and args.steps_per_period >= 20 and 0 <= args.ramp < args.periods):
@@ -199,7 +204,8 @@ def main(argv=None) -> int:
         config = DiskReductionConfig(tip_nodes="LE", r_c=args.r_c, r_md=r_md, criterion=criterion,
                                      r_cyclic=args.r_cyclic, interface=interface,
                                      forces="intrusive" if r_md else "none",
-                                     load_patch=1e-3 * args.patch if correction else 0.0)
+                                     load_patch=1e-3 * args.patch if correction else 0.0,
+                                     face_shapes=args.face_shapes if r_md else 0)
         tb = time.perf_counter()
         model, report = build_disk_model(sector, config, ops=ops, cache_dir=out / "models")
         build = time.perf_counter() - tb
@@ -220,6 +226,8 @@ def main(argv=None) -> int:
                                           loaded=(sector.tip_names.index("LE"), 2))
             best = best_approximation(model.sectors, ref["fields"], K_s, M_s)   # the basis's share of the error
             row = {"ramp_periods": args.ramp, "patch_mm": args.patch, "load_correction": correction,
+                   "face_shapes": model.forces.faces.shape[1] // 2 if model.forces is not None
+                   and model.forces.faces is not None else 0,
                    "criterion": criterion, "r_md": r_md, "interface": interface,
                    "r": model.r, "N_d": case[0], "omega": case[1],
                    "gnl": nonlinear, "window_periods": (ref["tip"].shape[0] - 1) / args.steps_per_period,

@@ -12,13 +12,16 @@ the same Newmark at the same step as the full-order reference:
 - "whole sector field": the nonlinear force of the whole sector field, faces included (exact tensors of [Phi_s,
   (Psi_L + Psi_R') Pi_0]);
 - "linear": no nonlinear force;
+- "faces on n_f shapes" (``--face-shapes``): the force of the disk model built with ``face_shapes = n_f``
+  (``DiskReductionConfig``: each face on n_f shapes, ``disk.face_shapes``), restricted to the tied sector;
 
 and reports each one's performance indicator (``disk.performance_indicator``) next to the smallest errors any state
 of the basis can have (``disk.best_approximation``). The full-order GNL reference is ``bench_disk_forced.py``'s
 (cached under results/disk_forced/<preset>/; computed, about 20 min on the ci preset, when missing) and the disk
 models are its cached ones (built when missing):
 
-    python benchmarks/bench_disk_gnl_coupling.py [--preset ci] [--r-md 10 20 40] [--patch 3] [--name SUFFIX]
+    python benchmarks/bench_disk_gnl_coupling.py [--preset ci] [--r-md 10 20 40] [--patch 3] [--face-shapes 6 12]
+        [--faces-only] [--name SUFFIX]
 
 Results: results/disk_gnl_coupling_<preset><SUFFIX>.json.
 """
@@ -36,13 +39,26 @@ from _common import write_results  # noqa: E402
 from bench_disk_forced import AMPLITUDE, reference, sector_load  # noqa: E402
 
 from rotor37_rom import fem  # noqa: E402
-from rotor37_rom.disk import best_approximation, performance_indicator  # noqa: E402
+from rotor37_rom.disk import best_approximation, face_shapes, performance_indicator  # noqa: E402
 from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
 from rotor37_rom.fem.periodic import RepeatingSectors  # noqa: E402
 from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces  # noqa: E402
 from rotor37_rom.reduction import CRITERIA, simulate_newmark  # noqa: E402
 
 OMEGA, PERIODS, SPP, RAMP = 4000.0, 10, 100, 1.0
+
+
+class _Mapped:
+    """A force on coordinates x = G q (G: m x r), pulled back to q: G^T f(G q), Jacobian G^T J G."""
+
+    def __init__(self, forces, G: np.ndarray):
+        self.forces, self.G = forces, G
+
+    def evaluate(self, Q):
+        return self.G.T @ self.forces.evaluate(self.G @ np.asarray(Q, float).reshape(self.G.shape[1], -1))
+
+    def jacobian(self, q):
+        return self.G.T @ self.forces.jacobian(self.G @ np.asarray(q, float)) @ self.G
 
 
 class _Leading:
@@ -63,14 +79,31 @@ class _Leading:
         return J
 
 
-def tied_basis(model) -> tuple[np.ndarray, int]:
+def tied_basis(model) -> tuple[np.ndarray, int, np.ndarray]:
     """Sector 0's fields of the disk model under a 0-diameter state: [Phi_s, (Psi_L + Psi_R') Pi_0] on the k = 0
-    interface modes (those equal on every sector), and r_s."""
+    interface modes (those equal on every sector), r_s, and those modes' face displacements Pi_0 (n_L, 6)."""
     b = model.sectors
     N, nL = b.n_sectors, b.Psi_L.shape[1]
     blocks = b.Pi.reshape(N, nL, -1)
     k0 = np.abs(blocks - blocks[0]).max(axis=(0, 1)) <= 1e-9 * np.abs(b.Pi).max()
-    return np.hstack([b.Phi_s, (b.Psi_L + b.Psi_Rr) @ blocks[0][:, k0]]), b.Phi_s.shape[1]
+    return np.hstack([b.Phi_s, (b.Psi_L + b.Psi_Rr) @ blocks[0][:, k0]]), b.Phi_s.shape[1], blocks[0][:, k0]
+
+
+def face_shape_force(sector, model, r_s: int, Pi0: np.ndarray, n_f: int):
+    """The force of the disk model with ``face_shapes = n_f`` (``disk.face_shapes``: the faces on n_f shapes L)
+    restricted to the tied sector: x = [q; L^T Pi_0 eta; L^T Pi_0 eta] (both faces alike under k = 0)."""
+    b = model.sectors
+    eta = slice(b.blocks.size, model.r)
+    omega = np.sqrt(np.diag(model.K)[eta] / np.diag(model.M)[eta])   # the interface modes are K- and M-orthogonal
+    L, _ = face_shapes(b.Pi, omega, b.n_sectors, n_f)
+    H, w, _ = fem.quadrature_gradients(sector, np.hstack([b.Phi_s, b.Psi_L @ L, b.Psi_Rr @ L]).T)
+    forces = compute_polynomial_forces(QuadratureForces(H, w, *sector.material.lame))
+    A = L.T @ Pi0
+    G = np.zeros((r_s + 2 * n_f, r_s + Pi0.shape[1]))
+    G[:r_s, :r_s] = np.eye(r_s)
+    G[r_s:r_s + n_f, r_s:] = A
+    G[r_s + n_f:, r_s:] = A
+    return _Mapped(forces, G)
 
 
 def main(argv=None) -> int:
@@ -80,8 +113,14 @@ def main(argv=None) -> int:
     parser.add_argument("--criterion", default="MI2b")
     parser.add_argument("--patch", type=float, default=3.0, help="load patch radius (mm), in (0, 20]")
     parser.add_argument("--out", default="results/disk_forced")
+    parser.add_argument("--face-shapes", nargs="*", type=int, default=[],
+                        help="also the disk model's force with the faces on these numbers of shapes (disk.face_shapes)")
+    parser.add_argument("--faces-only", action="store_true", help="only the --face-shapes variants")
     parser.add_argument("--name", default="", help="results file suffix: results/disk_gnl_coupling_<preset><name>.json")
     args = parser.parse_args(argv)
+    if args.face_shapes and min(args.face_shapes) < 1:
+        print(f"error: face-shapes must be >= 1, got {args.face_shapes}", file=sys.stderr)
+        return 2
     if min(args.r_md) < 1:
         print(f"error: r-md must be >= 1 (the coupling acts through the modal derivatives), got {args.r_md}",
               file=sys.stderr)
@@ -109,7 +148,7 @@ def main(argv=None) -> int:
         config = DiskReductionConfig(tip_nodes="LE", r_c=10, r_md=r_md, criterion=args.criterion, r_cyclic=144,
                                      forces="intrusive", load_patch=1e-3 * args.patch)
         model, _ = build_disk_model(sector, config, ops=ops, cache_dir=out / "models")
-        B, r_s = tied_basis(model)
+        B, r_s, Pi0 = tied_basis(model)
         K0, M0 = B.T @ (K_s @ B), B.T @ (M_s @ B)
         P = B.T @ f
 
@@ -117,15 +156,20 @@ def main(argv=None) -> int:
             envelope = 1.0 if t >= RAMP * T else 0.5 * (1.0 - np.cos(np.pi * t / (RAMP * T)))
             return P * (AMPLITUDE * envelope * np.sin(OMEGA * t))
         t0 = time.perf_counter()
-        H, w, _ = fem.quadrature_gradients(sector, B.T)
-        lame = sector.material.lame
-        whole = compute_polynomial_forces(QuadratureForces(H, w, *lame))
-        leading = _Leading(compute_polynomial_forces(QuadratureForces(np.ascontiguousarray(H[:, :r_s]), w, *lame)),
-                           B.shape[1], r_s)
-        del H
+        variants = []
+        if not args.faces_only:
+            H, w, _ = fem.quadrature_gradients(sector, B.T)
+            lame = sector.material.lame
+            whole = compute_polynomial_forces(QuadratureForces(H, w, *lame))
+            leading = _Leading(compute_polynomial_forces(QuadratureForces(np.ascontiguousarray(H[:, :r_s]), w,
+                                                                          *lame)), B.shape[1], r_s)
+            del H
+            variants = [("whole sector field", whole), ("eq. 61", leading), ("linear", None)]
+        variants += [(f"faces on {n_f} shapes", face_shape_force(sector, model, r_s, Pi0, n_f))
+                     for n_f in args.face_shapes]
         tensors = time.perf_counter() - t0
         best = best_approximation(model.sectors, ref["fields"], K_s, M_s)
-        for name, forces in (("whole sector field", whole), ("eq. 61", leading), ("linear", None)):
+        for name, forces in variants:
             t0 = time.perf_counter()
             _, Q = simulate_newmark(M0, np.zeros_like(M0), K0, load, T / SPP, PERIODS * SPP, forces=forces)
             wall = time.perf_counter() - t0

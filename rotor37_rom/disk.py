@@ -12,8 +12,10 @@ one of size N n_L: 19 problems of 2 n_L instead of one of 36 n_L. The reduced mo
 
 Nonlinear forces (eq. 61): the cyclic DOFs stay linear and each sector's reduced force depends on its own q^n only,
 g~^n(q^n) = Phi_s^T g_s(Phi_s q^n): one sector's reduced force (exact tensors or quadrature) evaluated with the
-sectors as batch columns (``SectorForces``). A mistuned disk scales each sector's stiffness and force by its own
-factor (SVK forces are linear in E); the interface modes stay those of the tuned disk, a basis for any scatter.
+sectors as batch columns (``SectorForces``). Optionally the force also sees the sector's faces on a few face shapes
+L (``face_shapes``: the faces' constraint modes carry part of the blade's motion, which eq. 61 leaves linear). A
+mistuned disk scales each sector's stiffness and force by its own factor (SVK forces are linear in E); the interface
+modes stay those of the tuned disk, a basis for any scatter.
 """
 from __future__ import annotations
 
@@ -28,41 +30,70 @@ from rotor37_rom.cyclic import harmonic_indices
 
 __all__ = ["SectorForces", "SectorMatrices", "DiskBasis", "HarmonicBlocks", "interface_modes", "assemble_disk_matrices",
            "disk_node_map", "sector_harmonics", "harmonic_node_load", "harmonic_field_load", "repeat_count",
-           "performance_indicator", "travelling_wave_departure", "INDICATOR_CRITERIA", "mistuning_factors"]
+           "performance_indicator", "travelling_wave_departure", "INDICATOR_CRITERIA", "mistuning_factors",
+           "best_approximation", "face_shapes"]
 
 
 @dataclasses.dataclass(frozen=True)
 class SectorForces:
-    """The disk's reduced nonlinear force: one sector's reduced force ``forces`` (r_s in, r_s out; PolynomialForces
-    or QuadratureForces) applied to every sector's block of q, the sectors as batch columns (eq. 61).
+    """The disk's reduced nonlinear force: one sector's reduced force ``forces`` applied to every sector, the sectors
+    as batch columns (PolynomialForces or QuadratureForces).
+
+    Without ``faces`` (eq. 61, the paper's linear coupling) sector n's force acts on its q^n only (r_s in, r_s out).
+    With ``faces`` (n_f face coordinates per side) it acts on the sector's field including its faces:
+    x^n = [q^n; a_L^n; a_R^n], [a_L^n; a_R^n] = faces[n] @ eta, eta = q[blocks.size:] the interface coordinates
+    (a^n = L^T u_L^n on face shapes L, the right face's from the next sector), and its face rows are scattered back by
+    faces[n]^T: the force is the gradient of the sum of the sectors' strain energies on those fields.
 
     Attributes:
-        forces: the sector's reduced force; blocks: (N, r_s) entries of q of each sector's q^n; r: size of q;
-        scales: (N,) factor of each sector's force (mistuning: a sector's E; 1 for a tuned disk).
+        forces: the sector's reduced force (r_s + 2 n_f in and out); blocks: (N, r_s) entries of q of each sector's
+            q^n; r: size of q; scales: (N,) factor of each sector's force (mistuning: a sector's E; 1 for a tuned
+            disk); faces: None, or (N, 2 n_f, r_cyclic) each sector's face coordinates from eta.
     """
 
     forces: object
     blocks: np.ndarray
     r: int
     scales: np.ndarray
+    faces: np.ndarray | None = None
+
+    def _inputs(self, Q: np.ndarray) -> np.ndarray:
+        """(N, r_s [+ 2 n_f], P): each sector's force coordinates."""
+        N, rs = self.blocks.shape
+        X = Q[self.blocks.ravel()].reshape(N, rs, Q.shape[1])
+        if self.faces is None:
+            return X
+        return np.concatenate([X, np.einsum("nfc,cp->nfp", self.faces, Q[self.blocks.size:])], axis=1)
 
     def evaluate(self, Q: np.ndarray) -> np.ndarray:
-        """g~(q) for Q (r,) or (r, P): (r, P); entries outside the sector blocks (interface modes) are 0."""
+        """g~(q) for Q (r,) or (r, P): (r, P); without ``faces`` the entries of the interface modes are 0."""
         Q = np.asarray(Q, float).reshape(self.r, -1)
         N, rs = self.blocks.shape
         P = Q.shape[1]
-        cols = Q[self.blocks.ravel()].reshape(N, rs, P).transpose(1, 0, 2).reshape(rs, N * P)
-        g = self.forces.evaluate(cols).reshape(rs, N, P) * self.scales[None, :, None]
+        X = self._inputs(Q)
+        m = X.shape[1]
+        g = self.forces.evaluate(X.transpose(1, 0, 2).reshape(m, N * P)).reshape(m, N, P) * self.scales[None, :, None]
         out = np.zeros((self.r, P))
-        out[self.blocks.ravel()] = g.transpose(1, 0, 2).reshape(N * rs, P)
+        out[self.blocks.ravel()] = g[:rs].transpose(1, 0, 2).reshape(N * rs, P)
+        if self.faces is not None:
+            out[self.blocks.size:] = np.einsum("nfc,fnp->cp", self.faces, g[rs:])
         return out
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
-        """dg~/dq (r, r) at one state: block-diagonal over the sectors."""
+        """dg~/dq (r, r) at one state: block-diagonal over the sectors (and their coupling through eta with faces)."""
         q = np.asarray(q, float).ravel()
+        X = self._inputs(q[:, None])[:, :, 0]
+        rs = self.blocks.shape[1]
+        eta = slice(self.blocks.size, self.r)
         J = np.zeros((self.r, self.r))
         for n, block in enumerate(self.blocks):                # N small Jacobians, one per sector
-            J[np.ix_(block, block)] = self.scales[n] * self.forces.jacobian(q[block])
+            Jn = self.scales[n] * self.forces.jacobian(X[n])
+            J[np.ix_(block, block)] = Jn[:rs, :rs]
+            if self.faces is not None:
+                E = self.faces[n]
+                J[block, eta] += Jn[:rs, rs:] @ E
+                J[eta, block] += E.T @ Jn[rs:, :rs]
+                J[eta, eta] += E.T @ Jn[rs:, rs:] @ E
         return J
 
 
@@ -336,6 +367,31 @@ class HarmonicBlocks:
         out = np.zeros((self.r, out_blocks.shape[2]))
         out[self.index[self.valid]] = out_blocks[self.valid]
         return self.backward(out)
+
+
+def face_shapes(Pi: np.ndarray, omega: np.ndarray, n_sectors: int, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """Face shapes for the nonlinear force (``SectorForces.faces``) and every sector's face coordinates.
+
+    L (n_L, count), orthonormal: the leading left singular vectors of the faces' motions in the interface modes, every
+    sector's block of every mode, each mode weighted by its static flexibility 1 / omega^2 (a mode's share of a
+    quasi-static response), each column's largest entry positive. faces (N, 2 count, r_cyclic): sector n's
+    [L^T Pi_n; L^T Pi_(n+1)] (its left face and the next sector's, whose left face is its right one).
+
+    Args: Pi (N n_L, r_cyclic) the interface modes; omega (r_cyclic,) their frequencies (rad/s); count >= 1."""
+    N = int(n_sectors)
+    nL = Pi.shape[0] // N
+    omega = np.asarray(omega, float)
+    if Pi.shape[0] != N * nL or omega.shape != (Pi.shape[1],) or not np.all(omega > 0):
+        raise ValueError(f"interface modes (N n_L, r) with r positive frequencies expected, got {Pi.shape}, "
+                         f"{omega.shape}")
+    if not 1 <= count <= min(nL, N * Pi.shape[1]):
+        raise ValueError(f"face_shapes must be in [1, {min(nL, N * Pi.shape[1])}], got {count}")
+    blocks = Pi.reshape(N, nL, -1)
+    U, _, _ = np.linalg.svd((blocks / omega**2).transpose(1, 0, 2).reshape(nL, -1), full_matrices=False)
+    L = U[:, :count]
+    L = L * np.where(L[np.abs(L).argmax(axis=0), np.arange(count)] < 0, -1.0, 1.0)
+    P = np.einsum("lf,nlc->nfc", L, blocks)
+    return L, np.concatenate([P, np.roll(P, -1, axis=0)], axis=1)
 
 
 def mistuning_factors(n_sectors: int, scatter: float, seed: int = 0) -> np.ndarray:

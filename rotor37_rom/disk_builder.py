@@ -19,7 +19,7 @@ from rotor37_rom.builder import (Laps, _m_normalise, boundary_node_map, cached_m
                                  mesh_signature)
 from rotor37_rom.cyclic import rotation_z
 from rotor37_rom.disk import (DiskBasis, SectorForces, SectorMatrices, assemble_disk_matrices, disk_node_map,
-                              interface_modes)
+                              face_shapes, interface_modes)
 from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces
 from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, ReducedModel, craig_bampton, modal_damping,
                                    save_reduced_model, select_pairs, selection_weights, simulate_linear_newmark)
@@ -52,6 +52,10 @@ class DiskReductionConfig:
             the boundary fixed added to every sector's basis after the fixed-interface modes (the static load
             correction of component mode synthesis: a load off the boundary set has a local field that neither the
             constraint modes nor the lowest fixed-interface modes carry), its modal derivatives among the candidates.
+        face_shapes: 0 (eq. 61: each sector's nonlinear force acts on its q^n only, the paper's linear coupling), or
+            n_f >= 1: the force acts on the sector's whole field with each face on n_f shapes (``disk.face_shapes``),
+            r_s + 2 n_f force coordinates per sector. The faces' constraint modes carry part of the blade's motion:
+            eq. 61 caps the GNL forced response's accuracy (docs/results.md).
     """
 
     tip_nodes: str = "all"
@@ -66,6 +70,7 @@ class DiskReductionConfig:
     mistuning: tuple | None = None
     seed: int = 0
     load_patch: float = 0.0
+    face_shapes: int = 0
 
     def __post_init__(self):
         if self.tip_nodes not in ("all", "LE"):
@@ -81,6 +86,8 @@ class DiskReductionConfig:
             raise ValueError(f"forces must be 'intrusive', 'quadrature' or 'none', got {self.forces!r}")
         if self.mistuning is not None and (len(self.mistuning) == 0 or min(self.mistuning) <= 0):
             raise ValueError("mistuning: one stiffness factor > 0 per sector")
+        if self.face_shapes < 0:
+            raise ValueError(f"face_shapes must be >= 0 (0: eq. 61's force of q^n only), got {self.face_shapes}")
         if not (np.isfinite(self.load_patch) and 0 <= self.load_patch <= 0.02):
             raise ValueError(f"load_patch must be in [0, 0.02] m, got {self.load_patch}")
 
@@ -125,7 +132,10 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     ops = ops or fem.create_svk_operators(sector)
     tip_rows = [sector.tip_names.index("LE")] if config.tip_nodes == "LE" else list(range(len(sector.tip_names)))
     tip_dofs = np.asarray(sector.tip_dofs)[tip_rows].ravel()
-    metadata = {"config": dataclasses.asdict(config), "mesh": mesh_signature(sector), "source": sector.source,
+    config_meta = dataclasses.asdict(config)
+    if not config.face_shapes:                     # eq. 61's models keep the keys they were cached under
+        config_meta.pop("face_shapes")
+    metadata = {"config": config_meta, "mesh": mesh_signature(sector), "source": sector.source,
                 "version": __version__, "kind": "disk", "n_sectors": N,
                 "damping": "5e-4 on the 3 N lowest modes"}
     if config.load_patch:
@@ -204,10 +214,16 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     blocks = np.arange(N * r_s).reshape(N, r_s)
     forces = None
     if config.forces != "none":
-        H, w, _ = fem.quadrature_gradients(sector, Phi_s.T)
+        Phi_nl, faces = Phi_s, None
+        if config.face_shapes:               # the faces in the force, on a few shapes: [Phi_s, Psi_L L, Psi_R' L]
+            L, faces = face_shapes(Pi, omega_pi, N, config.face_shapes)
+            Phi_nl = np.zeros((n_full, r_s + 2 * L.shape[1]))
+            Phi_nl[:, :r_s] = Phi_s
+            Phi_nl[free, r_s:] = np.hstack([Psi_L @ L, Psi_Rr @ L])
+        H, w, _ = fem.quadrature_gradients(sector, Phi_nl.T)
         exact = QuadratureForces(H, w, *sector.material.lame)
         sector_forces = compute_polynomial_forces(exact) if config.forces == "intrusive" else exact
-        forces = SectorForces(sector_forces, blocks, K.shape[0], scales)
+        forces = SectorForces(sector_forces, blocks, K.shape[0], scales, faces)
         lap("forces")
     sector_nodes = boundary_node_map(sector, tip_dofs)
     Psi_L_full, Psi_Rr_full = np.zeros((n_full, nL)), np.zeros((n_full, nL))

@@ -492,6 +492,8 @@ def save_reduced_model(model: ReducedModel, path: str | Path) -> Path:
     forces, kind = model.forces, "none"
     if forces is not None and hasattr(forces, "blocks"):          # a disk's sector forces (disk.SectorForces)
         arrays.update(sector_blocks=forces.blocks, sector_scales=forces.scales)
+        if forces.faces is not None:
+            arrays["sector_faces"] = forces.faces
         forces, kind = forces.forces, "sector_"
     if isinstance(forces, PolynomialForces):
         arrays.update(forces=kind.replace("none", "") + "polynomial", A=forces.A, B=forces.B)
@@ -537,7 +539,8 @@ def load_reduced_model(path: str | Path, expected_key: str | None = None) -> Red
     if kind.startswith("sector_"):
         from rotor37_rom.disk import SectorForces
 
-        forces = SectorForces(forces, arrays["sector_blocks"], arrays["K"].shape[0], arrays["sector_scales"])
+        forces = SectorForces(forces, arrays["sector_blocks"], arrays["K"].shape[0], arrays["sector_scales"],
+                              arrays["sector_faces"] if "sector_faces" in arrays else None)
     sectors = None
     if "sectors_Pi" in arrays:
         from rotor37_rom.disk import DiskBasis

@@ -4,7 +4,8 @@
   linear transient under a nodal-diameter load (plate, N = 8, N_d = 2: 4 sectors carry it);
 - the disk's CMS frequencies are Rayleigh-Ritz upper bounds of the full cyclic ones and within 1 % for the families
   up to 2B at k = 0, 1, 9, 18;
-- the disk's reduced force equals Phi^T g(Phi q) of the full-order sector forms per sector (eq. 61) to round-off;
+- the disk's reduced force equals Phi^T g(Phi q) of the full-order sector forms per sector (eq. 61) to round-off, and
+  with the faces in the force (face_shapes) the chain rule through the face coordinates;
 - save/load, the travelling load and the performance indicator; bad input;
 - the best approximation of reference fields in the model's span (the basis's share of the indicator's error);
 - a load spread over a patch (the GNL reference's load): its reduced force is the transpose of the field rebuild, and
@@ -18,8 +19,8 @@ import scipy.sparse.linalg as spla
 
 from rotor37_rom import fem
 from rotor37_rom.cyclic import assemble_full_structure, to_global_frame
-from rotor37_rom.disk import (best_approximation, harmonic_field_load, harmonic_node_load, performance_indicator,
-                              repeat_count, sector_harmonics)
+from rotor37_rom.disk import (best_approximation, face_shapes, harmonic_field_load, harmonic_node_load,
+                              performance_indicator, repeat_count, sector_harmonics)
 from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
 from rotor37_rom.reduction import load_reduced_model, save_reduced_model, simulate_newmark
 
@@ -97,6 +98,16 @@ def test_disk_frequencies_bound_the_cyclic_reference(ci_disk, ci_disk_ops, disk_
         np.testing.assert_array_less(rom, ref * 1.01)
 
 
+def _tips_moving(basis, r: int, rng) -> np.ndarray:
+    """A disk state with sectors 0 and 17 moved by random q^n, tip motions of ~2 mm (g ~ 1e-2 K u: no cancellation),
+    the others and the interface modes at rest."""
+    q = np.zeros(r)
+    for n in (0, 17):
+        block = rng.standard_normal(basis.blocks.shape[1])
+        q[basis.blocks[n]] = 2e-3 * block / np.abs(basis.Phi_s @ block).max()
+    return q
+
+
 def test_disk_force_equals_the_sector_forms(ci_disk, ci_disk_ops, disk_model):
     """eq. 61: with the interface modes at rest, the disk model's force on sector n's block is
     Phi_s^T g(Phi_s q^n) of the full-order SVK form, to 1e-10 relative (exact cubic tensors against quadrature of the
@@ -105,10 +116,7 @@ def test_disk_force_equals_the_sector_forms(ci_disk, ci_disk_ops, disk_model):
     basis, forces = model.sectors, model.forces
     K = fem.petsc_to_scipy(fem.assemble_stiffness(ci_disk, ci_disk_ops, clamped=False))
     rng = np.random.default_rng(3)
-    q = np.zeros(model.r)
-    for n in (0, 17):                                     # tip motions of ~2 mm: g ~ 1e-2 K u, no cancellation
-        block = rng.standard_normal(basis.blocks.shape[1])
-        q[basis.blocks[n]] = 2e-3 * block / np.abs(basis.Phi_s @ block).max()
+    q = _tips_moving(basis, model.r, rng)
     g = forces.evaluate(q)[:, 0]
     for n in (0, 17):
         u = basis.Phi_s @ q[basis.blocks[n]]
@@ -116,6 +124,49 @@ def test_disk_force_equals_the_sector_forms(ci_disk, ci_disk_ops, disk_model):
         np.testing.assert_allclose(g[basis.blocks[n]], ref, atol=1e-10 * np.abs(ref).max(), rtol=0)
     assert np.all(g[basis.blocks[5]] == 0.0)              # a sector at rest
     assert np.all(g[basis.blocks.size:] == 0.0)
+
+
+def test_disk_force_with_the_faces(tmp_path, ci_disk, ci_disk_ops):
+    """face_shapes = n_f: each sector's force acts on its whole field with the faces on n_f shapes L, u^n =
+    Phi_s q^n + Psi_L L a_L^n + Psi_R' L a_R^n (a = L^T u_L): the disk force equals, sector by sector, the
+    full-order SVK form's force on that field projected back (q^n rows by Phi_s^T, the interface rows by the faces'
+    chain rule), to 1e-10 relative (exact tensors against quadrature of the same polynomial: round-off); its
+    Jacobian passes the Taylor test (remainder ratio 4 when the step halves: g is a cubic polynomial); the model
+    saves and reloads with the same force."""
+    config = DiskReductionConfig(tip_nodes="LE", r_c=8, r_md=4, criterion="MI2b", r_cyclic=96, face_shapes=4)
+    model, report = build_disk_model(ci_disk, config, ops=ci_disk_ops)
+    basis, forces = model.sectors, model.forces
+    N, nL = basis.n_sectors, basis.Psi_L.shape[1]
+    L, faces = face_shapes(basis.Pi, report["interface_omega"], N, 4)
+    np.testing.assert_allclose(faces, forces.faces, rtol=0, atol=1e-14)
+    K = fem.petsc_to_scipy(fem.assemble_stiffness(ci_disk, ci_disk_ops, clamped=False))
+    rng = np.random.default_rng(6)
+    q = _tips_moving(basis, model.r, rng)
+    eta = rng.standard_normal(basis.Pi.shape[1])
+    q[basis.blocks.size:] = 5e-4 * eta / np.abs(basis.Pi @ eta).max()  # faces moving ~0.5 mm
+    g = forces.evaluate(q)[:, 0]
+    uL = (basis.Pi @ q[basis.blocks.size:]).reshape(N, nL)
+    ref_eta = np.zeros(basis.Pi.shape[1])
+    for n in range(N):
+        a_L, a_R = L.T @ uL[n], L.T @ uL[(n + 1) % N]
+        u = basis.Phi_s @ q[basis.blocks[n]] + basis.Psi_L @ (L @ a_L) + basis.Psi_Rr @ (L @ a_R)
+        f_int, Ku = fem.evaluate_forces(ci_disk, ci_disk_ops, u[None], "f_int")[0], K @ u
+        gn = f_int - Ku
+        ref_eta += faces[n, :4].T @ ((basis.Psi_L @ L).T @ gn) + faces[n, 4:].T @ ((basis.Psi_Rr @ L).T @ gn)
+        ref = basis.Phi_s.T @ gn
+        # round-off of the reference: f_int - K u cancels where the faces' constraint modes move the sector (Phi_s^T
+        # K Psi_L = 0 in exact arithmetic): a sum of n = 23,700 terms is within n eps = 2.6e-12 of sum |terms|
+        # (measured 4e-13 on a sector moved by its faces only, where the force itself is 1e-5 of sum |terms|)
+        noise = 1e-11 * (np.abs(basis.Phi_s).T @ (np.abs(f_int) + np.abs(Ku))).max()
+        np.testing.assert_allclose(g[basis.blocks[n]], ref, atol=1e-10 * np.abs(ref).max() + noise, rtol=0)
+    np.testing.assert_allclose(g[basis.blocks.size:], ref_eta, atol=1e-10 * np.abs(ref_eta).max(), rtol=0)
+    d = rng.standard_normal(model.r) * np.abs(q).max()
+    J = forces.jacobian(q)
+    rem = [np.linalg.norm(forces.evaluate(q + e * d)[:, 0] - g - e * (J @ d)) for e in (1e-2, 5e-3, 2.5e-3)]
+    for a, b in zip(rem, rem[1:]):
+        assert 3.5 < a / b < 4.5
+    back = load_reduced_model(save_reduced_model(model, tmp_path / "faces.npz"))
+    np.testing.assert_array_equal(back.forces.evaluate(q), forces.evaluate(q))
 
 
 def test_disk_model_save_load_and_response(tmp_path, disk_model):
@@ -238,6 +289,10 @@ def test_disk_bad_input(ci_disk, disk_model):
                                                       forces="none"))
     with pytest.raises(ValueError, match="tip_nodes"):
         DiskReductionConfig(tip_nodes="mid")
+    with pytest.raises(ValueError, match="face_shapes"):
+        DiskReductionConfig(face_shapes=-1)
+    with pytest.raises(ValueError, match="face_shapes must be in"):
+        face_shapes(model.sectors.Pi, np.ones(model.sectors.Pi.shape[1]), 36, 10**6)
 
 
 def test_disk_stress_of_a_tuned_state(ci_disk, disk_model):
