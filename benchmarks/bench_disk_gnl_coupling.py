@@ -39,7 +39,7 @@ from _common import write_results  # noqa: E402
 from bench_disk_forced import AMPLITUDE, reference, sector_load  # noqa: E402
 
 from rotor37_rom import fem  # noqa: E402
-from rotor37_rom.disk import best_approximation, face_shapes, performance_indicator  # noqa: E402
+from rotor37_rom.disk import best_approximation, face_shapes, performance_indicator, travelling_load  # noqa: E402
 from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
 from rotor37_rom.fem.periodic import RepeatingSectors  # noqa: E402
 from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces  # noqa: E402
@@ -59,24 +59,6 @@ class _Mapped:
 
     def jacobian(self, q):
         return self.G.T @ self.forces.jacobian(self.G @ np.asarray(q, float)) @ self.G
-
-
-class _Leading:
-    """The nonlinear force of the leading ``n`` coordinates of q only, zero elsewhere (eq. 61 on the tied sector)."""
-
-    def __init__(self, forces, r: int, n: int):
-        self.forces, self.r, self.n = forces, r, n
-
-    def evaluate(self, Q):
-        Q = np.asarray(Q, float).reshape(self.r, -1)
-        out = np.zeros_like(Q)
-        out[:self.n] = self.forces.evaluate(Q[:self.n])
-        return out
-
-    def jacobian(self, q):
-        J = np.zeros((self.r, self.r))
-        J[:self.n, :self.n] = self.forces.jacobian(np.asarray(q, float)[:self.n])
-        return J
 
 
 def tied_basis(model) -> tuple[np.ndarray, int, np.ndarray]:
@@ -150,19 +132,15 @@ def main(argv=None) -> int:
         model, _ = build_disk_model(sector, config, ops=ops, cache_dir=out / "models")
         B, r_s, Pi0 = tied_basis(model)
         K0, M0 = B.T @ (K_s @ B), B.T @ (M_s @ B)
-        P = B.T @ f
-
-        def load(t, P=P):
-            envelope = 1.0 if t >= RAMP * T else 0.5 * (1.0 - np.cos(np.pi * t / (RAMP * T)))
-            return P * (AMPLITUDE * envelope * np.sin(OMEGA * t))
+        load = travelling_load((B.T @ f)[:, None], AMPLITUDE, OMEGA, 0, RAMP * T)   # as the disk's, one sector
         t0 = time.perf_counter()
         variants = []
         if not args.faces_only:
             H, w, _ = fem.quadrature_gradients(sector, B.T)
             lame = sector.material.lame
             whole = compute_polynomial_forces(QuadratureForces(H, w, *lame))
-            leading = _Leading(compute_polynomial_forces(QuadratureForces(np.ascontiguousarray(H[:, :r_s]), w,
-                                                                          *lame)), B.shape[1], r_s)
+            leading = _Mapped(compute_polynomial_forces(QuadratureForces(np.ascontiguousarray(H[:, :r_s]), w, *lame)),
+                              np.eye(B.shape[1])[:r_s])          # q^n's coordinates only
             del H
             variants = [("whole sector field", whole), ("eq. 61", leading), ("linear", None)]
         variants += [(f"faces on {n_f} shapes", face_shape_force(sector, model, r_s, Pi0, n_f))

@@ -31,7 +31,7 @@ from rotor37_rom.cyclic import harmonic_indices
 __all__ = ["SectorForces", "SectorMatrices", "DiskBasis", "HarmonicBlocks", "interface_modes", "assemble_disk_matrices",
            "disk_node_map", "sector_harmonics", "harmonic_node_load", "harmonic_field_load", "repeat_count",
            "performance_indicator", "travelling_wave_departure", "INDICATOR_CRITERIA", "mistuning_factors",
-           "best_approximation", "face_shapes"]
+           "best_approximation", "face_shapes", "travelling_load"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -452,7 +452,7 @@ def harmonic_node_load(nodes, r: int, amplitude: float, omega: float, n_diameter
         raise ValueError(f"component must be 0, 1 or 2 (x, y, z), got {component}")
     P = np.zeros((r, N))
     P[[nodes.q_index[nodes.row(name, s), component] for s in range(N)], np.arange(N)] = 1.0
-    return _travelling_load(P, amplitude, omega, n_diameters, ramp)
+    return travelling_load(P, amplitude, omega, n_diameters, ramp)
 
 
 def harmonic_field_load(basis: DiskBasis, f: np.ndarray, amplitude: float, omega: float, n_diameters: int,
@@ -465,10 +465,10 @@ def harmonic_field_load(basis: DiskBasis, f: np.ndarray, amplitude: float, omega
     if np.shape(f) != (basis.Phi_s.shape[0],):
         raise ValueError(f"the load vector must have the sector's {basis.Phi_s.shape[0]} DOFs, got {np.shape(f)}")
     P = np.stack([basis.project(np.asarray(f, dtype=float), s) for s in range(N)], axis=1)
-    return _travelling_load(P, amplitude, omega, n_diameters, ramp)
+    return travelling_load(P, amplitude, omega, n_diameters, ramp)
 
 
-def _travelling_load(P: np.ndarray, amplitude: float, omega: float, n_diameters: int, ramp: float):
+def travelling_load(P: np.ndarray, amplitude: float, omega: float, n_diameters: int, ramp: float):
     """t -> P (A e(t) sin(omega t - s N_d 2 pi / N))_s: P (r, N) the reduced force of a unit load on each sector."""
     if not ramp >= 0:
         raise ValueError(f"ramp must be >= 0 s, got {ramp}")
