@@ -484,6 +484,12 @@ def travelling_load(P: np.ndarray, amplitude: float, omega: float, n_diameters: 
 INDICATOR_CRITERIA = ("loaded node", "tip nodes", "field", "strain energy")
 
 
+def _norms(A, X: np.ndarray) -> np.ndarray:
+    """The A-norms of the fields X (..., n_dofs), one per leading index, flattened."""
+    X2 = X.reshape(-1, X.shape[-1])
+    return np.sqrt(np.maximum(np.einsum("ij,ij->i", X2, (A @ X2.T).T), 0.0))
+
+
 def best_approximation(basis: DiskBasis, field_ref: np.ndarray, K, M) -> dict:
     """The smallest errors that any state of a disk model can have against reference fields: the lower bounds of
     ``performance_indicator``'s global criteria, which tell the basis's share of a reduced model's error from the
@@ -517,8 +523,7 @@ def best_approximation(basis: DiskBasis, field_ref: np.ndarray, K, M) -> dict:
             U = field_ref[:, n, :].T
             E = U - B @ (T @ (T.T @ (AB.T @ U)))
             E -= B @ (T @ (T.T @ (AB.T @ E)))           # once more: the projection's round-off projected out
-            norm = lambda X: np.sqrt(np.maximum(np.einsum("ij,ij->j", X, np.asarray(A @ X)), 0.0))  # noqa: E731
-            worst, ref_max = max(worst, norm(E).max()), max(ref_max, norm(U).max())
+            worst, ref_max = max(worst, _norms(A, E.T).max()), max(ref_max, _norms(A, U.T).max())
         out[name] = float(worst / max(ref_max, 1e-300))
     return out
 
@@ -548,12 +553,8 @@ def performance_indicator(tip_ref: np.ndarray, tip_rom: np.ndarray, field_ref: n
     e_loaded = np.max(np.abs(d_rom - d_ref).max(axis=0) / np.maximum(np.abs(d_ref).max(axis=0), 1e-300))
     e_tip = np.linalg.norm(tip_rom - tip_ref) / max(np.linalg.norm(tip_ref), 1e-300)
 
-    def norms(A, X):
-        X2 = X.reshape(-1, X.shape[-1])
-        return np.sqrt(np.maximum(np.einsum("ij,ij->i", X2, (A @ X2.T).T), 0.0))
-
     err = field_rom - field_ref
-    e_field = norms(M, err).max() / max(norms(M, field_ref).max(), 1e-300)
-    e_energy = norms(K, err).max() / max(norms(K, field_ref).max(), 1e-300)
+    e_field = _norms(M, err).max() / max(_norms(M, field_ref).max(), 1e-300)
+    e_energy = _norms(K, err).max() / max(_norms(K, field_ref).max(), 1e-300)
     errors = dict(zip(INDICATOR_CRITERIA, map(float, (e_loaded, e_tip, e_field, e_energy))))
     return {"I": float(np.mean([max(0.0, 1.0 - e) for e in errors.values()])), "errors": errors}
