@@ -42,6 +42,18 @@ from rotor37_rom.sweep import SweepSpec, last_revolution_max, load_sweep, run_sw
 MAP_SPEEDS, MAP_REVOLUTIONS = np.linspace(1200.0, 1650.0, 90), 200.0     # the issue's full-disk map
 
 
+def contact_disk_model(preset: str):
+    """(sector, model, seconds): the disk model of the contact maps (every sector's 8 tip nodes, r_c = 10, r_MD = 10
+    by MI 2b, r_cyclic = 144), cached in results/cache."""
+    t0 = time.perf_counter()
+    sector = fem.create_disk_sector(preset=preset)
+    model, _ = build_disk_model(sector, DiskReductionConfig(tip_nodes="all", r_c=10, r_md=10, criterion="MI2b",
+                                                            r_cyclic=144), cache_dir=Path("results/cache"))
+    offline = time.perf_counter() - t0
+    print(f"disk model r = {model.r} {model.sizes}, {len(model.nodes)} tip nodes; {offline:.0f} s", flush=True)
+    return sector, model, offline
+
+
 def cost_per_sim_step(scheme, casing, speeds, steps=2000) -> tuple[float, object]:
     """Seconds per simulation-step of a batch run with contact (and the run, for its states)."""
     t0 = time.perf_counter()
@@ -69,12 +81,7 @@ def main(argv=None) -> int:
         return 2
     cap = 2 * np.pi * 1e3 * args.cap
     casing = Casing(mu=args.mu, direction="cone")
-    t0 = time.perf_counter()
-    sector = fem.create_disk_sector(preset=args.preset)
-    model, _ = build_disk_model(sector, DiskReductionConfig(tip_nodes="all", r_c=10, r_md=10, criterion="MI2b",
-                                                            r_cyclic=144), cache_dir=Path("results/cache"))
-    offline = time.perf_counter() - t0
-    print(f"disk model r = {model.r} {model.sizes}, {len(model.nodes)} tip nodes; {offline:.0f} s", flush=True)
+    _, model, offline = contact_disk_model(args.preset)
     if args.gnl_throughput:
         scheme = CentralDifference(model, nonlinear=True, h=1.15e-6, frequency_cap=cap)
         speeds = np.linspace(1200.0, 1650.0, args.gnl_throughput)

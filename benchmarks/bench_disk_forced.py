@@ -10,7 +10,8 @@ same step, so the error is the reduction's. Each pair is scored by the performan
 (``disk.performance_indicator``: loaded node, tip nodes, field and strain-energy criteria), next to the smallest
 field and strain-energy errors any state of the model could have (``disk.best_approximation``: the reference's
 snapshots projected on the model's sector fields), which separates the basis's share of the error from that of the
-reduced dynamics.
+reduced dynamics. Each row keeps the error histories behind its I (``disk.indicator_histories``), which
+``benchmarks/plot_disk_indicator.py`` charts with I against r_MD.
 
 A 400 N point force on the ci mesh's thin leading edge makes the GNL reference collapse locally (St. Venant-Kirchhoff
 softens in compression; a point force on a continuum has no finite limit): ``--patch MM`` spreads the same 400 N as
@@ -40,7 +41,7 @@ from _common import write_results  # noqa: E402
 
 from rotor37_rom import fem  # noqa: E402
 from rotor37_rom.disk import (best_approximation, harmonic_field_load, harmonic_node_load,  # noqa: E402
-                               performance_indicator, repeat_count)
+                               indicator_histories, performance_indicator, repeat_count)
 from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
 from rotor37_rom.fem.periodic import RepeatingSectors, sector_harmonic_load, solve_repeating_newmark  # noqa: E402
 from rotor37_rom.reduction import CRITERIA, simulate_newmark  # noqa: E402
@@ -225,6 +226,8 @@ def main(argv=None) -> int:
             score = performance_indicator(ref["tip"], rom["tip"], ref["fields"], rom["fields"], K_s, M_s,
                                           loaded=(sector.tip_names.index("LE"), 2))
             best = best_approximation(model.sectors, ref["fields"], K_s, M_s)   # the basis's share of the error
+            hist = indicator_histories(ref["tip"], rom["tip"], ref["fields"], rom["fields"], K_s, M_s,
+                                       loaded=(sector.tip_names.index("LE"), 2))
             row = {"ramp_periods": args.ramp, "patch_mm": args.patch, "load_correction": correction,
                    "face_shapes": model.forces.faces.shape[1] // 2 if model.forces is not None
                    and model.forces.faces is not None else 0,
@@ -236,7 +239,10 @@ def main(argv=None) -> int:
                    "rom_us_per_step": 1e6 * rom["wall"] / rom["steps"], "build_s": build,
                    "build_cached": bool(report.get("cached")), "fom_wall_s": float(ref["wall"]),
                    "max_le_z_mm": 1e3 * float(np.abs(ref["tip"][:, :, sector.tip_names.index("LE"), 2]).max()),
-                   "rom_max_le_z_mm": 1e3 * float(np.abs(rom["tip"][:, :, sector.tip_names.index("LE"), 2]).max())}
+                   "rom_max_le_z_mm": 1e3 * float(np.abs(rom["tip"][:, :, sector.tip_names.index("LE"), 2]).max()),
+                   "histories": {"t_periods": (np.arange(ref["tip"].shape[0]) / args.steps_per_period).tolist(),
+                                 "snapshot_periods": (np.asarray(ref["snapshots"]) / args.steps_per_period).tolist(),
+                                 **{k: v.tolist() for k, v in hist.items()}}}
             rows.append(row)
             save()
             print(f"{interface:7s} {'S ' if correction else ''}{criterion:6s} r_md {r_md:3d} r {model.r:5d}  "

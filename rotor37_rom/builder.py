@@ -303,16 +303,25 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
 
 
 def hyper_reduce(sector, model: ReducedModel, Q_train: np.ndarray, tol: float = 1e-3, level: str = "point",
-                 label: str = "") -> tuple[ReducedModel, dict]:
+                 label: str = "", max_columns: int = 256) -> tuple[ReducedModel, dict]:
     """The model with its nonlinear forces replaced by a hyper-reduced quadrature trained on the states Q_train
     (r, n): cells (ECSW) or single points (empirical cubature), see ``ecsw.train_ecsw``. Train on the states the
     model will visit (e.g. those of contact runs): smooth lifted modes miss the local tip deformations of contact.
 
-    Returns (model, report): report has the exact quadrature forces ('exact'), the EcswResult ('result') and the
-    training time (s). The model's metadata records the hyper-reduction (level, tol, points, a hash of Q_train and
-    ``label``), so sweeps cached under its key are not mixed up with the exact model's.
+    A disk model (``model.sectors``, forces ``disk.SectorForces``): the sector's force is hyper-reduced, trained on
+    the sectors' coordinates of the states as columns (``SectorForces.sector_states``; at most ``max_columns`` of
+    them, ``ecsw.spread_columns``), on the sector's fields (``disk.sector_force_basis``, the faces included when the
+    model's force has them); every sector then evaluates the same points. ``sector`` is the disk sector.
+
+    Returns (model, report): report has the exact quadrature forces ('exact'), the EcswResult ('result'), the
+    training columns ('columns_trained') and the training time (s). The model's metadata records the
+    hyper-reduction (level, tol, points, a hash of Q_train and ``label``), so sweeps cached under its key are not
+    mixed up with the exact model's.
     """
-    if model.Phi is None:
+    disk = model.sectors is not None
+    if disk and not hasattr(model.forces, "sector_states"):
+        raise ValueError("hyper_reduce: this disk model has no nonlinear forces (built with forces='none')")
+    if not disk and model.Phi is None:
         raise ValueError("hyper_reduce needs the model's basis: build it with keep_basis=True")
     if model.metadata.get("mesh") not in (None, mesh_signature(sector)):
         raise ValueError("hyper_reduce: the sector is not the mesh the model was built on (mesh signatures differ)")
@@ -320,14 +329,24 @@ def hyper_reduce(sector, model: ReducedModel, Q_train: np.ndarray, tol: float = 
     if Q_train.ndim != 2 or Q_train.shape[0] != model.r or not np.all(np.isfinite(Q_train)):
         raise ValueError(f"Q_train must be finite with shape (r = {model.r}, n), got {Q_train.shape}")
     t0 = time.perf_counter()
-    H, w, cells = fem.quadrature_gradients(sector, model.Phi.T)
+    if disk:
+        from rotor37_rom.disk import sector_force_basis
+        from rotor37_rom.ecsw import spread_columns
+
+        fields = sector_force_basis(model.sectors, model.forces.faces)
+        X = model.forces.sector_states(Q_train)
+        X = X[:, spread_columns(X, max_columns)]
+    else:
+        fields, X = model.Phi, Q_train
+    H, w, cells = fem.quadrature_gradients(sector, fields.T)
     exact = QuadratureForces(H, w, *sector.material.lame)
-    result = train_ecsw(exact, cells, Q_train, tol=tol, level=level)
+    result = train_ecsw(exact, cells, X, tol=tol, level=level)
     info = {"level": level, "tol": tol, "columns": int(result.cells.size), "points": result.n_points,
             "training": hashlib.sha256(np.ascontiguousarray(Q_train).tobytes()).hexdigest()[:16], "label": label}
-    reduced = dataclasses.replace(model, forces=result.forces,
-                                  metadata={**model.metadata, "hyper_reduction": info})
-    return reduced, {"exact": exact, "result": result, "seconds": time.perf_counter() - t0, **info}
+    forces = dataclasses.replace(model.forces, forces=result.forces) if disk else result.forces
+    reduced = dataclasses.replace(model, forces=forces, metadata={**model.metadata, "hyper_reduction": info})
+    return reduced, {"exact": exact, "result": result, "columns_trained": X, "seconds": time.perf_counter() - t0,
+                     **info}
 
 
 def clearance_consumption_study(sector, mode: str = "1B", zeta: float = 1e-3, n_levels: int = 10,

@@ -6,7 +6,8 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["plot_clearance_consumption", "plot_md_weights", "plot_interaction_map", "plot_nfrc", "plot_time_history",
-           "plot_speed_accuracy", "plot_indicator_vs_rmd", "plot_safe_diagram"]
+           "plot_speed_accuracy", "plot_indicator_vs_rmd", "plot_safe_diagram", "plot_disk_indicator",
+           "plot_error_histories"]
 
 
 def _pyplot():
@@ -187,6 +188,51 @@ def plot_indicator_vs_rmd(rows: list, path: str | Path, title: str = "") -> Path
     ax.set_title(title)
     ax.grid(alpha=0.3, which="both")
     ax.legend()
+    return _save(fig, path)
+
+
+def plot_disk_indicator(panels: dict, path: str | Path, paper: dict | None = None) -> Path:
+    """The disk's performance indicator I against r_MD (Figs. 17, 18, 20-22 analogues), one panel per title in
+    ``panels``: {title: {series label: [(r_md, I), ...]}} (a one-point series is a marker); ``paper``: {criterion:
+    I} drawn as dotted levels on the last panel."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, len(panels), figsize=(6.2 * len(panels), 4.4), squeeze=False)
+    for ax, (title, series) in zip(axes[0], panels.items()):
+        for k, (label, pts) in enumerate(series.items()):
+            pts = sorted(pts)
+            style = "o-" if len(pts) > 1 else "s"
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], style, color=f"C{k % 10}", ms=5, label=label)
+        ax.set_xlabel("modal derivatives per sector r_MD")
+        ax.set_ylabel("performance indicator I")
+        ax.set_title(title, fontsize=9)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="lower right")
+    for value in (paper or {}).values():
+        axes[0][-1].axhline(value, color="0.5", ls=":", lw=0.8)
+    if paper:
+        axes[0][-1].text(0.02, 0.5, "dotted: the paper's " + ", ".join(f"{k} {v:g}" for k, v in paper.items()),
+                         transform=axes[0][-1].transAxes, fontsize=7, color="0.3")
+    return _save(fig, path)
+
+
+def plot_error_histories(histories: dict, path: str | Path, title: str = "") -> Path:
+    """The indicator's four criteria over time for several models: {label: row['histories'] of
+    bench_disk_forced} (loaded node and tip nodes at every step, field and strain energy at the snapshots)."""
+    plt = _pyplot()
+    names = ("loaded node", "tip nodes", "field", "strain energy")
+    fig, axes = plt.subplots(2, 2, figsize=(11, 6.4), sharex=True)
+    for k, (label, h) in enumerate(histories.items()):
+        for ax, name in zip(axes.ravel(), names):
+            t = h["t_periods"] if len(h[name]) == len(h["t_periods"]) else h["snapshot_periods"]
+            ax.plot(t, h[name], lw=0.8, color=f"C{k % 10}", label=label)
+    for ax, name in zip(axes.ravel(), names):
+        ax.set_title(name, fontsize=9)
+        ax.set_ylabel("relative error")
+        ax.grid(alpha=0.3)
+    for ax in axes[1]:
+        ax.set_xlabel("time (periods of the load)")
+    axes[0][0].legend(fontsize=7)
+    fig.suptitle(title, fontsize=10)
     return _save(fig, path)
 
 

@@ -31,7 +31,8 @@ from rotor37_rom.cyclic import harmonic_indices
 __all__ = ["SectorForces", "SectorMatrices", "DiskBasis", "HarmonicBlocks", "interface_modes", "assemble_disk_matrices",
            "disk_node_map", "sector_harmonics", "harmonic_node_load", "harmonic_field_load", "repeat_count",
            "performance_indicator", "travelling_wave_departure", "INDICATOR_CRITERIA", "mistuning_factors",
-           "best_approximation", "face_shapes", "travelling_load"]
+           "best_approximation", "face_shapes", "travelling_load", "sector_force_basis",
+           "indicator_histories"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -65,14 +66,21 @@ class SectorForces:
             return X
         return np.concatenate([X, np.einsum("nfc,cp->nfp", self.faces, Q[self.blocks.size:])], axis=1)
 
+    def sector_states(self, Q: np.ndarray) -> np.ndarray:
+        """(m, N P): the coordinates each sector's force acts on for the disk states Q (r, P), the sectors as
+        columns (sector-major: column n P + p is sector n of state p), m = r_s (+ 2 n_f with faces)."""
+        Q = np.asarray(Q, float).reshape(self.r, -1)
+        X = self._inputs(Q)
+        return X.transpose(1, 0, 2).reshape(X.shape[1], -1)
+
     def evaluate(self, Q: np.ndarray) -> np.ndarray:
         """g~(q) for Q (r,) or (r, P): (r, P); without ``faces`` the entries of the interface modes are 0."""
         Q = np.asarray(Q, float).reshape(self.r, -1)
         N, rs = self.blocks.shape
         P = Q.shape[1]
-        X = self._inputs(Q)
-        m = X.shape[1]
-        g = self.forces.evaluate(X.transpose(1, 0, 2).reshape(m, N * P)).reshape(m, N, P) * self.scales[None, :, None]
+        X = self.sector_states(Q)
+        m = X.shape[0]
+        g = self.forces.evaluate(X).reshape(m, N, P) * self.scales[None, :, None]
         out = np.zeros((self.r, P))
         out[self.blocks.ravel()] = g[:rs].transpose(1, 0, 2).reshape(N * rs, P)
         if self.faces is not None:
@@ -369,6 +377,22 @@ class HarmonicBlocks:
         return self.backward(out)
 
 
+def sector_force_basis(basis: DiskBasis, faces: np.ndarray | None = None) -> np.ndarray:
+    """The fields a sector's nonlinear force acts on (n_dofs, m), in the order of ``SectorForces.sector_states``:
+    Phi_s, and with ``faces`` (``SectorForces.faces``) also Psi_L L and Psi_R' L. The face shapes L come back from
+    faces[n, :n_f] = L^T Pi_n (every sector n) by least squares: L lies in the span of the faces' motions in the
+    interface modes (``face_shapes`` takes it from their singular vectors), where that solution is exact."""
+    if faces is None:
+        return basis.Phi_s
+    N, nL = basis.n_sectors, basis.Psi_L.shape[1]
+    n_f = faces.shape[1] // 2
+    if faces.shape != (N, 2 * n_f, basis.Pi.shape[1]):
+        raise ValueError(f"faces must be (N = {N}, 2 n_f, r_cyclic = {basis.Pi.shape[1]}), got {faces.shape}")
+    motions = basis.Pi.reshape(N, nL, -1).transpose(1, 0, 2).reshape(nL, -1)     # [Pi_0 ... Pi_(N-1)]
+    L = np.linalg.lstsq(motions.T, faces[:, :n_f].transpose(0, 2, 1).reshape(-1, n_f), rcond=None)[0]
+    return np.hstack([basis.Phi_s, basis.Psi_L @ L, basis.Psi_Rr @ L])
+
+
 def face_shapes(Pi: np.ndarray, omega: np.ndarray, n_sectors: int, count: int) -> tuple[np.ndarray, np.ndarray]:
     """Face shapes for the nonlinear force (``SectorForces.faces``) and every sector's face coordinates.
 
@@ -558,3 +582,31 @@ def performance_indicator(tip_ref: np.ndarray, tip_rom: np.ndarray, field_ref: n
     e_energy = _norms(K, err).max() / max(_norms(K, field_ref).max(), 1e-300)
     errors = dict(zip(INDICATOR_CRITERIA, map(float, (e_loaded, e_tip, e_field, e_energy))))
     return {"I": float(np.mean([max(0.0, 1.0 - e) for e in errors.values()])), "errors": errors}
+
+
+def indicator_histories(tip_ref: np.ndarray, tip_rom: np.ndarray, field_ref: np.ndarray, field_rom: np.ndarray,
+                        K, M, loaded: tuple = (0, 2)) -> dict:
+    """The error time histories behind ``performance_indicator`` (same arguments), each relative to the same
+    reference scale as its criterion, so that the criterion is the history's largest value (loaded node, field,
+    strain energy) or its RMS (tip nodes):
+
+    - 'loaded node' (n_t,): |u - u_ref| of the loaded DOF, the largest over sectors of that sector's error over the
+      sector's max_t |u_ref|;
+    - 'tip nodes' (n_t,): || u - u_ref || over tip nodes, components and sectors at each instant over the RMS over
+      instants of || u_ref ||;
+    - 'field', 'strain energy' (n_snap,): the M- and K-norm of the error per snapshot (largest over sectors) over the
+      largest of the reference's."""
+    tip_ref, tip_rom = np.asarray(tip_ref, float), np.asarray(tip_rom, float)
+    field_ref, field_rom = np.asarray(field_ref, float), np.asarray(field_rom, float)
+    node, comp = loaded
+    d_ref, d_rom = tip_ref[:, :, node, comp], tip_rom[:, :, node, comp]
+    loaded_err = (np.abs(d_rom - d_ref) / np.maximum(np.abs(d_ref).max(axis=0), 1e-300)).max(axis=1)
+    n_t = tip_ref.shape[0]
+    per_instant = np.linalg.norm((tip_rom - tip_ref).reshape(n_t, -1), axis=1)
+    tip_err = per_instant / max(np.linalg.norm(tip_ref) / np.sqrt(n_t), 1e-300)
+    out = {"loaded node": loaded_err, "tip nodes": tip_err}
+    n_snap, n_s = field_ref.shape[:2]
+    for name, A in (("field", M), ("strain energy", K)):
+        e = _norms(A, field_rom - field_ref).reshape(n_snap, n_s).max(axis=1)
+        out[name] = e / max(_norms(A, field_ref).max(), 1e-300)
+    return out

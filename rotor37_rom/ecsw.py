@@ -15,7 +15,7 @@ import scipy.optimize
 
 from rotor37_rom.nonlinear_forces import QuadratureForces
 
-__all__ = ["EcswResult", "cell_contributions", "train_ecsw", "state_errors", "trajectory_states"]
+__all__ = ["EcswResult", "cell_contributions", "train_ecsw", "state_errors", "trajectory_states", "spread_columns"]
 
 
 def cell_contributions(forces: QuadratureForces, cells: np.ndarray, Q: np.ndarray,
@@ -69,6 +69,23 @@ def trajectory_states(runs, boundary_rows, n_per_run: int = 25, n_largest: int =
         raise ValueError("trajectory_states: no finite recorded state in the runs")
     r = train[0].shape[0]
     return np.hstack(train), (np.hstack(held) if held else np.zeros((r, 0)))
+
+
+def spread_columns(X: np.ndarray, n: int) -> np.ndarray:
+    """Indices of at most n nonzero columns of X to train on: the n // 2 of largest norm and the rest evenly spread
+    over the others in their order (all nonzero columns if there are no more than n). For the columns of many
+    similar states (a disk's sectors, each state's 36 of them), whose full set would make the training matrix
+    n_columns x r rows by n_points."""
+    if n < 1:
+        raise ValueError(f"n must be >= 1, got {n}")
+    norms = np.linalg.norm(X, axis=0)
+    nonzero = np.flatnonzero(norms > 0)
+    if nonzero.size <= n:
+        return nonzero
+    largest = nonzero[np.argsort(-norms[nonzero], kind="stable")[:n // 2]]
+    rest = np.setdiff1d(nonzero, largest)
+    spread = rest[np.linspace(0, rest.size - 1, n - largest.size).round().astype(int)]
+    return np.union1d(largest, spread)
 
 
 @dataclasses.dataclass(frozen=True)

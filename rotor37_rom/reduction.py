@@ -464,10 +464,14 @@ class ReducedModel:
 def with_force_precision(model: ReducedModel, precision: str) -> ReducedModel:
     """The model with its quadrature forces (exact or hyper-reduced) evaluated in ``precision``, 'double' or
     'single'; the key changes with it (single: metadata 'force_precision'), so cached sweeps are not mixed up."""
-    if not isinstance(model.forces, QuadratureForces):
+    sector = hasattr(model.forces, "blocks")                  # a disk's sector forces (disk.SectorForces)
+    inner = model.forces.forces if sector else model.forces
+    if not isinstance(inner, QuadratureForces):
         raise ValueError("force precision applies to quadrature forces (exact or hyper-reduced), not to "
-                         f"{type(model.forces).__name__}")
-    forces = model.forces.with_precision(precision)          # checks the name
+                         f"{type(inner).__name__}")
+    forces = inner.with_precision(precision)                 # checks the name
+    if sector:
+        forces = dataclasses.replace(model.forces, forces=forces)
     metadata = {k: v for k, v in model.metadata.items() if k != "force_precision"}
     if precision != "double":
         metadata["force_precision"] = precision

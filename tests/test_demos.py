@@ -69,7 +69,7 @@ def test_contact_map_command_line_is_the_config(contact_map, tmp_path):
     ({"disk": True, "mistuning": -0.01}, "--mistuning"), ({"disk": True, "mistuning": 1.0}, "--mistuning"),
     ({"mistuning": 0.02}, "--mistuning"), ({"disk": True, "sector": 36}, "--sector"), ({"sector": 1}, "--sector"),
     ({"disk": True, "sector": -1}, "--sector"), ({"disk": True, "r_cyclic": 0}, "--r-cyclic"),
-    ({"disk": True, "cubature": 1e-4}, "--cubature"), ({"stress": True}, "--stress"),
+    ({"disk": True, "cubature": 1.0}, "--cubature"), ({"stress": True}, "--stress"),
     ({"cubature_speeds": (1300.0,)}, "--cubature-speeds"),
     ({"cubature": 1e-4, "cubature_speeds": ()}, "--cubature-speeds"),
     ({"cubature": 1e-4, "cubature_speeds": (1300.0, -1.0)}, "--cubature-speeds"),

@@ -6,7 +6,9 @@
   time by j (2 pi / 36) / Omega (the casing is fixed and the blades identical: the steady response is a travelling
   wave), no penetration is left, lambda >= 0 and friction opposes the sliding; GNL off, the discrete energy balance
   holds to round-off;
-- mistuning factors: mean 1, the asked standard deviation, positive, seeded; bad input.
+- mistuning factors: mean 1, the asked standard deviation, positive, seeded; bad input;
+- point cubature of the sector force trained on the sectors of a GNL contact run (the blade's hyper-reduction with
+  the sectors as columns): its force on another speed's run, float32, save/load, and the run it gives.
 """
 from __future__ import annotations
 
@@ -18,7 +20,7 @@ import pytest
 from rotor37_rom.casing import Casing
 from rotor37_rom.disk import assemble_disk_matrices, mistuning_factors, travelling_wave_departure
 from rotor37_rom.integrator import CentralDifference, simulate
-from rotor37_rom.reduction import modal_damping
+from rotor37_rom.reduction import load_reduced_model, modal_damping, save_reduced_model, with_force_precision
 
 pytestmark = pytest.mark.slow
 
@@ -144,3 +146,51 @@ def test_contact_map_takes_a_disk_model(disk_model, tmp_path):
     assert 4 * result.linear_resonance > result.eigenfrequencies[0]
     with pytest.raises(ValueError, match="--sector"):
         contact_map.ContactMapConfig(model=config.model, sector=36)
+
+
+def test_disk_point_cubature(ci_disk, disk_model, tmp_path):
+    """The sector's force hyper-reduced by point cubature (``builder.hyper_reduce`` on a disk model), trained on the
+    sector columns of a GNL contact run at 1,400 rad/s (light contact as above, 0.06 s: the casing's ramp and the
+    first contacts). The exact quadrature on ``disk.sector_force_basis`` equals the model's exact tensors to round-off
+    (1e-10: the same polynomial, summed in another order); the training error is within its tolerance, 1e-3, on few
+    of the sector's points with positive weights (the force stays the gradient of a sum of SVK point energies); on
+    the states of a run at 1,500 rad/s (held out) the disk force's error has a median within 5 times the training
+    tolerance (the blade's bound); K~ is the exact one and the key changes; float32 evaluation moves the force by far
+    less than the cubature's own error; save/load keeps it. (Unlike the blade's test, no comparison of runs: this
+    light-contact disk run amplifies any perturbation ~1e6-fold in 0.06 s - the batched and the single run at 1,500
+    rad/s part at 2e-7 of the amplitude from round-off - so runs compare on the maps' statistics, in the benchmark.)"""
+    from rotor37_rom.builder import hyper_reduce
+
+    model, _ = disk_model
+    scheme = CentralDifference(model, nonlinear=True, h=SHIFT / (2 * STEPS_PER_SHIFT), frequency_cap=CAP)
+    casing = Casing(h_b=0.55e-3, mu=0.0, direction="cone")
+    n_steps = int(round(0.06 / scheme.h))        # from rest: the casing's ramp, the first contact at 0.017 s
+    exact = simulate(scheme, [1400.0, 1500.0], casing, n_steps=n_steps, duration=0.15, monitor=_le_rows(model),
+                     record_q=True, record_every=50)
+    assert (exact.diverged_step == -1).all() and (exact.contact_steps > 100).all(), exact.contact_steps
+    Q_train, Q_held = exact.records_q[0], exact.records_q[1]
+    hr, rep = hyper_reduce(ci_disk, model, Q_train, tol=1e-3, max_columns=128)
+    n_all = rep["exact"].w.size
+    X = rep["columns_trained"]
+    assert X.shape == (model.forces.forces.r, 128)
+    exact_quadrature = dataclasses.replace(model.forces, forces=rep["exact"])
+    Q_held = Q_held[:, np.abs(Q_held[model.nodes.boundary_rows]).max(axis=0) > 1e-5]     # in motion
+    g = model.forces.evaluate(Q_held)
+    np.testing.assert_allclose(exact_quadrature.evaluate(Q_held), g, rtol=0, atol=1e-10 * np.abs(g).max())
+    err = np.linalg.norm(hr.forces.evaluate(Q_held) - g, axis=0) / np.linalg.norm(g, axis=0)
+    err_run = np.linalg.norm(hr.forces.evaluate(Q_held) - g, axis=0).max() / np.linalg.norm(g, axis=0).max()
+    print(f"disk cubature: {rep['points']} of {n_all} points from {X.shape[1]} sector columns, training error "
+          f"{rep['result'].training_error:.1e}; held-out force error median {np.median(err):.1e} max {err.max():.1e}, "
+          f"largest relative to the run's largest force {err_run:.1e}")
+    assert rep["result"].training_error <= 1e-3
+    assert rep["points"] < 0.05 * n_all and np.all(hr.forces.forces.w > 0)
+    assert hr.K is model.K and hr.key != model.key and hr.sectors is model.sectors
+    assert np.median(err) <= 5e-3
+    single = with_force_precision(hr, "single")
+    assert single.key != hr.key and single.forces.forces.precision == "single"
+    dev32 = np.linalg.norm(single.forces.evaluate(Q_held) - hr.forces.evaluate(Q_held), axis=0) / np.linalg.norm(
+        g, axis=0)
+    assert dev32.max() <= 1e-2 * np.median(err)
+    back = load_reduced_model(save_reduced_model(single, tmp_path / "disk_cubature.npz"), expected_key=single.key)
+    np.testing.assert_array_equal(back.forces.evaluate(Q_held), single.forces.evaluate(Q_held))
+

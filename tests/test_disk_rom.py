@@ -19,8 +19,9 @@ import scipy.sparse.linalg as spla
 
 from rotor37_rom import fem
 from rotor37_rom.cyclic import assemble_full_structure, to_global_frame
-from rotor37_rom.disk import (best_approximation, face_shapes, harmonic_field_load, harmonic_node_load,
-                              performance_indicator, repeat_count, sector_harmonics)
+from rotor37_rom.disk import (DiskBasis, best_approximation, face_shapes, harmonic_field_load, harmonic_node_load,
+                              indicator_histories, performance_indicator, repeat_count, sector_force_basis,
+                              sector_harmonics)
 from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
 from rotor37_rom.reduction import load_reduced_model, save_reduced_model, simulate_newmark
 
@@ -169,6 +170,25 @@ def test_disk_force_with_the_faces(tmp_path, ci_disk, ci_disk_ops):
     np.testing.assert_array_equal(back.forces.evaluate(q), forces.evaluate(q))
 
 
+def test_sector_force_basis_recovers_the_face_shapes():
+    """The fields of the sector force (what a cubature is trained on) come back from a model's stored face
+    coordinates alone: faces[n] = [L^T Pi_n; L^T Pi_(n+1)] determine L because L lies in the span of the faces'
+    motions; [Phi_s, Psi_L L, Psi_R' L] to round-off (1e-12 relative; least squares on a matrix of condition ~10),
+    and Phi_s alone without faces. Random interface modes (N = 6, 40 face DOFs, 30 modes)."""
+    rng = np.random.default_rng(11)
+    N, nL, r_c, n_dofs, r_s = 6, 40, 30, 200, 7
+    Pi = rng.standard_normal((N * nL, r_c))
+    L, faces = face_shapes(Pi, rng.uniform(1e3, 1e4, r_c), N, 5)
+    basis = DiskBasis(rng.standard_normal((n_dofs, r_s)), rng.standard_normal((n_dofs, nL)),
+                      rng.standard_normal((n_dofs, nL)), Pi, np.arange(N * r_s).reshape(N, r_s), N)
+    want = np.hstack([basis.Phi_s, basis.Psi_L @ L, basis.Psi_Rr @ L])
+    got = sector_force_basis(basis, faces)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * np.abs(want).max())
+    assert sector_force_basis(basis, None) is basis.Phi_s
+    with pytest.raises(ValueError, match="faces must be"):
+        sector_force_basis(basis, faces[:, :, 1:])
+
+
 def test_disk_model_save_load_and_response(tmp_path, disk_model):
     """The saved model reloads with the same matrices, forces and sector basis; a travelling 0-diameter load gives
     every sector the same LE history (the tuned disk's symmetry; GNL on) to round-off, and a 9-diameter load repeats
@@ -197,6 +217,23 @@ def test_disk_model_save_load_and_response(tmp_path, disk_model):
     eye = sp.identity(6)
     assert performance_indicator(tip, tip, fields, fields, eye, eye)["I"] == 1.0
     assert performance_indicator(tip, 0 * tip, fields, 0 * fields, eye, eye)["I"] == 0.0
+
+
+def test_indicator_histories_give_the_criteria():
+    """The error histories charted next to I are the indicator's own criteria over time: their largest values are the
+    loaded-node, field and strain-energy errors and the RMS of the tip history is the tip error, to round-off
+    (random histories of 3 sectors, 8 tip nodes, 40 instants, 10 snapshots, SPD K and M)."""
+    rng = np.random.default_rng(4)
+    tip_ref, tip_rom = rng.standard_normal((2, 40, 3, 8, 3))
+    field_ref, field_rom = rng.standard_normal((2, 10, 3, 12))
+    A, B = rng.standard_normal((2, 12, 12))
+    K, M = A @ A.T + np.eye(12), B @ B.T + np.eye(12)
+    errors = performance_indicator(tip_ref, tip_rom, field_ref, field_rom, K, M, loaded=(2, 1))["errors"]
+    hist = indicator_histories(tip_ref, tip_rom, field_ref, field_rom, K, M, loaded=(2, 1))
+    assert hist["loaded node"].shape == hist["tip nodes"].shape == (40,) and hist["field"].shape == (10,)
+    for name in ("loaded node", "field", "strain energy"):
+        assert hist[name].max() == pytest.approx(errors[name], rel=1e-12)
+    assert np.sqrt(np.mean(hist["tip nodes"] ** 2)) == pytest.approx(errors["tip nodes"], rel=1e-12)
 
 
 def test_best_approximation_bounds_every_state(ci_disk, ci_disk_ops, disk_model):
