@@ -11,7 +11,7 @@ export OMPI_MCA_rmaps_base_oversubscribe := 1
 export MPLBACKEND := Agg
 export PYVISTA_OFF_SCREEN := true
 
-.PHONY: setup demo test test-fast test-fe test-mpi test-slow test-kernels bench contact-map speed-accuracy clean
+.PHONY: setup demo test test-fast test-fe test-mpi test-slow test-kernels bench contact-map speed-accuracy disk-map clean
 
 setup: $(STAMP)
 
@@ -101,6 +101,13 @@ bench: $(STAMP)
 # file choose_model reads (rotor37_rom/data/speed_accuracy.json); 52 min from scratch on 2 cores
 speed-accuracy: $(STAMP)
 	$(PY) benchmarks/speed_accuracy.py
+
+# the full-disk maps (issue #21): 90 speeds x 200 revolutions, 36 x 8 tip nodes, without GNL (2 h) and with GNL,
+# point cubature 3e-3 in float32, and its exact reference at 4 speeds (about 11 h; stopped, it resumes when run again)
+disk-map: $(STAMP)
+	OPENBLAS_NUM_THREADS=1 mpirun -n 2 $(PY) demos/contact_map.py --disk --direction cone --frequency-cap 60 \
+		--speeds 1200 1650 90 --revolutions 200 --gnl off --stress --out results/disk_map200
+	OPENBLAS_NUM_THREADS=1 mpirun -n 2 $(PY) benchmarks/bench_disk_map.py
 
 clean:
 	rm -rf $(VENV) results .pytest_cache

@@ -4,7 +4,7 @@
 # blade's 8 tip nodes in contact, each blade at its own angle), then sweeps the angular speed with the casing ovalized
 # into two lobes (eqs. 37-38; c0 = 0.5 mm, h_b = 0.625 mm, mu = 0.15), GNL off and on. Every speed's result is written as
 # it finishes; a killed run started again resumes. The same command under `mpirun -n N` splits the speeds over the
-# ranks (give --model, the file the serial run saved; with --cubature rank 0 trains, the others wait).
+# ranks (rank 0 builds the model, or give --model; with --cubature rank 0 trains; the others wait).
 #
 #     python demos/contact_map.py --preset ci --speeds 1200 1600 21 --revolutions 20          # minutes
 #     python demos/contact_map.py --preset coarse --speeds 1200 1600 201 --revolutions 200      # paper scale (hours)
@@ -28,6 +28,7 @@ import importlib
 import json
 import logging
 import numbers
+import os
 import sys
 import time
 from pathlib import Path
@@ -90,7 +91,8 @@ class ContactMapConfig:
 
     Attributes:
         preset: mesh preset of the blade the model is built on (and the cubature trained on): ci, coarse, paper.
-        model: a saved reduced model (.npz) to load instead of building one (required under MPI).
+        model: a saved reduced model (.npz) to load instead of building one (under MPI rank 0 builds it, the
+            others load it).
         disk: build the model of the 36-sector bladed disk (``disk_builder``: every sector's 8 tip nodes, modal
             derivatives by MI 2b, ``r_cyclic`` interface modes) instead of the clamped blade's.
         r_c: fixed-interface modes (per sector) of the model built (>= 1). None: 15 for the blade, 10 for the disk.
@@ -455,6 +457,13 @@ class ContactMapResult:
 # modal derivatives, exact cubic tensors) and saved as `<out>/rom.npz` for later runs and MPI runs.
 
 # +
+def idle_barrier(comm: MPI.Comm, poll: float = 0.05) -> None:
+    """A barrier the ranks wait at asleep (a blocking MPI call spins a core: the one rank 0's serial work needs)."""
+    request = comm.Ibarrier()
+    while not request.Test():
+        time.sleep(poll)
+
+
 def reduced_model(config: ContactMapConfig, comm: MPI.Comm | None) -> tuple[ReducedModel, list[Path]]:
     """The model of ``config.model``, or one built and saved; returns it and the files written."""
     if config.model is not None:
@@ -462,14 +471,29 @@ def reduced_model(config: ContactMapConfig, comm: MPI.Comm | None) -> tuple[Redu
             return load_reduced_model(config.model), []
         except ValueError as exc:
             raise ValueError(f"--model: {exc}") from None
-    if comm is not None and comm.size > 1:
-        raise ValueError("under MPI give --model (the rom.npz a serial run saved); the reduction is serial")
-    model = build_model(config)
-    return model, [save_reduced_model(model, config.out / "rom.npz")]
+    if comm is None or comm.size == 1:
+        model = build_model(config)
+        return model, [save_reduced_model(model, config.out / "rom.npz")]
+    # under MPI rank 0 builds (the reduction is serial: its own copy of the mesh) and saves; the others load
+    importlib.import_module("rotor37_rom.fem")    # on every rank: importing dolfinx initializes PETSc (collective)
+    error, path = None, None
+    if comm.rank == 0:
+        try:
+            path = save_reduced_model(build_model(config), config.out / "rom.npz")
+        except ValueError as exc:
+            error = str(exc)
+    idle_barrier(comm)
+    error, path = comm.bcast((error, path), root=0)
+    if error is not None:
+        raise ValueError(error)
+    return load_reduced_model(path), [path] if comm.rank == 0 else []
 
 
 def build_model(config: ContactMapConfig) -> ReducedModel:
-    """Build the reduced model of the ``config.preset`` blade, or of the bladed disk (cached in <out>/cache)."""
+    """Build the reduced model of the ``config.preset`` blade, or of the bladed disk (cached in <out>/cache), in this
+    process alone."""
+    from mpi4py import MPI
+
     from rotor37_rom import fem
 
     r_c, r_md = config.modes
@@ -477,7 +501,7 @@ def build_model(config: ContactMapConfig) -> ReducedModel:
     if config.disk:
         from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
 
-        sector = fem.create_disk_sector(preset=config.preset)
+        sector = fem.create_disk_sector(MPI.COMM_SELF, preset=config.preset)
         factors = None if config.mistuning == 0 else tuple(mistuning_factors(N_SECTORS, config.mistuning,
                                                                               config.seed).tolist())
         reduction = DiskReductionConfig(tip_nodes="all", r_c=r_c, r_md=r_md, criterion="MI2b",
@@ -486,7 +510,7 @@ def build_model(config: ContactMapConfig) -> ReducedModel:
     else:
         from rotor37_rom.builder import ReductionConfig, build_reduced_model
 
-        sector = fem.create_blade_sector(preset=config.preset)
+        sector = fem.create_blade_sector(MPI.COMM_SELF, preset=config.preset)
         reduction = ReductionConfig(r_c=r_c, r_md=r_md, global_md_modes=config.global_md, forces="intrusive")
         model, _ = build_reduced_model(sector, reduction, cache_dir=config.out / "cache")
     print(f"reduced model: {config.preset} preset ({sector.n_dofs} DOF) -> r = {model.r} {model.sizes} "
@@ -580,6 +604,7 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
             except ValueError as exc:
                 error = str(exc)
         if comm is not None:
+            idle_barrier(comm)
             error = comm.bcast(error, root=0)
         if error is not None:
             raise ValueError(error)
@@ -629,19 +654,8 @@ def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: Re
         revolutions = min(4.0, config.revolutions)
         if model.sectors is not None:
             probe = training_speeds(config.speed_grid, 4)
-            scheme = CentralDifference(model, nonlinear=True, safety=config.safety,
-                                       frequency_cap=config.frequency_cap_rad_s)
-            for _ in range(5):                 # the capped modes stiffen with the amplitude: halve until it holds
-                res = simulate(scheme, probe, config.casing, revolutions=revolutions, on_blowup="flag",
-                               record_q=True, record_every=max(1, int(round(2e-5 / scheme.h))))
-                if (res.diverged_step < 0).all():
-                    break
-                scheme = scheme.with_step(scheme.h / 2)
-            else:
-                raise ValueError(f"--h: the disk's capped GNL probe diverged down to h = {scheme.h:.3g} s; give a "
-                                 f"smaller step or a higher --frequency-cap")
-            states = largest_states(res, scheme.boundary_rows, 8)
-            kind = f"capped (h = {scheme.h:.3g} s)"
+            states, h_probe = disk_probe_states(config, model, probe, revolutions)
+            kind = f"capped (h = {h_probe:.3g} s)"
         else:
             probe = config.speed_grid[:: max(1, config.speeds[2] // 16)]
             states = probe_states(model, probe, config.casing, revolutions=revolutions)
@@ -651,6 +665,35 @@ def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: Re
                       cap_safety=config.safety)
     print(f"GNL with a {config.frequency_cap:g} kHz cap: h = {h:.3g} s")
     return h
+
+
+def disk_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np.ndarray, revolutions: float
+                      ) -> tuple[np.ndarray, float]:
+    """The 8 largest states of a capped GNL run of the disk (exact forces) at the ``probe`` speeds, its step halved
+    until no speed blows up (the capped modes stiffen with the amplitude), and that step. Cached in <out>/cache (a
+    resumed map does not probe again; every rank computes or reads the same)."""
+    scheme = CentralDifference(model, nonlinear=True, safety=config.safety, frequency_cap=config.frequency_cap_rad_s)
+    key = json.dumps([model.key, probe.tolist(), revolutions, scheme.h, scheme.frequency_cap, vars(config.casing),
+                      "8 largest states"], sort_keys=True, default=str)
+    cache = config.out / "cache" / f"gnl_probe_{hashlib.sha256(key.encode()).hexdigest()[:16]}.npz"
+    if cache.is_file():
+        with np.load(cache) as data:
+            return data["states"], float(data["h"])
+    for _ in range(5):
+        res = simulate(scheme, probe, config.casing, revolutions=revolutions, on_blowup="flag", record_q=True,
+                       record_every=max(1, int(round(2e-5 / scheme.h))))
+        if (res.diverged_step < 0).all():
+            break
+        scheme = scheme.with_step(scheme.h / 2)
+    else:
+        raise ValueError(f"--h: the disk's capped GNL probe diverged down to h = {scheme.h:.3g} s; give a smaller "
+                         f"step or a higher --frequency-cap")
+    states = largest_states(res, scheme.boundary_rows, 8)
+    cache.parent.mkdir(parents=True, exist_ok=True)
+    partial = cache.with_name(cache.stem + f".{os.getpid()}.partial.npz")
+    np.savez(partial, states=states, h=scheme.h)
+    partial.replace(cache)                               # complete or absent (ranks may write it side by side)
+    return states, scheme.h
 
 
 def time_scheme(config: ContactMapConfig, model: ReducedModel, gnl: bool, comm: MPI.Comm | None
@@ -818,12 +861,14 @@ def carry_on_record(config: ContactMapConfig, run_scheme: CentralDifference, rec
 
 def stress_mesh(config: ContactMapConfig, model: ReducedModel):
     """The disk sector's mesh the model was built on (for ``--stress``; made once per call of the study)."""
+    from mpi4py import MPI
+
     from rotor37_rom import fem
     from rotor37_rom.builder import mesh_signature
 
     if model.sectors is None:
         raise ValueError("--stress needs a disk model (this one is a single blade's: demos/report.py draws its stress)")
-    sector = fem.create_disk_sector(preset=config.preset)
+    sector = fem.create_disk_sector(MPI.COMM_SELF, preset=config.preset)     # rank 0's own copy under mpirun
     if mesh_signature(sector) != model.metadata.get("mesh"):
         raise ValueError(f"--preset: the model was not built on the {config.preset} disk sector's mesh")
     return sector
@@ -890,8 +935,14 @@ def merge_earlier_runs(summary: dict, previous: Path) -> None:
 def write_summary(out: Path, summary: dict) -> list[Path]:
     """Write nfrc.png (every run of the summary) and summary.json; returns their paths."""
     merge_earlier_runs(summary, out / "summary.json")
-    curves = {label: (np.array(run["speeds"]), np.array(run["nfrc"]), "-" if label.startswith("GNL") else "--")
-              for label, run in summary["runs"].items()}
+    curves = {}
+    for label, run in summary["runs"].items():
+        style = "-" if label.startswith("GNL") else "--"
+        curves[label] = (np.array(run["speeds"]), np.array(run["nfrc"]), style)
+        if "largest_over_sectors" in run:                  # a disk: also the largest over the blades
+            largest = np.array([np.nan if a is None else a for a in run["largest_over_sectors"]], float)
+            curves[f"{label}: largest over the blades"] = (np.array(run["speeds"]), largest,
+                                                           "-." if label.startswith("GNL") else ":")
     chart = plot_nfrc(curves, out / "nfrc.png", summary["linear_resonance"], PAPER)
     out.mkdir(parents=True, exist_ok=True)
     path = out / "summary.json"

@@ -148,6 +148,32 @@ def test_contact_map_takes_a_disk_model(disk_model, tmp_path):
         contact_map.ContactMapConfig(model=config.model, sector=36)
 
 
+def test_disk_gnl_map_probes_once(disk_model, tmp_path, monkeypatch):
+    """A capped GNL disk map takes its step from a capped GNL probe run (the disk's unscaled step is ~5e-8 s); the
+    probe is cached with the map, so the map started again (a resumed multi-hour map) runs no simulation at all - its
+    speeds are done and the probe is read back - and takes the same step, below the capped linear one."""
+    from conftest import load_demo
+    from rotor37_rom.reduction import save_reduced_model
+
+    contact_map = load_demo("contact_map")
+    model, _ = disk_model
+    config = contact_map.ContactMapConfig(model=save_reduced_model(model, tmp_path / "disk.npz"),
+                                          speeds=(1400, 1500, 2), revolutions=0.2, gnl="on", frequency_cap=16.0,
+                                          direction="cone", hb=0.55e-3, quiet=True, out=tmp_path / "map")
+    first = contact_map.run_contact_map(config).runs["GNL, cap 16 kHz"]
+    assert len(list((tmp_path / "map" / "cache").glob("gnl_probe_*.npz"))) == 1
+
+    def no_simulation(*args, **kwargs):
+        raise AssertionError("the resumed map simulated again")
+
+    monkeypatch.setattr(contact_map, "simulate", no_simulation)
+    again = contact_map.run_contact_map(config).runs["GNL, cap 16 kHz"]
+    linear = contact_map.CentralDifference(model, nonlinear=False, safety=0.5,
+                                           frequency_cap=config.frequency_cap_rad_s)
+    assert again.h == first.h <= linear.h
+    np.testing.assert_array_equal(again.imap.nfrc, first.imap.nfrc)
+
+
 def test_disk_point_cubature(ci_disk, disk_model, tmp_path):
     """The sector's force hyper-reduced by point cubature (``builder.hyper_reduce`` on a disk model), trained on the
     sector columns of a GNL contact run at 1,400 rad/s (light contact as above, 0.06 s: the casing's ramp and the

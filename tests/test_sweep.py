@@ -13,7 +13,7 @@ import pytest
 from rotor37_rom import sweep as sweep_mod
 from rotor37_rom.casing import Casing
 from rotor37_rom.integrator import CentralDifference
-from rotor37_rom.reduction import save_reduced_model
+from rotor37_rom.reduction import load_reduced_model, save_reduced_model
 from rotor37_rom.sweep import SweepSpec, interaction_map, is_steady, load_sweep, rerun_diverged, run_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -104,6 +104,26 @@ def test_mpi_sweep_equals_serial(ci_rom, tmp_path):
     assert ups[0] == 1300.0 and max(ups) <= 1450.0 and got_down.shape == (len(down), 4)
     np.testing.assert_allclose(got_down, np.array([dataclasses.astuple(p) for p in down], float), rtol=1e-8,
                                equal_nan=True)
+
+
+@pytest.mark.slow
+@pytest.mark.mpi
+def test_mpi_map_without_a_model_builds_it_on_rank_0(tmp_path):
+    """Under mpirun -n 2 without --model (the README's commands) rank 0 builds the reduced model on its own copy of
+    the mesh and saves it, rank 1 waits and loads it, and the ranks split the speeds: every speed is in the summary
+    and the saved model is the one the options ask for (r = 24 tip DOFs + r_c)."""
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg", OPENBLAS_NUM_THREADS="1")
+    cmd = ["mpirun", "-n", "2", sys.executable, str(ROOT / "demos" / "contact_map.py"), "--r-c", "4", "--global-md",
+           "0", "--speeds", "1300", "1400", "2", "--revolutions", "0.2", "--gnl", "off", "--out", str(tmp_path),
+           "--quiet"]
+    run = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr[-2000:]
+    model = load_reduced_model(tmp_path / "rom.npz")
+    assert model.r == 28 and model.sizes["r_c"] == 4
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["runs"]["no GNL"]["speeds"] == [1300.0, 1400.0]
+    assert len(list((tmp_path / "sweeps").glob("*/omega_*.npz"))) == 2
 
 
 def test_interaction_map_spectrum_and_steady_state():

@@ -11,6 +11,11 @@ the factorisation and eigen-solver given to ``reduction.craig_bampton``), ``fiel
 mesh), ``cyclic`` (disk and plate sectors, face pairing, operators and modes per nodal diameter), ``periodic``
 (the full-order transient of a disk under a nodal-diameter load on the sectors it repeats over), ``safe`` (SAFE diagram).
 """
+# SLEPc initialises (and finalises at exit) collectively on PETSc's COMM_WORLD: importing it here makes every rank
+# that imports this package do so, also when only rank 0 then solves eigenproblems on its own copy of a mesh (a rank
+# 0 that alone initialised SLEPc waits for the others at exit forever)
+from slepc4py import SLEPc  # noqa: F401
+
 from .cyclic import (CyclicModes, CyclicOperators, assemble_cyclic_operators, create_annular_sector, create_disk_sector,
                      sector_fields, solve_cyclic_modes)
 from .fields import (cell_midpoints, cells_touching_points, displacement_function, von_mises_at_quadrature,

@@ -1,0 +1,215 @@
+"""The issue's full-disk GNL map (paper §3.4, Figs. 23-24): 90 speeds x 200 revolutions in 1,200-1,650 rad/s at the
+recommended model, its wall time on this machine, and its error against the exact sector tensors at a few speeds.
+
+The recommended model (benchmarks/bench_disk_cubature.py): the contact maps' disk model (ci preset, every sector's 8
+tip nodes, r_c = 10, r_MD = 10 by MI 2b, r_cyclic = 144: r = 1,728), the casing cone's normal, mu = 0.15, a 60 kHz
+frequency cap, the GNL forces by point cubature trained to 3e-3 and evaluated in float32, the step from the tangent
+limit on the training states. The map is demos/contact_map.py's study itself (the command users run, with --stress):
+its summary.json, NFRC, interaction map and stress pictures land in --out, next to the linear map of
+
+    mpirun -n 2 python demos/contact_map.py --disk --direction cone --frequency-cap 60 --speeds 1200 1650 90 \
+        --revolutions 200 --gnl off --stress --out results/disk_map200
+
+Then the reference, at --reference map speeds (indices into the 90; none is a training speed): the same step with the
+exact sector tensors, and the floor, the exact forces x (1 + 1e-4) (how far any perturbation of that size moves the
+answer). Per speed: node LE of sector 0 and the largest over the 36 blades, max over the last revolution.
+
+Every part resumes: the model, the probe and the cubature are cached, the sweeps checkpoint every 60 s; so the map
+runs over several sittings. The wall time is accounted by a heartbeat (every 30 s, rank 0) per phase and sitting in
+<out>/bench_disk_map_sittings.json: a sitting that is killed loses at most 30 s of its account.
+
+    OPENBLAS_NUM_THREADS=1 mpirun -n 2 python benchmarks/bench_disk_map.py [--reference 10 30 50 70] [--part all]
+    OPENBLAS_NUM_THREADS=1 mpirun -n 2 python benchmarks/bench_disk_map.py --revolutions 0.5 --out results/smoke
+
+Results: results/bench_disk_map.json (machine stated; written once the map and the reference are complete; with
+fewer --revolutions results/bench_disk_map_<N>rev.json).
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "demos"))
+from _common import write_results  # noqa: E402
+from contact_map import ContactMapConfig, reduced_model, run_contact_map, time_scheme, world_comm  # noqa: E402,E501
+
+from rotor37_rom.integrator import CentralDifference, training_speeds  # noqa: E402
+from rotor37_rom.sweep import last_revolution_max, load_speed, run_sweep, sweep_folder  # noqa: E402
+
+SPEEDS, REVOLUTIONS = (1200.0, 1650.0, 90), 200.0
+CUBATURE, PRECISION, CAP_KHZ = 3e-3, "single", 60.0
+FLOOR = 1e-4
+
+
+class Sittings:
+    """Wall time per phase and sitting, kept by a heartbeat thread (rank 0) in a JSON file."""
+
+    def __init__(self, path: Path, active: bool):
+        self.path, self.active, self.phase = path, active, "start"
+        self.log = json.loads(path.read_text()) if active and path.is_file() else []
+        self.entry = {"started": time.time(), "phases": {}}
+        self.log.append(self.entry)
+        self._last, self._stop = time.time(), threading.Event()
+        if active:
+            self._thread = threading.Thread(target=self._beat, daemon=True)
+            self._thread.start()
+
+    def _tick(self) -> None:
+        now = time.time()
+        phases = self.entry["phases"]
+        phases[self.phase] = phases.get(self.phase, 0.0) + now - self._last
+        self._last = now
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = self.path.with_suffix(".partial")
+        tmp.write_text(json.dumps(self.log, indent=1))
+        tmp.replace(self.path)
+
+    def _beat(self) -> None:
+        while not self._stop.wait(30.0):
+            self._tick()
+
+    def enter(self, phase: str) -> None:
+        if self.active:
+            self._tick()
+        self.phase = phase
+
+    def close(self) -> None:
+        if self.active:
+            self._stop.set()
+            self._tick()
+
+    def totals(self) -> dict:
+        out: dict = {}
+        for entry in self.log:
+            for phase, seconds in entry["phases"].items():
+                out[phase] = out.get(phase, 0.0) + seconds
+        return out
+
+
+def responses(folder: Path, speeds, labels_le: list[str]) -> dict:
+    """Node LE of sector 0 and the largest over the blades (max over the last revolution, m) of a sweep's speeds."""
+    le0, largest, blade = [], [], []
+    for w in speeds:
+        rec = load_speed(folder, float(w))
+        if rec is None:
+            raise FileNotFoundError(f"{folder}: no run at {w:g} rad/s")
+        if int(rec["diverged_step"]) >= 0:
+            le0.append(float("nan")), largest.append(float("nan")), blade.append(None)
+            continue
+        amp = {str(label): last_revolution_max(rec["t"], u, float(w)) for u, label in zip(rec["u_r"], rec["labels"])}
+        per_blade = [amp[label] for label in labels_le]
+        le0.append(per_blade[0])
+        largest.append(max(per_blade))
+        blade.append(int(np.argmax(per_blade)))
+    return {"le0_m": le0, "largest_m": largest, "largest_blade": blade}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=Path("results/disk_map200"), help="the map's folder")
+    parser.add_argument("--reference", type=int, nargs="+", default=[10, 30, 50, 70],
+                        help="indices (0..89) of the map's speeds run with the exact sector tensors")
+    parser.add_argument("--part", choices=["all", "map", "reference"], default="all")
+    parser.add_argument("--revolutions", type=float, default=REVOLUTIONS,
+                        help="per speed (default 200; fewer: a smoke run of the whole chain)")
+    args = parser.parse_args(argv)
+    if not 0 < args.revolutions <= 1000:
+        print(f"error: --revolutions must be in (0, 1000], got {args.revolutions:g}", file=sys.stderr)
+        return 2
+    grid = np.linspace(*SPEEDS[:2], int(SPEEDS[2]))
+    train = training_speeds(grid)
+    if not all(0 <= i < grid.size for i in args.reference) or set(grid[args.reference]) & set(train):
+        print(f"error: --reference must be indices in 0..{grid.size - 1} of the map's speeds, none of the training "
+              f"ones ({', '.join(str(int(np.argmin(abs(grid - w)))) for w in train)})", file=sys.stderr)
+        return 2
+    comm = world_comm()
+    rank = 0 if comm is None else comm.rank
+    sittings = Sittings(args.out / "bench_disk_map_sittings.json", rank == 0)
+    config = ContactMapConfig(disk=True, direction="cone", mu=0.15, frequency_cap=CAP_KHZ, speeds=SPEEDS,
+                              revolutions=args.revolutions, gnl="on", cubature=CUBATURE, precision=PRECISION,
+                              stress=True, out=args.out, quiet=False)
+    try:
+        return run(args, config, grid, comm, sittings)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    finally:
+        sittings.close()
+
+
+def run(args, config: ContactMapConfig, grid: np.ndarray, comm, sittings: Sittings) -> int:
+    """The model, probe and cubature (cached), the map, the reference and floor runs, the report."""
+    rank = 0 if comm is None else comm.rank
+    sittings.enter("model, probe and cubature")
+    rom = args.out / "rom.npz"
+    config = dataclasses.replace(config, model=rom) if rom.is_file() else config
+    model, _ = reduced_model(config, comm)             # rank 0 builds it (or every rank reads rom.npz)
+    config = dataclasses.replace(config, model=rom)
+    scheme = time_scheme(config.setting(True), model, True, comm)      # the map's own scheme (probe, cubature)
+    spec = config.sweep_spec(model)
+    if args.part in ("all", "map"):
+        sittings.enter("map")
+        run_contact_map(config, comm)
+    if args.part == "map":
+        return 0
+    speeds = grid[args.reference]
+    exact = CentralDifference(model, nonlinear=True, h=scheme.h, frequency_cap=scheme.frequency_cap)
+    scaled = dataclasses.replace(model, forces=dataclasses.replace(model.forces,
+                                                                   scales=model.forces.scales * (1 + FLOOR)),
+                                 metadata=dict(model.metadata, force_scale=1 + FLOOR))
+    floor = CentralDifference(scaled, nonlinear=True, h=scheme.h, frequency_cap=scheme.frequency_cap)
+    sittings.enter("reference (exact tensors)")
+    ref_folder = run_sweep(exact, speeds, spec, args.out / "reference", comm=comm)
+    sittings.enter("floor (exact x (1 + 1e-4))")
+    floor_folder = run_sweep(floor, speeds, spec, args.out / "reference", comm=comm)
+    sittings.enter("report")
+    map_folder = sweep_folder(scheme, spec, args.out / "sweeps")
+    if rank != 0:
+        return 0
+    labels_le = [f"{s}:LE" for s in range(model.nodes.n_sectors)]
+    try:
+        runs = {"map (cubature 3e-3 float32)": responses(map_folder, speeds, labels_le)}
+    except FileNotFoundError:
+        print("the map's runs at the reference speeds are not there yet (--part map or all); the reference is")
+        return 0
+    runs["exact"] = responses(ref_folder, speeds, labels_le)
+    runs["exact x (1 + 1e-4) (floor)"] = responses(floor_folder, speeds, labels_le)
+    ref = runs["exact"]
+    for name, resp in runs.items():
+        resp["le0_error"] = [abs(a - b) / b for a, b in zip(resp["le0_m"], ref["le0_m"])]
+        resp["largest_error"] = [abs(a - b) / b for a, b in zip(resp["largest_m"], ref["largest_m"])]
+        print(f"{name:28s} LE sector 0: " + " ".join(f"{1e3 * a:.3f}" for a in resp["le0_m"]) + " mm, errors "
+              + " ".join(f"{x:.1%}" for x in resp["le0_error"]) + "; largest over the blades: "
+              + " ".join(f"{1e3 * a:.3f}" for a in resp["largest_m"]) + " mm, errors "
+              + " ".join(f"{x:.1%}" for x in resp["largest_error"]))
+    summary = json.loads((args.out / "summary.json").read_text())
+    gnl = next(entry for label, entry in summary["runs"].items() if label.startswith("GNL"))
+    sittings.close()
+    totals = sittings.totals()
+    row = {"speeds": SPEEDS, "revolutions": config.revolutions, "r": model.r, "h": scheme.h, "cap_khz": CAP_KHZ,
+           "cubature": CUBATURE, "precision": PRECISION, "mu": config.mu, "direction": config.direction,
+           "ranks": 1 if comm is None else comm.size, "reference_speeds": speeds.tolist(), "responses": runs,
+           "wall_s_by_phase": totals, "sittings": len(sittings.log), "map_wall_s": totals.get("map"),
+           "map": {k: gnl.get(k) for k in ("peak_speed", "peak_amplitude", "diverged", "contact_checks",
+                                           "stress", "cubature")}}
+    hours = totals.get("map", float("nan")) / 3600
+    print(f"map: {hours:.2f} h over {len(sittings.log)} sittings (model, probe and cubature "
+          f"{totals.get('model, probe and cubature', 0) / 60:.0f} min; reference "
+          f"{totals.get('reference (exact tensors)', 0) / 60:.0f} min, floor "
+          f"{totals.get('floor (exact x (1 + 1e-4))', 0) / 60:.0f} min)")
+    name = "bench_disk_map" if config.revolutions == REVOLUTIONS else f"bench_disk_map_{config.revolutions:g}rev"
+    machine = write_results(name, [row])
+    print(f"results/{name}.json ({machine})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
