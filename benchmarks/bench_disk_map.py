@@ -42,7 +42,7 @@ from _common import write_results  # noqa: E402
 from contact_map import ContactMapConfig, reduced_model, run_contact_map, time_scheme, world_comm  # noqa: E402,E501
 
 from rotor37_rom.integrator import CentralDifference, training_speeds  # noqa: E402
-from rotor37_rom.sweep import last_revolution_max, load_speed, run_sweep, sweep_folder  # noqa: E402
+from rotor37_rom.sweep import load_speed, run_sweep, sector_maxima, sweep_folder  # noqa: E402
 
 SPEEDS, REVOLUTIONS = (1200.0, 1650.0, 90), 200.0
 CUBATURE, PRECISION, CAP_KHZ = 3e-3, "single", 60.0
@@ -94,21 +94,17 @@ class Sittings:
         return out
 
 
-def responses(folder: Path, speeds, labels_le: list[str]) -> dict:
+def responses(folder: Path, speeds) -> dict:
     """Node LE of sector 0 and the largest over the blades (max over the last revolution, m) of a sweep's speeds."""
     le0, largest, blade = [], [], []
     for w in speeds:
         rec = load_speed(folder, float(w))
         if rec is None:
             raise FileNotFoundError(f"{folder}: no run at {w:g} rad/s")
-        if int(rec["diverged_step"]) >= 0:
-            le0.append(float("nan")), largest.append(float("nan")), blade.append(None)
-            continue
-        amp = {str(label): last_revolution_max(rec["t"], u, float(w)) for u, label in zip(rec["u_r"], rec["labels"])}
-        per_blade = [amp[label] for label in labels_le]
-        le0.append(per_blade[0])
-        largest.append(max(per_blade))
-        blade.append(int(np.argmax(per_blade)))
+        per_blade = sector_maxima(rec)
+        le0.append(float(per_blade[0]))
+        largest.append(float(np.max(per_blade)))
+        blade.append(int(np.argmax(per_blade)) if np.isfinite(per_blade).all() else None)
     return {"le0_m": le0, "largest_m": largest, "largest_blade": blade}
 
 
@@ -174,14 +170,13 @@ def run(args, config: ContactMapConfig, grid: np.ndarray, comm, sittings: Sittin
     map_folder = sweep_folder(scheme, spec, args.out / "sweeps")
     if rank != 0:
         return 0
-    labels_le = [f"{s}:LE" for s in range(model.nodes.n_sectors)]
     try:
-        runs = {"map (cubature 3e-3 float32)": responses(map_folder, speeds, labels_le)}
+        runs = {"map (cubature 3e-3 float32)": responses(map_folder, speeds)}
     except FileNotFoundError:
         print("the map's runs at the reference speeds are not there yet (--part map or all); the reference is")
         return 0
-    runs["exact"] = responses(ref_folder, speeds, labels_le)
-    runs["exact x (1 + 1e-4) (floor)"] = responses(floor_folder, speeds, labels_le)
+    runs["exact"] = responses(ref_folder, speeds)
+    runs["exact x (1 + 1e-4) (floor)"] = responses(floor_folder, speeds)
     ref = runs["exact"]
     for name, resp in runs.items():
         resp["le0_error"] = [abs(a - b) / b for a, b in zip(resp["le0_m"], ref["le0_m"])]

@@ -34,21 +34,15 @@ from rotor37_rom.casing import Casing  # noqa: E402
 from rotor37_rom.disk import mistuning_factors  # noqa: E402
 from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
 from rotor37_rom.integrator import CentralDifference  # noqa: E402
-from rotor37_rom.sweep import SweepSpec, last_revolution_max, load_speed, run_sweep  # noqa: E402
+from rotor37_rom import sweep  # noqa: E402
+from rotor37_rom.sweep import SweepSpec, run_sweep  # noqa: E402
 
 OUT = Path("results/bench_disk_mistuning")
 
 
-def blade_amplitudes(folder: Path, speeds, n_sectors: int) -> np.ndarray:
+def blade_amplitudes(folder: Path, speeds) -> np.ndarray:
     """(speeds, sectors): node LE's max over the last revolution per blade (NaN where the run blew up)."""
-    out = np.full((len(speeds), n_sectors), np.nan)
-    for i, w in enumerate(speeds):
-        rec = load_speed(folder, float(w))
-        if int(rec["diverged_step"]) >= 0:
-            continue
-        amp = {str(label): last_revolution_max(rec["t"], u, float(w)) for u, label in zip(rec["u_r"], rec["labels"])}
-        out[i] = [amp[f"{s}:LE"] for s in range(n_sectors)]
-    return out
+    return np.array([sweep.sector_maxima(sweep.load_speed(folder, float(w))) for w in speeds])
 
 
 def main(argv=None) -> int:
@@ -91,7 +85,7 @@ def main(argv=None) -> int:
         t0 = time.perf_counter()
         folder = run_sweep(scheme, args.speeds, spec, OUT)
         wall = time.perf_counter() - t0
-        amp = blade_amplitudes(folder, args.speeds, N)
+        amp = blade_amplitudes(folder, args.speeds)
         largest = np.nanmax(amp, axis=1)
         if tuned is None:
             tuned = largest

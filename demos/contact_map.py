@@ -47,7 +47,7 @@ from rotor37_rom.integrator import (CentralDifference, gnl_time_step, largest_st
                                     training_speeds)
 from rotor37_rom.reduction import ReducedModel, load_reduced_model, save_reduced_model, with_force_precision
 from rotor37_rom.sweep import (ContinuationPoint, InteractionMap, SweepSpec, continuation, interaction_map,
-                               last_revolution_max, load_speed, load_sweep, record_row, rerun_diverged, run_sweep,
+                               load_speed, load_sweep, record_row, rerun_diverged, run_sweep, sector_maxima,
                                sweep_folder)
 
 if TYPE_CHECKING:
@@ -821,9 +821,7 @@ def summary_entry(config: ContactMapConfig, scheme: CentralDifference, result: M
                  "min_multiplier": min(float(r["min_multiplier"]) for r in records),
                  "max_friction_power": max(float(r["friction_power"]) for r in records)}}
     if len({label.partition(":")[0] for label in map(str, records[0]["labels"])}) > 1:     # a disk: every LE
-        per_sector = [[last_revolution_max(r["t"], u, float(r["omega"])) if int(r["diverged_step"]) < 0 else np.nan
-                       for u, label in zip(r["u_r"], map(str, r["labels"])) if label.endswith(":LE")]
-                      for r in records]
+        per_sector = [sector_maxima(r) for r in records]
         entry["largest_over_sectors"] = [float(np.nanmax(a)) if np.isfinite(a).any() else None for a in per_sector]
         entry["largest_sector"] = [int(np.nanargmax(a)) if np.isfinite(a).any() else None for a in per_sector]
     for name, branch in result.branches.items():

@@ -21,7 +21,7 @@ from rotor37_rom.casing import Casing
 from rotor37_rom.integrator import CentralDifference, simulate
 
 __all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "load_speed", "sweep_folder", "interaction_map",
-           "InteractionMap", "engine_order_resonance", "record_row", "last_revolution_max",
+           "InteractionMap", "engine_order_resonance", "record_row", "last_revolution_max", "sector_maxima",
            "continuation", "ContinuationPoint", "is_steady"]
 
 LOG = logging.getLogger(__name__)
@@ -236,6 +236,16 @@ def last_revolution_max(t: np.ndarray, u: np.ndarray, omega: float, revolutions:
     T = 2 * np.pi / omega
     sel = t >= t[-1] - revolutions * T + 1e-15
     return float(np.nanmax(np.abs(u[sel])))
+
+
+def sector_maxima(record: dict, node: str = "LE") -> np.ndarray:
+    """Every sector's max |u| of ``node`` over the last revolution in a disk's sweep record (its monitored labels
+    '<sector>:<node>'), in sector order; NaN where the run blew up."""
+    rows = sorted((int(label.partition(":")[0]), i) for i, label in enumerate(map(str, record["labels"]))
+                  if label.partition(":")[2] == node)
+    if int(record["diverged_step"]) >= 0:
+        return np.full(len(rows), np.nan)
+    return np.array([last_revolution_max(record["t"], record["u_r"][i], float(record["omega"])) for _, i in rows])
 
 
 @dataclasses.dataclass
