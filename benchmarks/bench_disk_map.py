@@ -153,7 +153,7 @@ def run(args, config: ContactMapConfig, grid: np.ndarray, comm, sittings: Sittin
     spec = config.sweep_spec(model)
     if args.part in ("all", "map"):
         sittings.enter("map")
-        run_contact_map(config, comm)
+        run_contact_map(config, comm, schemes={True: scheme})
     if args.part == "map":
         return 0
     speeds = grid[args.reference]

@@ -582,7 +582,8 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
         # of the capped probe (exact forces)
         scheme = CentralDifference(model, nonlinear=True, safety=config.safety,
                                    frequency_cap=config.frequency_cap_rad_s,
-                                   h=config.h or capped_gnl_step(config, model, model, None))
+                                   h=config.h or capped_gnl_step(config, model, model, None,
+                                                                  verbose=comm is None or comm.rank == 0))
     else:
         scheme = CentralDifference(model, nonlinear=True, safety=config.safety)
     runs = [model.key, train.tolist(), revolutions, scheme.h, vars(config.casing)]
@@ -647,7 +648,7 @@ def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: Centr
 
 
 def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: ReducedModel,
-                    states: np.ndarray | None) -> float:
+                    states: np.ndarray | None, verbose: bool = True) -> float:
     """The GNL step with a frequency cap, from the tangent limit on ``states`` (None: on a short unscaled probe;
     for a disk, whose unscaled step is ~5e-8 s, a capped GNL probe at 4 of the speeds, its 8 largest states)."""
     if states is None:
@@ -660,10 +661,13 @@ def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: Re
             probe = config.speed_grid[:: max(1, config.speeds[2] // 16)]
             states = probe_states(model, probe, config.casing, revolutions=revolutions)
             kind = "unscaled"
-        print(f"GNL step from the tangent limit on a {revolutions:g}-revolution {kind} probe at {len(probe)} speeds")
+        if verbose:
+            print(f"GNL step from the tangent limit on a {revolutions:g}-revolution {kind} probe at {len(probe)} "
+                  f"speeds")
     h = gnl_time_step(run_model, states, config.frequency_cap_rad_s, safety=config.tangent_safety,
                       cap_safety=config.safety)
-    print(f"GNL with a {config.frequency_cap:g} kHz cap: h = {h:.3g} s")
+    if verbose:
+        print(f"GNL with a {config.frequency_cap:g} kHz cap: h = {h:.3g} s")
     return h
 
 
@@ -704,7 +708,7 @@ def time_scheme(config: ContactMapConfig, model: ReducedModel, gnl: bool, comm: 
         run_model, states = cubature_model(config, model, comm)
         run_model = with_force_precision(run_model, config.precision)
     if gnl and config.frequency_cap is not None and h is None:
-        h = capped_gnl_step(config, model, run_model, states)
+        h = capped_gnl_step(config, model, run_model, states, verbose=comm is None or comm.rank == 0)
     return CentralDifference(run_model, nonlinear=gnl, h=h, safety=config.safety,
                              frequency_cap=config.frequency_cap_rad_s)
 
@@ -763,7 +767,7 @@ def continuation_branches(config: ContactMapConfig, scheme: CentralDifference, r
                                   first_revolutions=config.revolutions,
                                   revolutions=continued_revolutions(config.revolutions),
                                   out=config.out / "continuation" / tag, window=config.steady_window,
-                                  unsteady=config.unsteady_step,
+                                  unsteady=config.unsteady_step, node=config.node,
                                   progress=not config.quiet)
             mine[name] = Branch(points, run_scheme.h, time.perf_counter() - t0)
     if comm is not None:
@@ -955,11 +959,18 @@ def write_summary(out: Path, summary: dict) -> list[Path]:
 # GNL setting. Under MPI every rank runs its share of the speeds and rank 0 writes the charts and the summary.
 
 # +
-def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None) -> ContactMapResult:
+def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
+                    schemes: dict[bool, CentralDifference] | None = None) -> ContactMapResult:
     """Run the interaction maps (and continuations) of ``config``; ``comm``: split the speeds over its ranks
-    (None: serial). Raises ValueError for an input the library refuses (a corrupted model, a step above the
+    (None: serial); ``schemes``: the schemes of the GNL settings (True/False) when the caller has them already
+    (``time_scheme``). Raises ValueError for an input the library refuses (a corrupted model, a step above the
     stability limit, ...)."""
     rank = 0 if comm is None else comm.rank
+    if comm is not None:
+        # rank 0 alone imports dolfinx for its serial work (the build, the cubature, the stress) and PETSc's
+        # initialisation is collective: every rank initialises it first (a disk map read from --model with --stress
+        # imported none before the stress, and rank 0 waited there forever)
+        importlib.import_module("rotor37_rom.fem")
     model, files = reduced_model(config, comm)
     omega = eigenfrequencies(model)
     onset = sprag_slip_onsets(model, config.casing, config.sector)
@@ -973,7 +984,7 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None) -> C
         setting = config.setting(gnl)
         if config.tolerance is not None and rank == 0:
             print(f"--tolerance {config.tolerance:g}: {config.choice(gnl).describe()}")
-        scheme = time_scheme(setting, model, gnl, comm)
+        scheme = (schemes or {}).get(gnl) or time_scheme(setting, model, gnl, comm)
         label, tag = setting_names(setting, gnl)
         folder, records, retried, wall = sweep_map(setting, scheme, comm)
         branches = continuation_branches(setting, scheme, retried, tag, comm)

@@ -13,6 +13,7 @@ import json
 import logging
 import os
 from pathlib import Path
+from collections.abc import Iterator, Mapping
 from typing import Sequence
 
 import numpy as np
@@ -68,7 +69,7 @@ def sweep_folder(scheme: CentralDifference, spec: SweepSpec, out: str | Path) ->
     return Path(out) / _key(scheme, spec)
 
 
-def load_speed(folder: str | Path, omega: float) -> dict | None:
+def load_speed(folder: str | Path, omega: float) -> Mapping | None:
     """The record of one speed of a sweep folder (as ``load_sweep`` gives it); None if it is absent or unreadable."""
     path = _speed_file(Path(folder), float(omega))
     return _load_result(path) if path.exists() else None
@@ -80,11 +81,42 @@ def _atomic_savez(path: Path, **arrays) -> None:
     tmp.replace(path)
 
 
-def _load_result(path: Path) -> dict | None:
+class SavedRecord(Mapping):
+    """A saved result (one speed's record, a checkpoint) read from its .npz file on demand: entries under 1 MB are
+    read when it opens, each larger one when first asked for, then kept. A 200-revolution disk record holds ~230 MB of
+    contact-force histories (288 nodes) that a map never reads: read eagerly, the 90 records of a disk map took 20 GB
+    of the machine's 24."""
+
+    SMALL = 1 << 20                                        # bytes
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        with np.load(self.path, allow_pickle=False) as data:
+            sizes = {k: data.zip.getinfo(k + ".npy").file_size for k in data.files}
+            self._keys = tuple(data.files)
+            self._cache = {k: data[k] for k in self._keys if sizes[k] < self.SMALL}
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        if key not in self._cache:
+            if key not in self._keys:
+                raise KeyError(key)
+            with np.load(self.path, allow_pickle=False) as data:
+                self._cache[key] = data[key]
+        return self._cache[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._keys)
+
+    def __len__(self) -> int:
+        return len(self._keys)
+
+
+def _load_result(path: Path) -> SavedRecord | None:
+    """The saved result at ``path`` (``SavedRecord``), None if its file cannot be opened (truncated, corrupted: the
+    caller computes it again; files are written whole by ``_atomic_savez``, so a member that opens reads)."""
     try:
-        with np.load(path, allow_pickle=False) as data:
-            return {k: data[k] for k in data.files}
-    except Exception:                                     # truncated or corrupted: recompute that speed
+        return SavedRecord(path)
+    except Exception:
         LOG.warning("ignoring unreadable result %s", path)
         return None
 
@@ -224,8 +256,8 @@ def _readable(path: Path) -> bool:
         return False
 
 
-def load_sweep(folder: str | Path) -> list[dict]:
-    """All per-speed results of a sweep folder, sorted by speed."""
+def load_sweep(folder: str | Path) -> list[Mapping]:
+    """All per-speed results of a sweep folder, sorted by speed (``SavedRecord``: large arrays read on demand)."""
     files = sorted(Path(folder).glob("omega_*.npz"))
     out = [r for r in (_load_result(f) for f in files) if r is not None]
     return sorted(out, key=lambda r: float(r["omega"]))

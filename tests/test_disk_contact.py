@@ -125,7 +125,9 @@ def test_mistuning_factors():
 def test_contact_map_takes_a_disk_model(disk_model, tmp_path):
     """The map command runs a saved disk model as it runs a blade's (--model): the map and NFRC at node LE of the
     asked sector, node LE of every sector recorded and the largest over them in summary.json (so never below the
-    asked sector's), the EO4 resonance from the 1B family's 4-diameter mode (above the family's lowest)."""
+    asked sector's), the EO4 resonance from the 1B family's 4-diameter mode (above the family's lowest); its
+    continuation (§2.3.3) on the disk follows the same node: each branch's first run is the map's run at its start
+    speed (from rest, as long), so it gives the map's amplitude there."""
     from conftest import load_demo
     from rotor37_rom.reduction import save_reduced_model
     from rotor37_rom.sweep import load_sweep
@@ -134,9 +136,14 @@ def test_contact_map_takes_a_disk_model(disk_model, tmp_path):
     model, _ = disk_model
     config = contact_map.ContactMapConfig(model=save_reduced_model(model, tmp_path / "disk.npz"), sector=5,
                                           speeds=(1400, 1500, 2), revolutions=1.0, gnl="off", frequency_cap=16.0,
-                                          direction="cone", hb=0.55e-3, quiet=True, out=tmp_path / "map")
+                                          direction="cone", hb=0.55e-3, quiet=True, out=tmp_path / "map",
+                                          continuation=100.0, continuation_range=(1400.0, 1500.0))
     result = contact_map.run_contact_map(config)
     run, summary = result.runs["no GNL, cap 16 kHz"], result.summary
+    up, down = run.branches["up"].points, run.branches["down"].points
+    assert (up[0].omega, down[0].omega) == (1400.0, 1500.0) and up[-1].omega <= 1500.0 <= down[0].omega
+    # the same run alone instead of in a batch of two: equal to the batch's round-off (as the MPI map's test)
+    np.testing.assert_allclose([up[0].amplitude, down[0].amplitude], run.nfrc, rtol=1e-8)
     assert summary["node"] == "5:LE" and summary["disk"]
     entry = summary["runs"]["no GNL, cap 16 kHz"]
     assert np.all(np.asarray(entry["largest_over_sectors"]) >= run.nfrc) and np.all(run.nfrc > 0)

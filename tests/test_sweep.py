@@ -272,6 +272,26 @@ def test_unsteady_points_keep_the_full_step_when_asked(ci_rom):
         sweep_mod.continuation(scheme, 1300.0, 1380.0, 40.0, unsteady="half", **kwargs)
 
 
+def test_saved_record_reads_large_arrays_on_demand(tmp_path):
+    """A saved record gives back every array as written (bit for bit); the large ones (here 2 MB, like a disk
+    record's contact-force histories) are read only when asked for, so a map that never reads them does not hold
+    them; a file that does not open as an npz is refused (None: the sweep computes that speed again)."""
+    rng = np.random.default_rng(0)
+    arrays = {"omega": np.float64(1400.0), "u_r": rng.standard_normal((3, 50)),
+              "lam": rng.standard_normal((8, 32768)), "labels": np.array(["0:LE", "0:TE", "1:LE"])}
+    path = tmp_path / "omega_0001400.0000.npz"
+    np.savez(path, **arrays)
+    rec = sweep_mod.load_speed(tmp_path, 1400.0)
+    assert set(rec) == set(arrays) and "lam" not in rec._cache and "u_r" in rec._cache
+    for key, value in arrays.items():
+        np.testing.assert_array_equal(rec[key], value)
+    assert "lam" in rec._cache
+    with pytest.raises(KeyError):
+        rec["q_final"]
+    path.write_bytes(path.read_bytes()[:1000])                 # truncated
+    assert sweep_mod.load_speed(tmp_path, 1400.0) is None
+
+
 def test_killed_continuation_resumes_where_it_stopped(ci_rom, tmp_path, monkeypatch):
     """A continuation killed at its third run resumes from the last accepted speed (the first run is not redone) and
     gives the points of an uninterrupted branch bit for bit; a finished branch is read back without running
