@@ -830,7 +830,8 @@ def summary_entry(config: ContactMapConfig, scheme: CentralDifference, result: M
         entry["largest_sector"] = [int(np.nanargmax(a)) if np.isfinite(a).any() else None for a in per_sector]
     for name, branch in result.branches.items():
         entry[f"continuation_{name}_peak"] = branch.peak.omega
-        entry[f"continuation_{name}"] = [(p.omega, p.amplitude, p.steady, p.halvings) for p in branch.points]
+        entry[f"continuation_{name}"] = [(p.omega, p.amplitude, p.steady, p.halvings, p.period)
+                                         for p in branch.points]
         entry[f"continuation_{name}_h"], entry[f"continuation_{name}_wall_s"] = branch.h, branch.wall_s
         entry["continuation_steady_window"] = config.steady_window
         entry["continuation_unsteady_step"] = config.unsteady_step

@@ -23,7 +23,7 @@ from rotor37_rom.integrator import CentralDifference, simulate
 
 __all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "load_speed", "sweep_folder", "interaction_map",
            "InteractionMap", "engine_order_resonance", "record_row", "last_revolution_max", "sector_maxima",
-           "continuation", "ContinuationPoint", "is_steady"]
+           "continuation", "ContinuationPoint", "is_steady", "response_period"]
 
 LOG = logging.getLogger(__name__)
 LE = "0:LE"     # the node whose response makes the maps and NFRC: node LE of sector 0 (a NodeMap label)
@@ -364,12 +364,36 @@ def is_steady(t: np.ndarray, u: np.ndarray, omega: float, tol: float = 0.02, win
     return bool(abs(a - b) <= tol * max(a, b, 1e-12))
 
 
+def response_period(t: np.ndarray, u: np.ndarray, omega: float, tol: float = 0.02, max_halves: int = 24) -> int:
+    """The response's period in half revolutions: the smallest m <= ``max_halves`` such that u(t) and u(t - m T/2)
+    differ by at most ``tol`` times max |u| over the last max(m T/2, T) of the record (T = 2 pi / omega; u
+    interpolated linearly between samples); 0 when none does (not periodic, or a period above ``max_halves`` T/2).
+    A response locked to the rotor gives 2 (T) or 1 (T/2: the two-lobe casing's EO2 family); the paper's 11T/2
+    branch (§2.3.3) gives 11."""
+    if max_halves < 1 or not tol > 0:
+        raise ValueError(f"max_halves must be >= 1 and tol > 0, got {max_halves}, {tol}")
+    half = np.pi / omega
+    for m in range(1, max_halves + 1):
+        shift = m * half
+        window = t >= t[-1] - max(shift, 2 * half)
+        if t[window][0] - shift < t[0]:
+            break                                         # the record is too short for this period and above
+        ref = np.abs(u[window]).max()
+        if ref == 0.0:
+            return 1
+        lagged = np.interp(t[window] - shift, t, u)
+        if np.abs(u[window] - lagged).max() <= tol * ref:
+            return m
+    return 0
+
+
 @dataclasses.dataclass
 class ContinuationPoint:
     omega: float
     amplitude: float
     steady: bool
     halvings: int
+    period: int = 0            # in half revolutions (``response_period``); 0: not periodic within 12 T or unknown
 
 
 def continuation(scheme: CentralDifference, start: float, stop: float, step: float, casing: Casing = Casing(),
@@ -421,11 +445,13 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
     def save(finished: bool) -> None:
         if path is not None:
             path.parent.mkdir(parents=True, exist_ok=True)
-            _atomic_savez(path, points=np.array([[p.omega, p.amplitude, p.steady, p.halvings] for p in points]),
+            _atomic_savez(path, points=np.array([[p.omega, p.amplitude, p.steady, p.halvings, p.period]
+                                                        for p in points]),
                           q=state[0], q_prev=state[1], phase=phase, omega=omega, finished=finished)
 
     if saved is not None:
-        points = [ContinuationPoint(float(w), float(a), bool(s), int(k)) for w, a, s, k in saved["points"]]
+        points = [ContinuationPoint(float(w), float(a), bool(s), int(k), *(int(x) for x in rest))
+                  for w, a, s, k, *rest in saved["points"]]             # branches saved before the period: 4 columns
         state, phase, omega = (saved["q"], saved["q_prev"]), float(saved["phase"]), float(saved["omega"])
         if bool(saved["finished"]):
             return points
@@ -441,7 +467,8 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
             return points
         row = res.row(node)
         points = [ContinuationPoint(start, last_revolution_max(res.t[0], res.u_r[0][row], start),
-                                    is_steady(res.t[0], res.u_r[0][row], start, tol, window), 0)]
+                                    is_steady(res.t[0], res.u_r[0][row], start, tol, window), 0,
+                                    response_period(res.t[0], res.u_r[0][row], start, tol))]
         if progress:
             LOG.warning("continuation starts at %.1f rad/s: %.4g mm (%s)", start, points[0].amplitude * 1e3,
                         "steady" if points[0].steady else "not steady")
@@ -472,16 +499,20 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
         k = max_halvings if k is None else k
         target = targets[k]
         r, p, steady = runs[target]
-        amp = last_revolution_max(r.t[p], r.u_r[p][r.row(node)], target) if r.diverged_step[p] < 0 else np.nan
-        points.append(ContinuationPoint(target, amp, steady, k))
+        u = r.u_r[p][r.row(node)]
+        bounded = r.diverged_step[p] < 0
+        points.append(ContinuationPoint(target, last_revolution_max(r.t[p], u, target) if bounded else np.nan,
+                                        steady, k, response_period(r.t[p], u, target, tol) if bounded else 0))
+        amp = points[-1].amplitude
         if r.diverged_step[p] >= 0:            # nothing sensible to continue from: the branch ends here
             LOG.warning("continuation stopped at %.1f rad/s: the run diverged at step %d", target,
                         r.diverged_step[p])
             save(True)
             break
         if progress:
-            LOG.warning("continuation %.1f rad/s: %.4g mm (%s, %d halvings)", target, amp * 1e3,
-                        "steady" if steady else "not steady", k)
+            LOG.warning("continuation %.1f rad/s: %.4g mm (%s, %d halvings, period %s)", target, amp * 1e3,
+                        "steady" if steady else "not steady", k,
+                        f"{points[-1].period}T/2" if points[-1].period else "none within 12T")
         state = (r.q_final[:, p], r.q_prev[:, p])
         phase += casing.rotation_sense * target * r.n_steps[p] * scheme.h
         omega = target

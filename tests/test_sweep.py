@@ -14,7 +14,8 @@ from rotor37_rom import sweep as sweep_mod
 from rotor37_rom.casing import Casing
 from rotor37_rom.integrator import CentralDifference
 from rotor37_rom.reduction import load_reduced_model, save_reduced_model
-from rotor37_rom.sweep import SweepSpec, interaction_map, is_steady, load_sweep, rerun_diverged, run_sweep
+from rotor37_rom.sweep import (SweepSpec, interaction_map, is_steady, load_sweep, rerun_diverged, response_period,
+                               run_sweep)
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEEDS = np.array([1300.0, 1600.0])
@@ -101,7 +102,7 @@ def test_mpi_sweep_equals_serial(ci_rom, tmp_path):
     down = continuation(scheme, 1450.0, 1300.0, 150.0, Casing(), first_revolutions=0.3, revolutions=5.0)
     got_down = np.array(run_mpi["continuation_down"], float)
     ups = [p[0] for p in run_mpi["continuation_up"]]
-    assert ups[0] == 1300.0 and max(ups) <= 1450.0 and got_down.shape == (len(down), 4)
+    assert ups[0] == 1300.0 and max(ups) <= 1450.0 and got_down.shape == (len(down), 5)
     np.testing.assert_allclose(got_down, np.array([dataclasses.astuple(p) for p in down], float), rtol=1e-8,
                                equal_nan=True)
 
@@ -129,7 +130,8 @@ def test_mpi_map_without_a_model_builds_it_on_rank_0(tmp_path):
 def test_interaction_map_spectrum_and_steady_state():
     """A sampled 2-tone signal: the map recovers both amplitudes (interpolated spectrum at the tones) of the node it
     is asked for (by label), from the second half of the run only (a transient in the first half changes nothing),
-    and the steady-state test accepts a periodic signal but not a growing one."""
+    and the steady-state test accepts a periodic signal but not a growing one; ``response_period`` gives each
+    signal's period in half revolutions."""
     omega = 1400.0
     t = np.arange(0, 40 * 2 * np.pi / omega, 1e-5)
     w1, w2 = 4 * omega, 9.5 * omega
@@ -158,6 +160,16 @@ def test_interaction_map_spectrum_and_steady_state():
     assert not is_steady(t, sub * np.exp(0.05 * t * omega / (2 * np.pi)), omega, window=6)
     with pytest.raises(ValueError, match="window must be >= 1"):
         is_steady(t, u, omega, window=0)
+    # the period in half revolutions: the smallest shift m T/2 that maps the record's end onto itself (linear
+    # interpolation between samples: (9.5 omega dt)^2 / 8 = 2.2e-3 relative, inside the 2 % tolerance)
+    assert response_period(t, 2e-4 * np.sin(w1 * t), omega) == 1                # 4 Omega: periodic with T/2
+    assert response_period(t, 2e-4 * np.sin(w1 * t) + 5e-5 * np.sin(omega * t), omega) == 2   # with T, not T/2
+    assert response_period(t, u, omega) == 4                                     # 9.5 Omega: with 2T
+    assert response_period(t, sub, omega) == 11                                  # 11T/2
+    assert response_period(t, u + 1e-4 * np.sin(np.sqrt(2) * omega * t), omega) == 0   # not locked to the rotor
+    assert response_period(t, sub, omega, max_halves=10) == 0                    # above the longest period asked
+    assert response_period(t[t > t[-1] - 3 * 2 * np.pi / omega], sub[t > t[-1] - 3 * 2 * np.pi / omega],
+                           omega) == 0                                          # 3 revolutions cannot show 11T/2
 
 
 def test_engine_order_resonance_picks_the_1b_eo4_speeds():
