@@ -122,6 +122,9 @@ def main(argv=None) -> int:
                         help="steps of the ROMs with --rom-cap (s; several: each model at each step, the smallest "
                              "one's run of the largest model the reference; without a cap: 0.5 x the stability "
                              "limit)")
+    parser.add_argument("--plot", default=None, metavar="PNG",
+                        help="draw the LE histories of the reference and the compared models, one file per speed "
+                             "(the speed appended to the name)")
     args = parser.parse_args(argv)
     checks = (("--revolutions", [args.revolutions], 0.5, 50), ("--h-full", args.h_full, 1e-8, 1e-4),
               ("--bump", [args.bump], 0.0, 4.9), ("--mu", [args.mu], 0.0, 2.0), ("--speeds", args.speeds, 1.0, 5000),
@@ -230,6 +233,18 @@ def main(argv=None) -> int:
             e = errors(run, ref, w)
             print(f"{label:>34} {r:>4} {w:>6g} {e[0]:>8.3f} {e[1]:>+9.3f} {last_peak(run, w) * 1e3:>6.3f} mm "
                   f"{run['wall_s']:>9.1f}")
+        if args.plot:
+            from rotor37_rom.charts import plot_time_history
+            t = np.asarray(ref["t"])
+            series = {("reference" if args.no_full_order else f"full order, h = {ref['h']:.3g} s"): ref["u_le"]}
+            series.update({f"r = {r}" + (" (diverged)" if run["diverged"] else ""):
+                           np.interp(t, np.asarray(run["t"]), np.asarray(run["u_le"]))
+                           for label, (r, run) in runs.items() if run is not ref})
+            path = Path(args.plot)
+            path = plot_time_history(t, series, path.with_name(f"{path.stem}_{w:g}{path.suffix or '.png'}"),
+                                     title=f"{kind}, node LE, {w:g} rad/s, mu = {args.mu:g}",
+                                     ylabel="normal displacement (mm)")
+            print(f"chart: {path}")
     return 0
 
 

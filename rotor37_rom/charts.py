@@ -127,14 +127,15 @@ def plot_nfrc(curves: dict, path: str | Path, linear_resonance: float | None = N
     return _save(fig, path)
 
 
-def plot_time_history(t: np.ndarray, series: dict, path: str | Path, title: str = "") -> Path:
-    """Radial displacement histories (mm) vs time (ms). series: {label: values (m)}."""
+def plot_time_history(t: np.ndarray, series: dict, path: str | Path, title: str = "",
+                      ylabel: str = "radial displacement (mm)") -> Path:
+    """Displacement histories (mm) vs time (ms). series: {label: values (m)}."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(8, 3.6))
     for label, values in series.items():
         ax.plot(t * 1e3, np.asarray(values) * 1e3, lw=0.7, label=label)
     ax.set_xlabel("time (ms)")
-    ax.set_ylabel("radial displacement (mm)")
+    ax.set_ylabel(ylabel)
     ax.set_title(title)
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)

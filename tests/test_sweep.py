@@ -15,7 +15,7 @@ from rotor37_rom.casing import Casing
 from rotor37_rom.integrator import CentralDifference
 from rotor37_rom.reduction import load_reduced_model, save_reduced_model
 from rotor37_rom.sweep import (SweepSpec, interaction_map, is_steady, load_sweep, rerun_diverged, response_period,
-                               run_sweep)
+                               run_sweep, sweep_folder)
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEEDS = np.array([1300.0, 1600.0])
@@ -67,6 +67,22 @@ def test_killed_sweep_resumes(ci_rom, tmp_path, monkeypatch):
     bad.write_bytes(b"garbage")
     run_sweep(scheme, SPEEDS, spec, tmp_path / "a", progress=False)
     assert len(load_sweep(folder)) == 2
+
+
+def test_sweep_folder_absorbs_the_steps_round_off(ci_rom, tmp_path):
+    """The explicit step comes from the highest frequency, whose last digits depend on the BLAS threads: a restart
+    with a step that differs by round-off finds the runs already done; a step that differs for real does not."""
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
+    spec = SweepSpec(revolutions=0.02, casing=Casing(), record_dt=2e-6)
+    folder = run_sweep(scheme, [1500.0], spec, tmp_path, progress=False)
+    twin = scheme.with_step(scheme.h * (1 + 3e-12))                 # 12th digit: another key, the same run
+    assert sweep_mod._key(twin, spec) != sweep_mod._key(scheme, spec)
+    assert sweep_folder(twin, spec, tmp_path) == folder
+    assert run_sweep(twin, [1500.0], spec, tmp_path, progress=False) == folder
+    assert len(load_sweep(folder)) == 1 and len(list(tmp_path.iterdir())) == 1
+    assert sweep_folder(scheme.with_step(scheme.h * (1 - 1e-6)), spec, tmp_path) != folder
+    other = SweepSpec(revolutions=0.03, casing=Casing(), record_dt=2e-6)
+    assert sweep_folder(scheme, other, tmp_path) != folder
 
 
 @pytest.mark.slow
