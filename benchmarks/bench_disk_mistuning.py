@@ -12,7 +12,7 @@ which blade; its ratio to the tuned disk's largest at the same speed (the amplif
 largest blade's amplitude over the RMS of the 36 (1 when every blade moves alike, as in a tuned disk's travelling
 wave; 6 = sqrt(36) when one blade carries all).
 
-    python benchmarks/bench_disk_mistuning.py [--sigma 0 0.01 0.03 0.05] [--seeds 0] [--speeds 1400 1450 1500]
+    python benchmarks/bench_disk_mistuning.py [--sigma 0 0.01 0.03 0.05] [--seeds 0] [--speeds 1256 1453 1554]
                                               [--revolutions 200] [--gnl --h 1.15e-6]
 
 Results: results/bench_disk_mistuning[_gnl].json (machine stated); the sweeps in results/bench_disk_mistuning/.
@@ -51,8 +51,9 @@ def main(argv=None) -> int:
     parser.add_argument("--sigma", type=float, nargs="+", default=[0.0, 0.01, 0.03, 0.05],
                         help="standard deviations of the blades' stiffness factors, in [0, 1) (0: tuned)")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0], help="seeds of the mistuning factors (>= 0)")
-    parser.add_argument("--speeds", type=float, nargs="+", default=[1400.0, 1450.0, 1500.0],
-                        help="angular speeds (rad/s)")
+    parser.add_argument("--speeds", type=float, nargs="+", default=[1256.0, 1453.0, 1554.0],
+                        help="angular speeds (rad/s; default: one in each band of large response of the tuned map: "
+                             "the k = 5 band's largest, the 1B/EO4 branch above its jump, its upper part)")
     parser.add_argument("--revolutions", type=float, default=200.0, help="per speed, from rest")
     parser.add_argument("--gnl", action="store_true", help="geometric nonlinearity (exact sector tensors at --h)")
     parser.add_argument("--h", type=float, default=1.15e-6, help="the GNL step (s)")
