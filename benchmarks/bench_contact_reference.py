@@ -92,6 +92,14 @@ def errors(run, ref, omega):
             float((np.abs(u[last]).max() - peak_ref) / peak_ref))
 
 
+def per_revolution(run, omega):
+    """Per revolution of a run: (largest inward, mean, largest outward) LE normal displacement (m)."""
+    t, u = np.asarray(run["t"]), np.asarray(run["u_le"])
+    rev = np.floor(t * omega / (2 * np.pi) - 1e-9).clip(0).astype(int)
+    return [(float(u[rev == k].min()), float(u[rev == k].mean()), float(u[rev == k].max()))
+            for k in range(rev.max() + 1)]
+
+
 def last_peak(run, omega):
     """The last revolution's max |u| of a run (m)."""
     t, u = np.asarray(run["t"]), np.asarray(run["u_le"])
@@ -233,11 +241,21 @@ def main(argv=None) -> int:
             e = errors(run, ref, w)
             print(f"{label:>34} {r:>4} {w:>6g} {e[0]:>8.3f} {e[1]:>+9.3f} {last_peak(run, w) * 1e3:>6.3f} mm "
                   f"{run['wall_s']:>9.1f}")
+        print(f"per revolution, LE inward peak / mean / outward peak (mm); RMS error over the first revolution:")
+        t_ref = np.asarray(ref["t"])
+        one = t_ref <= 2 * np.pi / w
+        for label, run in [("reference", ref)] + [(f"{k} (r = {r})", run) for k, (r, run) in runs.items()]:
+            rows = "  ".join(f"{-1e3 * a:.3f}/{1e3 * m:+.3f}/{1e3 * b:.3f}" for a, m, b in per_revolution(run, w))
+            u = np.interp(t_ref[one], np.asarray(run["t"]), np.asarray(run["u_le"]))
+            e1 = np.linalg.norm(u - np.asarray(ref["u_le"])[one]) / np.linalg.norm(np.asarray(ref["u_le"])[one])
+            print(f"  {label}: {rows}  ({e1:.0%})")
         if args.plot:
             from rotor37_rom.charts import plot_time_history
             t = np.asarray(ref["t"])
-            series = {("reference" if args.no_full_order else f"full order, h = {ref['h']:.3g} s"): ref["u_le"]}
-            series.update({f"r = {r}" + (" (diverged)" if run["diverged"] else ""):
+            series = {("reference" if args.no_full_order else
+                       f"full order, h = {ref['h']:.3g} s" + (f", rho_inf {ref['rho_inf']:g}"
+                                                             if ref.get("rho_inf") is not None else "")): ref["u_le"]}
+            series.update({f"{label} (r = {r})" + (" (diverged)" if run["diverged"] else ""):
                            np.interp(t, np.asarray(run["t"]), np.asarray(run["u_le"]))
                            for label, (r, run) in runs.items() if run is not ref})
             path = Path(args.plot)

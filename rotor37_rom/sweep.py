@@ -49,11 +49,11 @@ class SweepSpec:
             raise ValueError(f"batch_size must be >= 1, got {self.batch_size}")
 
 
-def _key(scheme: CentralDifference, spec: SweepSpec) -> str:
+def _key(scheme: CentralDifference, spec: SweepSpec, h: float | None = None) -> str:
     # h to 12 digits: the step from omega_max differs in its last bit with the BLAS thread count (mpirun ranks run
-    # one thread each), and those are the same run
-    info = {"model": scheme.model.key, "h": float(f"{scheme.h:.12g}"), "nonlinear": scheme.nonlinear,
-            "massless": scheme.massless,
+    # one thread each), and those are the same run (``sweep_folder`` also finds a folder whose step rounded apart)
+    info = {"model": scheme.model.key, "h": float(f"{scheme.h if h is None else h:.12g}"),
+            "nonlinear": scheme.nonlinear, "massless": scheme.massless,
             "spec": dataclasses.asdict(spec) | {"batch_size": None}}
     if scheme.frequency_cap is not None:                 # absent from older keys: their results stay valid
         info["frequency_cap"] = scheme.frequency_cap
@@ -64,44 +64,22 @@ def _speed_file(folder: Path, omega: float) -> Path:
     return folder / f"omega_{omega:012.4f}.npz"
 
 
-def _spec_record(scheme: CentralDifference, spec: SweepSpec) -> dict:
-    """What ``run_sweep`` writes to a folder's spec.json (and ``sweep_folder`` compares)."""
-    record = {"h": scheme.h, "nonlinear": scheme.nonlinear, "model": scheme.model.key, "r": scheme.r,
-              "massless": scheme.massless, "spec": dataclasses.asdict(spec)}
-    if scheme.frequency_cap is not None:
-        record["frequency_cap"] = scheme.frequency_cap
-    return json.loads(json.dumps(record, default=str))
-
-
-def _same_sweep(path: Path, record: dict) -> bool:
-    """Whether the spec.json at ``path`` describes the run of ``record`` up to the step's round-off."""
-    try:
-        saved = json.loads(path.read_text())
-        h = float(saved["h"])
-    except (OSError, ValueError, KeyError, TypeError):
-        return False
-    if not abs(h - record["h"]) <= 1e-9 * record["h"]:
-        return False
-    for name in ("nonlinear", "model", "r", "massless", "frequency_cap"):
-        if name in saved and saved[name] != record.get(name):        # folders of before lack the last three
-            return False
-    ours = {k: v for k, v in record["spec"].items() if k != "batch_size"}
-    return {k: v for k, v in saved.get("spec", {}).items() if k != "batch_size"} == ours
-
-
 def sweep_folder(scheme: CentralDifference, spec: SweepSpec, out: str | Path) -> Path:
     """The folder under ``out`` where ``run_sweep`` writes the speeds of ``scheme`` and ``spec``: the one its key
-    names or, if that does not exist, an existing folder of the same run whose step differs by round-off only. The
-    step from the highest frequency differs in its last digits with the BLAS threads; the key rounds it to 12
-    digits, and two such steps can round apart (2.6525823848459e-06 and ...8440e-06: a restarted run would start
-    over)."""
+    names or, if that does not exist, an existing folder of the same run whose step differs by round-off only (its
+    name is the key of everything else at its own step, within 1e-9 of ours). The step from the highest frequency
+    differs in its last digits with the BLAS threads; the key rounds it to 12 digits, and two such steps can round
+    apart (2.6525823848459e-06 and ...8440e-06: a restarted run would start over)."""
     out = Path(out)
     folder = out / _key(scheme, spec)
     if folder.exists() or not out.is_dir():
         return folder
-    record = _spec_record(scheme, spec)
     for other in sorted(out.iterdir()):
-        if _same_sweep(other / "spec.json", record):
+        try:
+            h = float(json.loads((other / "spec.json").read_text())["h"])
+        except (OSError, ValueError, KeyError, TypeError):
+            continue
+        if abs(h - scheme.h) <= 1e-9 * scheme.h and other.name == _key(scheme, spec, h):
             return other
     return folder
 
@@ -171,8 +149,10 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
     folder = sweep_folder(scheme, spec, out)
     if rank == 0:
         folder.mkdir(parents=True, exist_ok=True)
-        if not (folder / "spec.json").exists():          # a folder found by round-off keeps its own
-            (folder / "spec.json").write_text(json.dumps(_spec_record(scheme, spec), indent=1))
+        if not (folder / "spec.json").exists():          # a folder found by round-off keeps its own step
+            (folder / "spec.json").write_text(json.dumps({"h": scheme.h, "nonlinear": scheme.nonlinear,
+                                                          "model": scheme.model.key, "r": scheme.r,
+                                                          "spec": dataclasses.asdict(spec)}, default=str, indent=1))
     if comm is not None:
         comm.Barrier()
     # batches interrupted earlier resume first (their speeds stay together); then the speeds not done yet

@@ -75,7 +75,7 @@ def test_sweep_folder_absorbs_the_steps_round_off(ci_rom, tmp_path):
     scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
     spec = SweepSpec(revolutions=0.02, casing=Casing(), record_dt=2e-6)
     folder = run_sweep(scheme, [1500.0], spec, tmp_path, progress=False)
-    twin = scheme.with_step(scheme.h * (1 + 3e-12))                 # 12th digit: another key, the same run
+    twin = scheme.with_step(scheme.h * (1 + 2e-11))        # above the 12-digit rounding step: another key
     assert sweep_mod._key(twin, spec) != sweep_mod._key(scheme, spec)
     assert sweep_folder(twin, spec, tmp_path) == folder
     assert run_sweep(twin, [1500.0], spec, tmp_path, progress=False) == folder

@@ -180,9 +180,11 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
             ``integrator.simulate`` sets it.
         rho_inf: None, Newmark's average acceleration (no numerical dissipation); a value in [0, 1], the
             generalised-alpha scheme with that spectral radius at infinite frequency: second order, modes with
-            omega dt >> 1 damped by rho_inf per step, those with omega dt << 1 almost not (1 is equivalent to
-            average acceleration). Equilibrium is written at the alpha point, the internal forces as (1 - alpha_f)
-            f(x_n+1) + alpha_f f(x_n), the contact multipliers as one force there; the constraint stays on x_n+1.
+            omega dt >> 1 damped by rho_inf per step, those with omega dt << 1 almost not (1 is average
+            acceleration without contact). Equilibrium is written at the alpha point, the internal forces as
+            (1 - alpha_f) f(x_n+1) + alpha_f f(x_n), the contact multipliers as one force there (their sign holds
+            there, and the result's ``lam`` and friction power are alpha-point quantities); the constraint stays
+            on x_n+1.
             For a contact run whose tip nodes ring at frequencies the step does not resolve.
     """
     if not (dt > 0 and n_steps >= 1):
