@@ -95,9 +95,9 @@ def errors(run, ref, omega):
 def per_revolution(run, omega):
     """Per revolution of a run: (largest inward, mean, largest outward) LE normal displacement (m)."""
     t, u = np.asarray(run["t"]), np.asarray(run["u_le"])
-    rev = np.floor(t * omega / (2 * np.pi) - 1e-9).clip(0).astype(int)
-    return [(float(u[rev == k].min()), float(u[rev == k].mean()), float(u[rev == k].max()))
-            for k in range(rev.max() + 1)]
+    n = max(1, int(round(t[-1] * omega / (2 * np.pi))))
+    rev = np.floor(t * omega / (2 * np.pi)).clip(0, n - 1).astype(int)        # the last sample ends revolution n
+    return [(float(u[rev == k].min()), float(u[rev == k].mean()), float(u[rev == k].max())) for k in range(n)]
 
 
 def last_peak(run, omega):
