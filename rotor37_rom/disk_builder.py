@@ -22,7 +22,8 @@ from rotor37_rom.disk import (DiskBasis, SectorForces, SectorMatrices, assemble_
                               face_shapes, interface_modes)
 from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces
 from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, ReducedModel, craig_bampton, modal_damping,
-                                   save_reduced_model, select_pairs, selection_weights, simulate_linear_newmark)
+                                   reduced_model_key, save_reduced_model, select_pairs, selection_weights,
+                                   simulate_linear_newmark)
 
 __all__ = ["DiskReductionConfig", "build_disk_model"]
 
@@ -157,7 +158,26 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     def solve(A):
         factorised.append(fem.mumps_solver(A))
         return factorised[-1]
-    Psi_f, Theta_f, omega_c = craig_bampton(K_f, M_f, pos, config.r_c, solve=solve, eigensolve=fem.slepc_eigenpairs)
+    # the sector's Craig-Bampton modes depend on the mesh, the boundary and r_c only: models that differ in r_MD,
+    # face shapes, the load patch or mistuning share them (a cache beside the models': n_free x (r_b + 2 n_L + r_c))
+    cb_meta = {"mesh": metadata["mesh"], "tip_nodes": config.tip_nodes, "r_c": config.r_c, "version": __version__,
+               "kind": "disk Craig-Bampton", "boundary": int(boundary.size), "free": int(free.size)}
+    cb_file = Path(cache_dir) / f"disk_cb_{reduced_model_key(cb_meta)}.npz" if cache_dir else None
+    if cb_file is not None and cb_file.is_file():
+        with np.load(cb_file) as data:
+            Psi_f, Theta_f, omega_c = data["Psi"], data["Theta"], data["omega_c"]
+        LOG.info("Craig-Bampton modes read from %s", cb_file)
+        if config.load_patch:               # the correction's solve on the interior DOFs
+            interior = np.setdiff1d(np.arange(free.size), pos)
+            factorised.append(fem.mumps_solver(K_f[interior][:, interior]))
+    else:
+        Psi_f, Theta_f, omega_c = craig_bampton(K_f, M_f, pos, config.r_c, solve=solve,
+                                                eigensolve=fem.slepc_eigenpairs)
+        if cb_file is not None:
+            cb_file.parent.mkdir(parents=True, exist_ok=True)
+            tmp = cb_file.with_suffix(".tmp.npz")
+            np.savez(tmp, Psi=Psi_f, Theta=Theta_f, omega_c=omega_c)
+            tmp.replace(cb_file)
     nb, nL = tip_dofs.size, left.size
     R_blk = np.kron(np.eye(nL // 3), rotation_z(pairs.angle))          # u_R = R u_L of the next sector, per node
     Psi_tip, Psi_L, Psi_Rr = Psi_f[:, :nb], Psi_f[:, nb:nb + nL], Psi_f[:, nb + nL:] @ R_blk

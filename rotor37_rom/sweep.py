@@ -383,9 +383,10 @@ def is_steady(t: np.ndarray, u: np.ndarray, omega: float, tol: float = 0.02, win
 def response_period(t: np.ndarray, u: np.ndarray, omega: float, tol: float = 0.02, max_halves: int = 24) -> int:
     """The response's period in half revolutions: the smallest m <= ``max_halves`` such that u(t) and u(t - m T/2)
     differ by at most ``tol`` times max |u| over the last max(m T/2, T) of the record (T = 2 pi / omega; u
-    interpolated linearly between samples); 0 when none does (not periodic, or a period above ``max_halves`` T/2).
-    A response locked to the rotor gives 2 (T) or 1 (T/2: the two-lobe casing's EO2 family); the paper's 11T/2
-    branch (§2.3.3) gives 11."""
+    interpolated linearly between samples). 0 when none does (not periodic with any period up to ``max_halves``
+    T/2); -1 when the record is too short to test them all and none of those it can test fits (unknown: a longer
+    record may find a longer period). A response locked to the rotor gives 2 (T) or 1 (T/2: the two-lobe casing's
+    EO2 family); the paper's 11T/2 branch (§2.3.3) gives 11."""
     if max_halves < 1 or not tol > 0:
         raise ValueError(f"max_halves must be >= 1 and tol > 0, got {max_halves}, {tol}")
     half = np.pi / omega
@@ -393,7 +394,7 @@ def response_period(t: np.ndarray, u: np.ndarray, omega: float, tol: float = 0.0
         shift = m * half
         window = t >= t[-1] - max(shift, 2 * half)
         if t[window][0] - shift < t[0]:
-            break                                         # the record is too short for this period and above
+            return -1                                     # the record is too short for this period and above
         ref = np.abs(u[window]).max()
         if ref == 0.0:
             return 1
@@ -409,7 +410,7 @@ class ContinuationPoint:
     amplitude: float
     steady: bool
     halvings: int
-    period: int = 0            # in half revolutions (``response_period``); 0: not periodic within 12 T or unknown
+    period: int = 0            # in half revolutions (``response_period``); 0: not periodic within 12 T, -1: unknown
 
 
 def continuation(scheme: CentralDifference, start: float, stop: float, step: float, casing: Casing = Casing(),

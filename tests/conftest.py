@@ -75,13 +75,20 @@ def ci_disk_ops(ci_disk):
 
 
 @pytest.fixture(scope="session")
-def disk_model(ci_disk, ci_disk_ops):
+def disk_cache(tmp_path_factory):
+    """The session's cache of disk models: the tests' other models of the ci sector with LE and r_c = 8 read the
+    sector's Craig-Bampton modes from it instead of computing them again (~30 s each)."""
+    return tmp_path_factory.mktemp("disk_cache")
+
+
+@pytest.fixture(scope="session")
+def disk_model(ci_disk, ci_disk_ops, disk_cache):
     """A small disk model of the ci sector (LE only: r_b = 3, r_c = 8, 4 modal derivatives by MI 2b, 96 interface
     modes; r = 636), exact forces; (model, build report)."""
     from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
 
     config = DiskReductionConfig(tip_nodes="LE", r_c=8, r_md=4, criterion="MI2b", r_cyclic=96)
-    return build_disk_model(ci_disk, config, ops=ci_disk_ops)
+    return build_disk_model(ci_disk, config, ops=ci_disk_ops, cache_dir=disk_cache)
 
 
 @pytest.fixture(scope="session")

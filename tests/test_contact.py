@@ -50,16 +50,17 @@ def test_contact_constraints(ci_rom, nonlinear):
     scheme = CentralDifference(ci_rom, nonlinear=nonlinear, safety=0.5)
     speeds = np.array([1300.0, 1450.0, 1550.0])
     casing = Casing(mu=0.15)
-    res = simulate(scheme, speeds, casing, n_steps=30000, record_every=1)
+    res = simulate(scheme, speeds, casing, n_steps=10_000, record_every=1)
     # the bumps (h_b > c0) sweep the tip: one pass over a bump's half-width (0.15 rad) lasts 0.15 / (Omega h) ~ 500
-    # steps at these speeds; 100 contact steps ask for a fifth of one pass, whatever the trajectory's round-off
+    # steps at these speeds; 100 contact steps ask for a fifth of one pass, whatever the trajectory's round-off (the
+    # ovalisation's ramp is set for the run's length: 740-810 contact steps in 10,000 measured with GNL)
     assert (res.contact_steps > 100).all(), res.contact_steps
     assert res.max_penetration.max() <= 1e-12, res.max_penetration
     assert res.min_multiplier.min() >= 0.0
     assert res.friction_power.max() < 0.0                              # f_t . v_slide < 0 at every contact
     nodes = ci_rom.nodes.coordinates
     _, _, theta0 = contact_frames(nodes, "x", -1)
-    alpha = ramp_rate(30000 * scheme.h)
+    alpha = ramp_rate(10_000 * scheme.h)
     for p, om in enumerate(speeds):
         t = res.t[p]
         gap = (casing.c0 - (1 - np.exp(-alpha * t))[None, :]

@@ -104,6 +104,13 @@ def test_generalised_alpha_is_second_order_and_newmark_at_rho_1():
                                                   snapshot_every=10, rho_inf=rho).fields for rho in (None, 1.0))
     scale = np.abs(newmark).max()
     assert scale > 0 and np.abs(alpha - newmark).max() <= 1e-9 * scale
+    # with SVK forces too: generalised alpha averages f(x_n) (carried over from the previous step) and f(x_n+1), and
+    # the equilibrium it adds at t_n is Newton's residual left there (rtol 1e-10 of the forces, ~60 steps of it)
+    newmark, alpha = (fem.solve_repeating_newmark(plate, n_rep, load_dof, harmonic, dt, steps, nonlinear=True,
+                                                  snapshot_every=10, rho_inf=rho, rtol=1e-10, atol=1e-9).fields
+                      for rho in (None, 1.0))
+    print("GNL, rho_inf 1 against Newmark:", np.abs(alpha - newmark).max() / np.abs(newmark).max())
+    assert np.abs(alpha - newmark).max() <= 1e-7 * np.abs(newmark).max()
     for rho in (0.8, 0.5):
         fields = {k: fem.solve_repeating_newmark(plate, n_rep, load_dof, smooth, dt / k, steps * k, nonlinear=False,
                                                  rho_inf=rho, snapshot_every=10 * k).fields for k in (1, 2, 4, 8)}
@@ -113,6 +120,35 @@ def test_generalised_alpha_is_second_order_and_newmark_at_rho_1():
         assert all(3.5 <= r <= 4.5 for r in rates), rates
     with pytest.raises(ValueError, match="rho_inf"):
         fem.solve_repeating_newmark(plate, n_rep, load_dof, harmonic, dt, 2, nonlinear=False, rho_inf=1.5)
+
+
+def test_generalised_alpha_damps_unresolved_modes_by_rho_inf():
+    """What rho_inf is for: a mode with omega dt >> 1 loses the factor rho_inf per step (Chung & Hulbert: at
+    omega dt -> infinity the amplification matrix has the triple eigenvalue -rho_inf), while average acceleration
+    keeps it (|eigenvalue| 1). The plate loaded over one step of dt = 1 s (omega_1 dt ~ 1e3 for its lowest mode,
+    so every mode is unresolved), then free. The triple eigenvalue is one Jordan block, so the free response is
+    (-rho_inf)^n (c0 + c1 n + c2 n^2): from step n_0 = 20 to the step n_1 where rho_inf^n falls to 1e-9 (above
+    round-off; at most 100) the field's log changes per step by log(rho_inf) + 2 ln(n_1 / n_0) / (n_1 - n_0), up to
+    the lower powers' share, (c1 / c2) / (n_0 n_1) <= 0.01 per step for |c1 / c2| up to 5, and the spectral
+    radius's excess at finite omega dt (O(1 / (omega dt)^2)); 0.02 asserted. Average acceleration neither grows nor
+    decays (0.01 per step)."""
+    plate, load_dof = _plate()
+    dt, steps = 1.0, 100
+
+    def kick(t):
+        return np.full(1, 100.0) if t < 1.5 * dt else np.zeros(1)
+
+    for rho in (None, 0.8, 0.5):
+        fields = fem.solve_repeating_newmark(plate, 1, load_dof, kick, dt, steps, nonlinear=False, rho_inf=rho,
+                                             snapshot_every=1).fields
+        size = np.abs(fields.reshape(steps, -1)).max(axis=1)           # snapshot k is step k + 1
+        expected = 0.0 if rho is None else np.log(rho)
+        n1 = steps if rho is None else min(steps, int(np.log(1e-9) / expected))
+        jordan = 0.0 if rho is None else 2 * np.log(n1 / 20) / (n1 - 20)
+        slope = (np.log(size[n1 - 1]) - np.log(size[19])) / (n1 - 20) - jordan
+        print(f"rho_inf {rho}: log decay per step over steps 20-{n1} {slope:.4f} (n^2 removed), expected "
+              f"{expected:.4f}")
+        assert abs(slope - expected) <= (0.02 if rho else 0.01)
 
 
 def test_disk_frequencies_bound_the_cyclic_reference(ci_disk, ci_disk_ops, disk_model):
@@ -163,7 +199,7 @@ def test_disk_force_equals_the_sector_forms(ci_disk, ci_disk_ops, disk_model):
     assert np.all(g[basis.blocks.size:] == 0.0)
 
 
-def test_disk_force_with_the_faces(tmp_path, ci_disk, ci_disk_ops):
+def test_disk_force_with_the_faces(tmp_path, ci_disk, ci_disk_ops, disk_model, disk_cache):
     """face_shapes = n_f: each sector's force acts on its whole field with the faces on n_f shapes L, u^n =
     Phi_s q^n + Psi_L L a_L^n + Psi_R' L a_R^n (a = L^T u_L): the disk force equals, sector by sector, the
     full-order SVK form's force on that field projected back (q^n rows by Phi_s^T, the interface rows by the faces'
@@ -171,7 +207,8 @@ def test_disk_force_with_the_faces(tmp_path, ci_disk, ci_disk_ops):
     Jacobian passes the Taylor test (remainder ratio 4 when the step halves: g is a cubic polynomial); the model
     saves and reloads with the same force."""
     config = DiskReductionConfig(tip_nodes="LE", r_c=8, r_md=4, criterion="MI2b", r_cyclic=96, face_shapes=4)
-    model, report = build_disk_model(ci_disk, config, ops=ci_disk_ops)
+    model, report = build_disk_model(ci_disk, config, ops=ci_disk_ops, cache_dir=disk_cache)
+    assert not report["cached"] and len(list(disk_cache.glob("disk_cb_*.npz"))) == 1   # disk_model's Craig-Bampton modes
     basis, forces = model.sectors, model.forces
     N, nL = basis.n_sectors, basis.Psi_L.shape[1]
     L, faces = face_shapes(basis.Pi, report["interface_omega"], N, 4)
@@ -302,7 +339,7 @@ def test_best_approximation_bounds_every_state(ci_disk, ci_disk_ops, disk_model)
             assert best[name] <= error(other, A) * (1 + 1e-10)
 
 
-def test_patch_load_and_its_static_correction(ci_disk, ci_disk_ops, disk_model):
+def test_patch_load_and_its_static_correction(ci_disk, ci_disk_ops, disk_model, disk_cache):
     """The 400 N of the forced-response study spread over the boundary facets within 3 mm of node LE: the nodal
     forces have a unit resultant along e_z and none across (consistent forces of a uniform traction, round-off).
     Their reduced force is the transpose of the field rebuild (f . u_n(q) = P_n(f) . q for any q, round-off), and
@@ -339,7 +376,8 @@ def test_patch_load_and_its_static_correction(ci_disk, ci_disk_ops, disk_model):
         return 1 - reduced / full
 
     corrected, _ = build_disk_model(ci_disk, DiskReductionConfig(tip_nodes="LE", r_c=8, r_md=0, r_cyclic=96,
-                                                                 forces="none", load_patch=3e-3), ops=ci_disk_ops)
+                                                                 forces="none", load_patch=3e-3), ops=ci_disk_ops,
+                                    cache_dir=disk_cache)
     assert corrected.sizes["r_load"] == 1 and corrected.r == model.r - 36 * 3
     e_point, e_patch = compliance_error(model, point), compliance_error(corrected, f)
     e_uncorrected = compliance_error(model, f)

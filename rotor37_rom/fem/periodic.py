@@ -263,6 +263,7 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
             t_wall -= float(data["elapsed"]) if "elapsed" in data.files else 0.0   # wall of the earlier parts
         LOG.info("resuming from %s at step %d", checkpoint, start)
     cache = {"h": None, "solve": None, "refreshes": refreshes}
+    carried = {"x": None, "f": None}         # the internal forces of the last converged state (generalised alpha)
 
     def factorise(y, h):
         """The iteration matrix at y, factorised; with a casing also its response to unit multipliers."""
@@ -283,12 +284,15 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
         f_ext = (1 - alpha_f) * force(t_new) + (alpha_f * force(t_new - h) if alpha_f else 0.0)
         # the inertia of a(y) = c0 (y - x) - v / (beta h) - (1 / (2 beta) - 1) a at the alpha point, without y
         inertia = -M @ ((1 - alpha_m) * (c0 * x + v / (beta * h) + (0.5 / beta - 1.0) * a) - alpha_m * a) - f_ext
-        if alpha_f:
-            inertia = inertia + alpha_f * internal(x)
+        if alpha_f:             # f(x_n): carried over from the step that converged to x_n (the same assembly)
+            inertia = inertia + alpha_f * (carried["f"] if carried["x"] is x else internal(x))
         gap_free = None if contact is None else clearance(t_new)
+        last = {"y": None, "f": None}
 
         def residual(y):
-            return (1 - alpha_m) * c0 * (M @ y) + (1 - alpha_f) * internal(y) + inertia
+            f = internal(y)
+            last["y"], last["f"] = y, f
+            return (1 - alpha_m) * c0 * (M @ y) + (1 - alpha_f) * f + inertia
 
         def correct(y):
             """y with the multipliers that close its penetrations through the kept compliance, and them."""
@@ -320,6 +324,8 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
                         1e-300)
             LOG.debug("t %.6e it %d |r| = %.3e", t_new, it, norm)
             if norm <= max(rtol * scale, atol) and admissible(x_new):
+                if last["y"] is x_new:
+                    carried["x"], carried["f"] = x_new, last["f"]
                 return x_new, v + h * ((1 - gamma) * a + gamma * acc), acc, it, lam
             if it == max_iterations or not np.isfinite(norm):
                 return None
