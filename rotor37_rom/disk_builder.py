@@ -9,7 +9,9 @@ selection criteria, exact modal derivatives with the fixed-interface correction,
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import logging
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -160,13 +162,23 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
         return factorised[-1]
     # the sector's Craig-Bampton modes depend on the mesh, the boundary and r_c only: models that differ in r_MD,
     # face shapes, the load patch or mistuning share them (a cache beside the models': n_free x (r_b + 2 n_L + r_c))
-    cb_meta = {"mesh": metadata["mesh"], "tip_nodes": config.tip_nodes, "r_c": config.r_c, "version": __version__,
-               "kind": "disk Craig-Bampton", "boundary": int(boundary.size), "free": int(free.size)}
+    cb_meta = {"mesh": metadata["mesh"], "source": sector.source, "r_c": config.r_c, "version": __version__,
+               "kind": "disk Craig-Bampton", "boundary": boundary.tolist(),
+               "free": hashlib.sha256(np.ascontiguousarray(free, np.int64).tobytes()).hexdigest()}
     cb_file = Path(cache_dir) / f"disk_cb_{reduced_model_key(cb_meta)}.npz" if cache_dir else None
+    cb = None
     if cb_file is not None and cb_file.is_file():
-        with np.load(cb_file) as data:
-            Psi_f, Theta_f, omega_c = data["Psi"], data["Theta"], data["omega_c"]
-        LOG.info("Craig-Bampton modes read from %s", cb_file)
+        try:
+            with np.load(cb_file) as data:
+                cb = data["Psi"], data["Theta"], data["omega_c"]
+            if cb[0].shape != (free.size, boundary.size) or cb[1].shape != (free.size, config.r_c):
+                raise ValueError(f"shapes {cb[0].shape}, {cb[1].shape}")
+            LOG.info("Craig-Bampton modes read from %s", cb_file)
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:   # a damaged file: again
+            LOG.warning("ignoring %s (%s): Craig-Bampton computed again", cb_file, exc)
+            cb = None
+    if cb is not None:
+        Psi_f, Theta_f, omega_c = cb
         if config.load_patch:               # the correction's solve on the interior DOFs
             interior = np.setdiff1d(np.arange(free.size), pos)
             factorised.append(fem.mumps_solver(K_f[interior][:, interior]))

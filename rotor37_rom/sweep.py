@@ -529,7 +529,8 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
         if progress:
             LOG.warning("continuation %.1f rad/s: %.4g mm (%s, %d halvings, period %s)", target, amp * 1e3,
                         "steady" if steady else "not steady", k,
-                        f"{points[-1].period}T/2" if points[-1].period else "none within 12T")
+                        f"{points[-1].period}T/2" if points[-1].period > 0
+                        else "none within 12T" if points[-1].period == 0 else "unknown: record too short")
         state = (r.q_final[:, p], r.q_prev[:, p])
         phase += casing.rotation_sense * target * r.n_steps[p] * scheme.h
         omega = target

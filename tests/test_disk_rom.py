@@ -105,12 +105,12 @@ def test_generalised_alpha_is_second_order_and_newmark_at_rho_1():
     scale = np.abs(newmark).max()
     assert scale > 0 and np.abs(alpha - newmark).max() <= 1e-9 * scale
     # with SVK forces too: generalised alpha averages f(x_n) (carried over from the previous step) and f(x_n+1), and
-    # the equilibrium it adds at t_n is Newton's residual left there (rtol 1e-10 of the forces, ~60 steps of it)
-    newmark, alpha = (fem.solve_repeating_newmark(plate, n_rep, load_dof, harmonic, dt, steps, nonlinear=True,
-                                                  snapshot_every=10, rho_inf=rho, rtol=1e-10, atol=1e-9).fields
-                      for rho in (None, 1.0))
+    # the equilibrium it adds at t_n is Newton's residual left there: at most rtol = 1e-8 of the forces per step,
+    # twice that in displacement over 20 steps is 4e-7 (a stale f(x_n), one step old, would be ~1e-2 off)
+    newmark, alpha = (fem.solve_repeating_newmark(plate, n_rep, load_dof, harmonic, dt, 20, nonlinear=True,
+                                                  snapshot_every=10, rho_inf=rho).fields for rho in (None, 1.0))
     print("GNL, rho_inf 1 against Newmark:", np.abs(alpha - newmark).max() / np.abs(newmark).max())
-    assert np.abs(alpha - newmark).max() <= 1e-7 * np.abs(newmark).max()
+    assert np.abs(alpha - newmark).max() <= 1e-6 * np.abs(newmark).max()
     for rho in (0.8, 0.5):
         fields = {k: fem.solve_repeating_newmark(plate, n_rep, load_dof, smooth, dt / k, steps * k, nonlinear=False,
                                                  rho_inf=rho, snapshot_every=10 * k).fields for k in (1, 2, 4, 8)}
@@ -123,32 +123,39 @@ def test_generalised_alpha_is_second_order_and_newmark_at_rho_1():
 
 
 def test_generalised_alpha_damps_unresolved_modes_by_rho_inf():
-    """What rho_inf is for: a mode with omega dt >> 1 loses the factor rho_inf per step (Chung & Hulbert: at
-    omega dt -> infinity the amplification matrix has the triple eigenvalue -rho_inf), while average acceleration
-    keeps it (|eigenvalue| 1). The plate loaded over one step of dt = 1 s (omega_1 dt ~ 1e3 for its lowest mode,
-    so every mode is unresolved), then free. The triple eigenvalue is one Jordan block, so the free response is
-    (-rho_inf)^n (c0 + c1 n + c2 n^2): from step n_0 = 20 to the step n_1 where rho_inf^n falls to 1e-9 (above
-    round-off; at most 100) the field's log changes per step by log(rho_inf) + 2 ln(n_1 / n_0) / (n_1 - n_0), up to
-    the lower powers' share, (c1 / c2) / (n_0 n_1) <= 0.01 per step for |c1 / c2| up to 5, and the spectral
-    radius's excess at finite omega dt (O(1 / (omega dt)^2)); 0.02 asserted. Average acceleration neither grows nor
-    decays (0.01 per step)."""
+    """What rho_inf is for: a mode with omega dt >> 1 loses the factor rho_inf per step, while average acceleration
+    keeps it. At omega dt -> infinity generalised alpha's amplification matrix has the triple eigenvalue -rho_inf
+    in one Jordan block (Chung & Hulbert 1993: the characteristic polynomial tends to (lambda + rho_inf)^3), so the
+    free response is x_n = (-rho_inf)^n (c0 + c1 n + c2 n^2): x_n / (-rho_inf)^n is a quadratic in n. The plate
+    kicked over one step of dt = 1e3 s, then free (omega_1 dt > 1e6 for its lowest mode: every mode unresolved; the
+    triple root splits by O((omega dt)^(-2/3)) ~ 1e-4, which bends the quadratic by ~(n 1e-4 / rho)^3 < 1e-6 over
+    100 steps; at dt = 1 s the split, 1e-2, bends it by 2.5e-3): from step 20 to where rho_inf^n reaches 1e-9 (above
+    round-off) the quadratic fits every DOF to 1e-6 of its largest value (measured 3e-9), while the same fit with a
+    rate 2 % off leaves 4e-4 to 6e-2. Average acceleration neither grows nor decays (1e-6 per step in log)."""
     plate, load_dof = _plate()
-    dt, steps = 1.0, 100
+    dt, steps = 1e3, 100
 
     def kick(t):
         return np.full(1, 100.0) if t < 1.5 * dt else np.zeros(1)
 
     for rho in (None, 0.8, 0.5):
         fields = fem.solve_repeating_newmark(plate, 1, load_dof, kick, dt, steps, nonlinear=False, rho_inf=rho,
-                                             snapshot_every=1).fields
-        size = np.abs(fields.reshape(steps, -1)).max(axis=1)           # snapshot k is step k + 1
-        expected = 0.0 if rho is None else np.log(rho)
-        n1 = steps if rho is None else min(steps, int(np.log(1e-9) / expected))
-        jordan = 0.0 if rho is None else 2 * np.log(n1 / 20) / (n1 - 20)
-        slope = (np.log(size[n1 - 1]) - np.log(size[19])) / (n1 - 20) - jordan
-        print(f"rho_inf {rho}: log decay per step over steps 20-{n1} {slope:.4f} (n^2 removed), expected "
-              f"{expected:.4f}")
-        assert abs(slope - expected) <= (0.02 if rho else 0.01)
+                                             snapshot_every=1).fields.reshape(steps, -1)   # snapshot k: step k + 1
+        if rho is None:
+            size = np.abs(fields).max(axis=1)
+            slope = (np.log(size[99]) - np.log(size[19])) / 80
+            print(f"Newmark: log change per step over steps 20-100 {slope:.2e}")
+            assert abs(slope) <= 1e-6              # |eigenvalue| 1; its beat, (n / (omega dt))^2, and round-off
+            continue
+        n = np.arange(20, min(steps, int(np.log(1e-9) / np.log(rho))) + 1)
+        V = np.vander(n.astype(float), 3)
+        for rate, bound in ((rho, 1e-6), (1.02 * rho, None), (0.98 * rho, None)):
+            Y = fields[n - 1] / (-rate) ** n[:, None]
+            coef, *_ = np.linalg.lstsq(V, Y, rcond=None)
+            misfit = np.abs(Y - V @ coef).max() / np.abs(Y).max()
+            print(f"rho_inf {rho}, rate {rate:.3f}: quadratic misfit {misfit:.1e}")
+            if bound is not None:
+                assert misfit <= bound
 
 
 def test_disk_frequencies_bound_the_cyclic_reference(ci_disk, ci_disk_ops, disk_model):
@@ -208,7 +215,7 @@ def test_disk_force_with_the_faces(tmp_path, ci_disk, ci_disk_ops, disk_model, d
     saves and reloads with the same force."""
     config = DiskReductionConfig(tip_nodes="LE", r_c=8, r_md=4, criterion="MI2b", r_cyclic=96, face_shapes=4)
     model, report = build_disk_model(ci_disk, config, ops=ci_disk_ops, cache_dir=disk_cache)
-    assert not report["cached"] and len(list(disk_cache.glob("disk_cb_*.npz"))) == 1   # disk_model's Craig-Bampton modes
+    assert not report["cached"] and any(disk_cache.glob("disk_cb_*.npz"))   # disk_model's Craig-Bampton modes read
     basis, forces = model.sectors, model.forces
     N, nL = basis.n_sectors, basis.Psi_L.shape[1]
     L, faces = face_shapes(basis.Pi, report["interface_omega"], N, 4)
