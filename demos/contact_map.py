@@ -883,7 +883,7 @@ def disk_peak_stress(config: ContactMapConfig, scheme: CentralDifference, result
     largest bounded response: that run carried on one revolution from its final state (as the report does for the
     blade), every sector's field rebuilt from q (no reassembly) on the disk ``sector`` (``stress_mesh``). Returns
     (numbers, [picture])."""
-    from rotor37_rom.analysis import disk_stress, disk_stress_summary
+    from rotor37_rom.analysis import describe_location, disk_stress, disk_stress_summary
     from rotor37_rom.plotting import render_stress
 
     model, speed = scheme.model, result.peak_speed
@@ -903,8 +903,9 @@ def disk_peak_stress(config: ContactMapConfig, scheme: CentralDifference, result
                             n_sectors=model.nodes.n_sectors, factor=factor, clim=numbers["clim"],
                             sector_displacements=fields)
     print(f"         stress at t_max ({speed:.0f} rad/s): sector {config.sector} {numbers['vm_max'] / 1e6:.0f} MPa "
-          f"({numbers['ratio_yield']:.2f} sigma_Y) outside the tip band, largest over the sectors "
-          f"{numbers['vm_max_all_sectors'] / 1e6:.0f} MPa (sector {numbers['sector_of_max']})")
+          f"({numbers['ratio_yield']:.2f} sigma_Y) outside the tip band ({describe_location(numbers['location'])}), "
+          f"largest over the sectors {numbers['vm_max_all_sectors'] / 1e6:.0f} MPa (sector {numbers['sector_of_max']}: "
+          f"{describe_location(numbers['location_all_sectors'])})")
     return numbers, [picture]
 
 

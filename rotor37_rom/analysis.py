@@ -6,7 +6,8 @@ import numpy as np
 
 from rotor37_rom import fem
 
-__all__ = ["stress_at_peak", "disk_stress", "disk_stress_summary", "tip_band", "TIP_BAND"]
+__all__ = ["stress_at_peak", "disk_stress", "disk_stress_summary", "stress_location", "describe_location",
+           "tip_band", "TIP_BAND"]
 
 TIP_BAND = 0.1     # cells closer to a contact node than this fraction of the span are reported apart
 
@@ -53,15 +54,43 @@ def tip_band(sector, model) -> tuple[np.ndarray, np.ndarray]:
 
 def disk_stress_summary(sector, model, values: np.ndarray, monitored: int = 0) -> dict:
     """The numbers of a disk's von Mises field (``disk_stress`` values, (N, n_cells), all sectors): the largest in
-    sector ``monitored`` and over all sectors outside the tip band (and which sector), in the tip band, and the ratio
-    of the sector's to the yield stress."""
+    sector ``monitored`` and over all sectors outside the tip band (and which sector), in the tip band, the ratio
+    of the sector's to the yield stress, and where the two largest sit (``stress_location``)."""
     band, _ = tip_band(sector, model)
     regular = np.where(band[None, :], -np.inf, values)
     per_sector = regular.max(axis=1)
+    worst = int(np.argmax(per_sector))
     return {"vm_max": float(per_sector[monitored]), "ratio_yield": float(per_sector[monitored] / sector.material.sigma_y),
-            "vm_max_all_sectors": float(per_sector.max()), "sector_of_max": int(np.argmax(per_sector)),
+            "vm_max_all_sectors": float(per_sector.max()), "sector_of_max": worst,
             "vm_max_tip_band": float(values[monitored][band].max()),
+            "location": stress_location(sector, model, int(np.argmax(regular[monitored]))),
+            "location_all_sectors": stress_location(sector, model, int(np.argmax(regular[worst]))),
             "clim": [0.0, float(np.percentile(values[:, ~band], 99.5))]}
+
+
+def stress_location(sector, model, cell: int) -> dict:
+    """Where a cell of a disk sector's mesh sits, in the sector's own frame (rotor axis z): its centroid's radius,
+    axial position and angle, its height above the hub cone (Table V's hub line, where the blade root meets the rim:
+    > 0 in the blade, < 0 in the disk), and in the blade the fraction of the span there (height over the tip's,
+    the tip radius interpolated in z between the contact nodes)."""
+    from rotor37_rom.geometry.disk import hub_radius
+
+    x = fem.cell_midpoints(sector)[cell]
+    r, z = float(np.hypot(x[0], x[1])), float(x[2])
+    height = r - float(hub_radius(z))
+    tips = model.nodes.coordinates[model.nodes.sector == 0]
+    order = np.argsort(tips[:, 2])
+    r_tip = float(np.interp(z, tips[order, 2], np.hypot(tips[order, 0], tips[order, 1])))
+    return {"r_mm": 1e3 * r, "z_mm": 1e3 * z, "theta_deg": float(np.degrees(np.arctan2(x[1], x[0]))),
+            "height_mm": 1e3 * height, "region": "blade" if height > 0 else "disk",
+            "span": height / (r_tip - float(hub_radius(z))) if height > 0 else None}
+
+
+def describe_location(location: dict) -> str:
+    """'blade, 4 % of the span, z = 12 mm' or 'disk, 3 mm under the hub cone, z = 40 mm'."""
+    if location["region"] == "blade":
+        return f"blade, {100 * location['span']:.0f} % of the span, z = {location['z_mm']:.0f} mm"
+    return f"disk, {-location['height_mm']:.0f} mm under the hub cone, z = {location['z_mm']:.0f} mm"
 
 
 def disk_stress(sector, model, q: np.ndarray, nonlinear: bool = True, sectors=None) -> tuple[np.ndarray, np.ndarray]:

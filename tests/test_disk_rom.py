@@ -450,3 +450,33 @@ def test_disk_stress_of_a_tuned_state(ci_disk, disk_model):
     assert numbers["ratio_yield"] == 0.0 and 0 < band.sum() < band.size
     with pytest.raises(ValueError, match="entries"):
         disk_stress(ci_disk, model, q[:-1])
+
+
+def test_disk_stress_of_the_1b_mode_peaks_at_the_blade_root(ci_disk, disk_model):
+    """Where the summary says the largest stress is: the disk's lowest 0-diameter mode (the 1B family: every blade
+    bending alike as a cantilever on the rim) has its largest curvature, hence its largest bending stress, at the
+    root of the blade, as the first bending mode of any clamped beam, and the root corner (no fillet) concentrates
+    it: the largest stress outside the tip band is in the lowest quarter of the span or within 5 mm under the hub
+    cone (either side of the junction). (A point load at node LE would not do: it bends the thin LE locally, and the
+    largest stress then sits just outside the tip band.) The location's numbers are the cell's centroid's, its height
+    the radius less the hub cone's."""
+    from rotor37_rom.analysis import describe_location, disk_stress, disk_stress_summary, tip_band
+    from rotor37_rom.geometry.disk import hub_radius
+    import scipy.linalg
+
+    model, _ = disk_model
+    lam, V = scipy.linalg.eigh(model.K, model.M)
+    first = np.flatnonzero(sector_harmonics(V, model.forces.blocks) == 0)[0]
+    print(f"lowest 0-diameter mode: {np.sqrt(lam[first]) / (2 * np.pi):.0f} Hz")
+    q = V[:, first] * 1e-3 / np.abs(V[model.nodes.q_index[model.nodes.row("LE", 0)], first]).max()
+    _, vm = disk_stress(ci_disk, model, q, nonlinear=False, sectors=(0,))
+    numbers = disk_stress_summary(ci_disk, model, vm, monitored=0)
+    where = numbers["location"]
+    print(f"1B, 0 diameters, 1 mm at LE: {numbers['vm_max'] / 1e6:.0f} MPa at {describe_location(where)} ({where})")
+    assert where == numbers["location_all_sectors"]
+    assert (where["region"] == "blade" and where["span"] <= 0.25) or -5.0 <= where["height_mm"] <= 0.0
+    band, _ = tip_band(ci_disk, model)
+    cell = int(np.argmax(np.where(band, -np.inf, vm[0])))
+    x = fem.cell_midpoints(ci_disk)[cell]
+    assert np.isclose(where["r_mm"], 1e3 * np.hypot(x[0], x[1]), rtol=1e-12)
+    assert np.isclose(where["height_mm"], 1e3 * (np.hypot(x[0], x[1]) - hub_radius(x[2])), rtol=1e-12)
