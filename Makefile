@@ -11,7 +11,8 @@ export OMPI_MCA_rmaps_base_oversubscribe := 1
 export MPLBACKEND := Agg
 export PYVISTA_OFF_SCREEN := true
 
-.PHONY: setup demo test test-fast test-fe test-mpi test-slow test-kernels bench contact-map speed-accuracy disk-map clean
+.PHONY: setup demo test test-fast test-fe test-mpi test-slow test-kernels bench contact-map speed-accuracy \
+	speed-accuracy-disk disk-map clean
 
 setup: $(STAMP)
 
@@ -101,6 +102,10 @@ bench: $(STAMP)
 # file choose_model reads (rotor37_rom/data/speed_accuracy.json); 52 min from scratch on 2 cores
 speed-accuracy: $(STAMP)
 	$(PY) benchmarks/speed_accuracy.py
+
+# its bladed-disk scenes (the disk's frequencies at every nodal diameter against r_c and r_cyclic); 25 min
+speed-accuracy-disk: $(STAMP)
+	$(PY) benchmarks/speed_accuracy.py --scene disk
 
 # the full-disk maps (issue #21): 90 speeds x 200 revolutions, 36 x 8 tip nodes, without GNL (2 h) and with GNL,
 # point cubature 3e-3 in float32, and its exact reference at 4 speeds (about 11 h; stopped, it resumes when run again)

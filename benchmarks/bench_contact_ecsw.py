@@ -46,19 +46,16 @@ def training_runs(model, speeds, casing, revolutions, h, cache: Path) -> tuple[l
     """Recorded states (r, n) of exact GNL contact runs at the training speeds, and the wall time of those runs
     (cached as .npz)."""
     from rotor37_rom.integrator import CentralDifference, simulate
+    from rotor37_rom.npz import load_npz, save_npz
 
-    if cache.is_file():
-        with np.load(cache) as data:
-            wall = float(data["wall"]) if "wall" in data.files else None
-            return [data[f"q{p}"] for p in range(len(speeds))], wall
+    data = load_npz(cache, what="training runs")
+    if data is not None:
+        return [data[f"q{p}"] for p in range(len(speeds))], float(data["wall"]) if "wall" in data else None
     scheme = CentralDifference(model, nonlinear=True, h=h)
     res = simulate(scheme, speeds, casing, revolutions=revolutions, on_blowup="flag",
                    record_every=max(1, int(round(1e-5 / scheme.h))), record_q=True)
     states = [q[:, np.isfinite(q).all(axis=0)] for q in res.records_q]
-    cache.parent.mkdir(parents=True, exist_ok=True)
-    tmp = cache.with_suffix(".tmp.npz")
-    np.savez(tmp, wall=res.wall, **{f"q{p}": q for p, q in enumerate(states)})
-    tmp.replace(cache)
+    save_npz(cache, wall=res.wall, **{f"q{p}": q for p, q in enumerate(states)})
     return states, res.wall
 
 

@@ -38,6 +38,7 @@ from _common import write_results  # noqa: E402
 from rotor37_rom.builder import hyper_reduce  # noqa: E402
 from rotor37_rom.casing import Casing  # noqa: E402
 from rotor37_rom.integrator import CentralDifference, contact_training_states, simulate  # noqa: E402
+from rotor37_rom.npz import load_npz, save_npz  # noqa: E402
 from rotor37_rom.reduction import with_force_precision  # noqa: E402
 from rotor37_rom.sweep import last_revolution_max  # noqa: E402
 
@@ -95,14 +96,10 @@ def main(argv=None) -> int:
                                      vars(casing)], sort_keys=True, default=str).encode()).hexdigest()[:16]
     runs = OUT / f"training_{key}.npz"
     t0 = time.perf_counter()
-    if runs.is_file():
-        with np.load(runs) as data:
-            Q_train = data["train"]
-    else:
+    Q_train = (load_npz(runs, ("train",), what="training runs") or {}).get("train")
+    if Q_train is None:
         Q_train, _ = contact_training_states(exact, args.train, casing, args.train_revolutions)
-        OUT.mkdir(parents=True, exist_ok=True)
-        np.savez(runs.with_suffix(".partial.npz"), train=Q_train)
-        runs.with_suffix(".partial.npz").replace(runs)
+        save_npz(runs, train=Q_train)
     summary["training_runs_s"] = time.perf_counter() - t0
     print(f"training states {Q_train.shape[1]} ({summary['training_runs_s']:.0f} s)", flush=True)
     variants = {"exact": exact}

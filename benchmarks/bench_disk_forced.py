@@ -44,6 +44,7 @@ from rotor37_rom.disk import (best_approximation, harmonic_field_load, harmonic_
                                indicator_histories, performance_indicator, repeat_count)
 from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
 from rotor37_rom.fem.periodic import RepeatingSectors, sector_harmonic_load, solve_repeating_newmark  # noqa: E402
+from rotor37_rom.npz import save_npz  # noqa: E402
 from rotor37_rom.reduction import CRITERIA, simulate_newmark  # noqa: E402
 
 AMPLITUDE = 400.0
@@ -95,7 +96,7 @@ def reference(sector, system, case, nonlinear, periods, spp, ramp, out: Path, pa
                                   checkpoint=checkpoint, ops=system.ops)
     data = {"t": res.t, "tip": res.tip, "fields": res.fields, "snapshots": res.snapshots,
             "wall": np.float64(time.perf_counter() - t0), "iterations": res.iterations}
-    np.savez(path, **data)
+    save_npz(path, **data)
     checkpoint.unlink(missing_ok=True)
     return data
 

@@ -91,6 +91,7 @@ def main(argv=None) -> int:
     from rotor37_rom.ecsw import trajectory_states
     from rotor37_rom.integrator import (CentralDifference, contact_training_states, gnl_time_step, simulate,
                                         training_speeds)
+    from rotor37_rom.npz import load_npz, save_npz
     from rotor37_rom.reduction import load_reduced_model, save_reduced_model, with_force_precision
     from rotor37_rom.sweep import SweepSpec, interaction_map, load_sweep, run_sweep
 
@@ -112,10 +113,10 @@ def main(argv=None) -> int:
     train = training_speeds(map_speeds)
     train_file = out / "cache" / "train_states.npz"
     t0 = time.perf_counter()
-    if not train_file.is_file():
+    if load_npz(train_file, ("Q", "seconds"), what="training runs") is None:
         scheme = CentralDifference(model, nonlinear=True, safety=0.5)
         Q_train, _ = contact_training_states(scheme, train, casing, 12.0)
-        np.savez(train_file, Q=Q_train, seconds=time.perf_counter() - t0)
+        save_npz(train_file, Q=Q_train, seconds=time.perf_counter() - t0)
     with np.load(train_file) as d:
         Q_train, t_train = d["Q"], float(d["seconds"])
     print(f"training states: {Q_train.shape[1]} from exact runs at {train.round(1).tolist()} x 12 rev "
@@ -161,7 +162,7 @@ def main(argv=None) -> int:
                     runs = [q[:, t < (np.inf if k < 0 else k * scheme.h - 2e-3)]
                             for q, t, k in zip(res.records_q, res.t, res.diverged_step)]
                     Q_ref, _ = trajectory_states(runs, scheme.boundary_rows)
-                    np.savez(path.with_suffix(".refine.npz"), Q_ref=Q_ref, diverged=res.diverged_step,
+                    save_npz(path.with_suffix(".refine.npz"), Q_ref=Q_ref, diverged=res.diverged_step,
                              largest=_largest(np.hstack(runs), scheme.boundary_rows, 24))
                     reduced, _ = hyper_reduce(sector, model, np.hstack([Q_train, Q_ref]), tol=tol, level="point",
                                               label=f"headline training + {refine:g}-rev refinement, tol {tol:g}")

@@ -2,9 +2,10 @@
 
     python benchmarks/speed_accuracy.py                       # all scenes (52 min from scratch on the 2-core machine)
     python benchmarks/speed_accuracy.py --scene modes clearance map-linear
+    python benchmarks/speed_accuracy.py --scene disk                # the bladed disk's scenes
     make speed-accuracy                                       # the same as the first line
 
-Scenes (single blade, the report's settings):
+Scenes (the report's settings):
 - ``modes``: the clamped 1B/1T/2B frequencies against mesh presets ci / coarse / paper; reference: the paper preset
   (the presets are remeshed, not nested: no Richardson limit), whose own error is taken as its change from coarse;
   held out: modes 4-6.
@@ -21,6 +22,10 @@ Scenes (single blade, the report's settings):
   max |u - u_ref| / max |u_ref| over the run.
 - the stability map: the stable step 2 / omega_max of the tangent against the LE amplitude, with and without a cap.
 - ``paper-speedup``: the GNL map model chosen at 5 % (else 20 %) against the paper's r = 189 exact tensors at 1e-7 s.
+- ``disk-modes`` (bladed disk, not in ``all``): the 1B, 1T and 2B families of the 36-sector disk at every nodal
+  diameter against the sector's full-order cyclic modes; candidates: r_c x r_cyclic (8 tip nodes per sector, as the
+  contact maps), with and without modal derivatives; cost: the linear contact run per simulated ms at the maps'
+  60 kHz cap; held out: the 4th-6th modes of every nodal diameter.
 - ``cost-r``: the cost per simulation-step against r for each force method (no GNL, exact tensors, point cubature on
   all points and on 10 points per mode, float64 / float32), synthetic models of each size, and the trained cubatures.
 
@@ -49,6 +54,7 @@ ROOT = Path(__file__).resolve().parents[1]
 WORK = ROOT / "results" / "speed_accuracy"
 IMG = ROOT / "docs" / "img"
 SCENES = ("modes", "clearance", "map-linear", "map-gnl", "stability", "paper-speedup", "cost-r")
+DISK_SCENES = ("disk-modes",)        # not in 'all' (the single-blade study's hour): --scene disk-modes, or disk
 PAPER_R, PAPER_H = 189, 1e-7            # the paper's single-blade GNL setting: r = 189, exact tensors, h = 1e-7 s
 TOLERANCES = (0.01, 0.05, 0.2)
 PERTURBATION = 1e-4
@@ -155,6 +161,82 @@ def scene_clearance() -> dict:
                 cost_unit="s (offline build + the 2 x 20 static solves)",
                 reference={"FOM nonlinear wall_s": sum(c.costs["FOM nonlinear"] for c in studies["study"])},
                 candidates=cands, held_out_case="the same modes at 1.5 times the amplitude (1B 1.5 mm, 1T 0.75 mm)")
+
+
+# ## Bladed disk: the disk model's frequencies at every nodal diameter against the cyclic full order
+
+DISK_MODELS = [  # (name, r_c, r_md, r_cyclic): every sector's 8 tip nodes (the contact maps' boundary)
+    ("r_c 2, r_cyclic 72", 2, 0, 72), ("r_c 2, r_cyclic 144", 2, 0, 144),
+    ("r_c 5, r_cyclic 72", 5, 0, 72), ("r_c 5, r_cyclic 144", 5, 0, 144),
+    ("r_c 10, r_cyclic 72", 10, 0, 72), ("r_c 10, r_cyclic 144", 10, 0, 144), ("r_c 10, r_cyclic 288", 10, 0, 288),
+    ("r_c 10, 10 MD, r_cyclic 144 (the maps' model)", 10, 10, 144),
+]
+DISK_CAP_KHZ, DISK_TIMED_STEPS = 60.0, 2000
+
+
+def scene_disk_modes() -> dict:
+    """The 36-sector disk (ci sector): the 1B, 1T and 2B families at every nodal diameter k = 0 ... 18 of disk models
+    (r_c, r_cyclic, modal derivatives) against the sector's full-order cyclic modes; held out: the 4th-6th modes of
+    every k. Cost: the linear contact run's time per simulated millisecond at the disk maps' 60 kHz cap."""
+    from rotor37_rom import fem
+    from rotor37_rom.analysis import cyclic_harmonic_frequencies
+    from rotor37_rom.builder import mesh_signature
+    from rotor37_rom.casing import Casing
+    from rotor37_rom.disk import harmonic_frequencies
+    from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
+    from rotor37_rom.integrator import CentralDifference, simulate
+    from rotor37_rom.npz import load_npz, save_npz
+
+    sector = fem.create_disk_sector(preset="ci")
+    ops = fem.create_svk_operators(sector)
+    ref_file = WORK / f"disk_modes_reference_{mesh_signature(sector)[:16]}.npz"
+    cached = load_npz(ref_file, ("omega", "wall"), what="cyclic reference")
+    if cached is None:
+        t0 = time.perf_counter()
+        omega = cyclic_harmonic_frequencies(sector, 6, ops=ops)
+        save_npz(ref_file, omega=omega, wall=time.perf_counter() - t0)
+        FRESH.append(f"disk-modes reference {time.perf_counter() - t0:.0f} s")
+        cached = load_npz(ref_file, ("omega", "wall"))
+    ref, ref_wall = cached["omega"], float(cached["wall"])
+    print(f"disk-modes: cyclic reference, 6 families x {ref.shape[0]} harmonics ({ref_wall:.0f} s)")
+    cap = 2 * np.pi * DISK_CAP_KHZ * 1e3
+    speeds = np.linspace(1200.0, 1650.0, 8)
+    casing = Casing(mu=0.15, direction="cone")                 # the disk maps' casing (paper's c0, h_b)
+    cands = []
+    for name, r_c, r_md, r_cyclic in DISK_MODELS:
+        t0 = time.perf_counter()
+        model, _ = build_disk_model(sector, DiskReductionConfig(tip_nodes="all", r_c=r_c, r_md=r_md,
+                                                                criterion="MI2b", r_cyclic=r_cyclic, forces="none"),
+                                    ops=ops, cache_dir=WORK / "disk_models")
+        build = time.perf_counter() - t0
+        rom = harmonic_frequencies(model, 6)
+        err = np.abs(rom / ref - 1.0)
+        below = float(np.nanmax((ref - rom) / ref))          # Rayleigh-Ritz: every value >= the full order's
+        scheme = CentralDifference(model, nonlinear=False, frequency_cap=cap)
+        simulate(scheme, speeds[:1], casing, n_steps=50, on_blowup="flag")                # warm-up
+        t0 = time.perf_counter()
+        simulate(scheme, speeds, casing, n_steps=DISK_TIMED_STEPS, record_every=50, on_blowup="flag")
+        per_step = (time.perf_counter() - t0) / (DISK_TIMED_STEPS * speeds.size)
+        cost = 1e6 * per_step / (scheme.h * 1e3)               # us per simulated ms of one speed
+        study, held = float(np.nanmax(err[:, :3])), float(np.nanmax(err[:, 3:6]))
+        cands.append(dict(name=name, options={"r_c": r_c, "r_md": r_md, "r_cyclic": r_cyclic, "tip_nodes": "all"},
+                          cost=cost, error=study if np.isfinite(err[:, :3]).all() else math.inf,
+                          held_out_error=held if np.isfinite(err[:, 3:6]).all() else math.inf, r=model.r,
+                          build_s=build, us_per_sim_step=1e6 * per_step, h=scheme.h,
+                          worst_k=int(np.nanargmax(err[:, :3].max(axis=1))), rayleigh_ritz_margin=below,
+                          errors={"families 1-3 by k": err[:, :3].max(axis=1).tolist(),
+                                  "families 4-6 by k": err[:, 3:6].max(axis=1).tolist()}))
+        print(f"disk-modes: {name}: r = {model.r}, built in {build:.0f} s, 1B/1T/2B within {100 * study:.3f} %, "
+              f"modes 4-6 within {100 * held:.3f} %, {1e6 * per_step:.1f} us/sim-step at h = {scheme.h:.3g} s")
+    return dict(description="the bladed disk's (36 ci sectors, 8 tip nodes each) 1B, 1T and 2B families at every "
+                            "nodal diameter k = 0 ... 18: largest relative frequency error against the sector's "
+                            "full-order cyclic modes",
+                cost_unit=f"us per simulated ms of one speed (linear contact run from rest, the maps' casing: cone "
+                          f"normal, mu = 0.15; {DISK_CAP_KHZ:g} kHz cap, {speeds.size} speeds batched)",
+                reference={"cyclic_rad_s": ref.tolist(), "wall_s": ref_wall,
+                           "options": {"model": "full-order cyclic sector", "preset": "ci"}},
+                candidates=cands, held_out_case="the 4th-6th modes of every nodal diameter (same models)",
+                machine=machine_description())
 
 
 # ## Interaction maps: schemes and force evaluations against a reference map
@@ -681,6 +763,8 @@ def render_markdown(study: dict) -> str:
         cands = scene["candidates"]
         front = pareto_front([c["cost"] for c in cands], [c["error"] for c in cands])
         lines += [f"### Scene `{name}`", "", scene["description"][0].upper() + scene["description"][1:] + ".", ""]
+        if scene.get("machine", study["machine"]) != study["machine"]:
+            lines += [f"Measured on {scene['machine']}.", ""]
         if f"speed_accuracy_{name}.png" in {p.name for p in IMG.glob("speed_accuracy_*.png")}:
             lines += [f"![{name}: error against cost](img/speed_accuracy_{name}.png)", ""]
         extra = "us_per_step" in cands[0]
@@ -767,11 +851,14 @@ def record_choices(study: dict) -> None:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scene", nargs="+", choices=SCENES + ("all",), default=["all"])
+    parser.add_argument("--scene", nargs="+", choices=SCENES + DISK_SCENES + ("all", "disk"), default=["all"],
+                        help="scenes to run: all (the single blade's), disk (the bladed disk's) or names")
     parser.add_argument("--json", type=Path, default=ROOT / "rotor37_rom" / "data" / "speed_accuracy.json")
     args = parser.parse_args(argv)
-    todo = SCENES if "all" in args.scene else tuple(args.scene)
-    fresh = not WORK.is_dir() or not any(WORK.iterdir())
+    todo = tuple(dict.fromkeys(name for scene in args.scene
+                               for name in {"all": SCENES, "disk": DISK_SCENES}.get(scene, (scene,))))
+    # from scratch: the whole single-blade study with no cached runs (a disk scene alone is a note on the study)
+    fresh = (not WORK.is_dir() or not any(WORK.iterdir())) and set(SCENES) <= set(todo)
     t_start = time.perf_counter()
     WORK.mkdir(parents=True, exist_ok=True)
     study = json.loads(args.json.read_text()) if args.json.is_file() else {"schema": 1, "scenes": {}}
@@ -781,6 +868,9 @@ def main(argv=None) -> int:
             study["scenes"]["modes"] = scene_modes()
         elif name == "clearance":
             study["scenes"]["clearance"] = scene_clearance()
+        elif name == "disk-modes":
+            study["scenes"]["disk-modes"] = scene_disk_modes()
+            FRESH.append(f"scene disk-modes {time.perf_counter() - t0:.0f} s")
         elif name in ("map-linear", "map-gnl"):
             gnl = name == "map-gnl"
             maps, history = scene_map(gnl)
@@ -796,7 +886,9 @@ def main(argv=None) -> int:
             FRESH.append(f"scene cost-r {time.perf_counter() - t0:.0f} s")
         print(f"scene {name}: {time.perf_counter() - t0:.0f} s")
         record_choices(study)
-        study.update(schema=1, machine=machine_description(), command="python benchmarks/speed_accuracy.py",
+        # the study's machine is the from-scratch run's; a scene measured elsewhere since says its own
+        study.update(schema=1, machine=study.get("machine") if not fresh and "machine" in study
+                     else machine_description(), command="python benchmarks/speed_accuracy.py",
                      tolerances=list(TOLERANCES))
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(study, indent=1, default=_finite))

@@ -28,7 +28,6 @@ import importlib
 import json
 import logging
 import numbers
-import os
 import sys
 import time
 from pathlib import Path
@@ -45,6 +44,7 @@ from rotor37_rom.friction import sprag_slip_friction
 from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.integrator import (CentralDifference, gnl_time_step, largest_states, probe_states, simulate,
                                     training_speeds)
+from rotor37_rom.npz import load_npz, save_npz
 from rotor37_rom.reduction import ReducedModel, load_reduced_model, save_reduced_model, with_force_precision
 from rotor37_rom.sweep import (ContinuationPoint, InteractionMap, SweepSpec, continuation, interaction_map,
                                load_speed, load_sweep, record_row, rerun_diverged, run_sweep, sector_maxima,
@@ -278,7 +278,8 @@ class ContactMapConfig:
             if not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
                 raise ValueError(f"--tolerance must be in (0, 1) (a relative error: 0.05 = 5 %), got {self.tolerance}")
             if self.disk:
-                raise ValueError("--tolerance: the speed-accuracy study has no bladed-disk map yet; give the options")
+                raise ValueError("--tolerance: the speed-accuracy study has no bladed-disk map yet (only the disk's "
+                                 "frequencies, scene disk-modes); give the options")
             chosen = set().union(*(self.choice(gnl).options for gnl in GNL_SETTINGS[self.gnl]))
             defaults = {f.name: f.default for f in dataclasses.fields(self)}
             given = [name for name in sorted(chosen - {"r_c"}) if getattr(self, name) != defaults[name]]
@@ -626,15 +627,12 @@ def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: Centr
 
     casing = config.casing
     t0 = time.perf_counter()
-    if runs_cache.is_file():
-        with np.load(runs_cache) as data:
-            Q_train, step_states = data["train"], data["step"]
+    runs = load_npz(runs_cache, ("train", "step"), what="training runs")
+    if runs is not None:
+        Q_train, step_states = runs["train"], runs["step"]
     else:
         Q_train, step_states = contact_training_states(scheme, train, casing, revolutions)
-        runs_cache.parent.mkdir(parents=True, exist_ok=True)
-        partial = runs_cache.with_suffix(".partial.npz")
-        np.savez(partial, train=Q_train, step=step_states)
-        partial.replace(runs_cache)                      # complete or absent
+        save_npz(runs_cache, train=Q_train, step=step_states)
     create = fem.create_disk_sector if model.sectors is not None else fem.create_blade_sector
     sector = create(MPI.COMM_SELF, preset=config.preset)
     reduced, rep = hyper_reduce(sector, model, Q_train, tol=config.cubature, level="point",
@@ -642,8 +640,7 @@ def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: Centr
     print(f"cubature: {rep['points']} of {rep['exact'].w.size} quadrature points (training error "
           f"{rep['result'].training_error:.1e}) from {Q_train.shape[1]} states of exact GNL runs at "
           f"{len(train)} speeds x {revolutions:g} rev; {time.perf_counter() - t0:.0f} s")
-    cache.parent.mkdir(parents=True, exist_ok=True)
-    np.savez(cache.with_suffix(".states.npz"), states=step_states)
+    save_npz(cache.with_suffix(".states.npz"), states=step_states)
     save_reduced_model(reduced, cache)                  # written last: its presence means both are complete
 
 
@@ -680,9 +677,9 @@ def disk_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np.n
     key = json.dumps([model.key, probe.tolist(), revolutions, scheme.h, scheme.frequency_cap, vars(config.casing),
                       "8 largest states"], sort_keys=True, default=str)
     cache = config.out / "cache" / f"gnl_probe_{hashlib.sha256(key.encode()).hexdigest()[:16]}.npz"
-    if cache.is_file():
-        with np.load(cache) as data:
-            return data["states"], float(data["h"])
+    cached = load_npz(cache, ("states", "h"), what="probe")
+    if cached is not None:
+        return cached["states"], float(cached["h"])
     for _ in range(5):
         res = simulate(scheme, probe, config.casing, revolutions=revolutions, on_blowup="flag", record_q=True,
                        record_every=max(1, int(round(2e-5 / scheme.h))))
@@ -693,10 +690,7 @@ def disk_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np.n
         raise ValueError(f"--h: the disk's capped GNL probe diverged down to h = {scheme.h:.3g} s; give a smaller "
                          f"step or a higher --frequency-cap")
     states = largest_states(res, scheme.boundary_rows, 8)
-    cache.parent.mkdir(parents=True, exist_ok=True)
-    partial = cache.with_name(cache.stem + f".{os.getpid()}.partial.npz")
-    np.savez(partial, states=states, h=scheme.h)
-    partial.replace(cache)                               # complete or absent (ranks may write it side by side)
+    save_npz(cache, states=states, h=scheme.h)           # ranks may write it side by side
     return states, scheme.h
 
 

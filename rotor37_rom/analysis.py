@@ -1,5 +1,6 @@
 """Analyses that combine the FE adapter with the pure modules: stress at the worst instant of a simulation, and the
-stress of every sector of a bladed disk from a disk model's state."""
+stress of every sector of a bladed disk from a disk model's state, and the full-order cyclic frequencies per nodal
+diameter (a disk model's: ``disk.harmonic_frequencies``)."""
 from __future__ import annotations
 
 import numpy as np
@@ -7,7 +8,7 @@ import numpy as np
 from rotor37_rom import fem
 
 __all__ = ["stress_at_peak", "disk_stress", "disk_stress_summary", "stress_location", "describe_location",
-           "tip_band", "TIP_BAND"]
+           "tip_band", "TIP_BAND", "cyclic_harmonic_frequencies"]
 
 TIP_BAND = 0.1     # cells closer to a contact node than this fraction of the span are reported apart
 
@@ -28,8 +29,8 @@ def stress_at_peak(sector, model, recovery, result, nonlinear: bool, sim: int = 
     k = int(np.nanargmax(np.abs(u_le) if magnitude else u_le))
     q = result.records_q[sim][:, k]
     cell_max = recovery.cell_max(q, nonlinear)
-    band, singular = tip_band(sector, model)
     mid = fem.cell_midpoints(sector)
+    band, singular = tip_band(sector, model, mid)
     regular = cell_max.copy()
     regular[band] = -np.inf
     cell = int(np.argmax(regular))
@@ -41,12 +42,13 @@ def stress_at_peak(sector, model, recovery, result, nonlinear: bool, sim: int = 
             "clim": [0.0, float(np.percentile(cell_max[~band], 99.5))]}
 
 
-def tip_band(sector, model) -> tuple[np.ndarray, np.ndarray]:
+def tip_band(sector, model, midpoints: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(cells within ``TIP_BAND`` of the span of a contact node, cells touching one) of the sector's mesh: the zone
-    of the contact impulses, where point forces make the FE stress singular."""
+    of the contact impulses, where point forces make the FE stress singular. ``midpoints``: the cells' midpoints
+    (``fem.cell_midpoints``) when the caller has them."""
     nodes = model.nodes.coordinates[model.nodes.sector == 0]        # the contact nodes on this sector's mesh
     singular = fem.cells_touching_points(sector, nodes)
-    mid = fem.cell_midpoints(sector)
+    mid = fem.cell_midpoints(sector) if midpoints is None else midpoints
     span = np.ptp(np.hypot(mid[:, 0], mid[:, 1]))
     distance = np.min(np.linalg.norm(mid[:, None, :] - nodes[None, :, :], axis=2), axis=1)
     return distance < TIP_BAND * span, singular
@@ -56,26 +58,27 @@ def disk_stress_summary(sector, model, values: np.ndarray, monitored: int = 0) -
     """The numbers of a disk's von Mises field (``disk_stress`` values, (N, n_cells), all sectors): the largest in
     sector ``monitored`` and over all sectors outside the tip band (and which sector), in the tip band, the ratio
     of the sector's to the yield stress, and where the two largest sit (``stress_location``)."""
-    band, _ = tip_band(sector, model)
+    mid = fem.cell_midpoints(sector)
+    band, _ = tip_band(sector, model, mid)
     regular = np.where(band[None, :], -np.inf, values)
     per_sector = regular.max(axis=1)
     worst = int(np.argmax(per_sector))
     return {"vm_max": float(per_sector[monitored]), "ratio_yield": float(per_sector[monitored] / sector.material.sigma_y),
             "vm_max_all_sectors": float(per_sector.max()), "sector_of_max": worst,
             "vm_max_tip_band": float(values[monitored][band].max()),
-            "location": stress_location(sector, model, int(np.argmax(regular[monitored]))),
-            "location_all_sectors": stress_location(sector, model, int(np.argmax(regular[worst]))),
+            "location": stress_location(sector, model, int(np.argmax(regular[monitored])), mid),
+            "location_all_sectors": stress_location(sector, model, int(np.argmax(regular[worst])), mid),
             "clim": [0.0, float(np.percentile(values[:, ~band], 99.5))]}
 
 
-def stress_location(sector, model, cell: int) -> dict:
+def stress_location(sector, model, cell: int, midpoints: np.ndarray | None = None) -> dict:
     """Where a cell of a disk sector's mesh sits, in the sector's own frame (rotor axis z): its centroid's radius,
     axial position and angle, its height above the hub cone (Table V's hub line, where the blade root meets the rim:
     > 0 in the blade, < 0 in the disk), and in the blade the fraction of the span there (height over the tip's,
-    the tip radius interpolated in z between the contact nodes)."""
+    the tip radius interpolated in z between the contact nodes). ``midpoints`` as in ``tip_band``."""
     from rotor37_rom.geometry.disk import hub_radius
 
-    x = fem.cell_midpoints(sector)[cell]
+    x = (fem.cell_midpoints(sector) if midpoints is None else midpoints)[cell]
     r, z = float(np.hypot(x[0], x[1])), float(x[2])
     height = r - float(hub_radius(z))
     tips = model.nodes.coordinates[model.nodes.sector == 0]
@@ -113,3 +116,19 @@ def disk_stress(sector, model, q: np.ndarray, nonlinear: bool = True, sectors=No
         fields.append(field)
         values.append(fem.von_mises_function(sector, u, nonlinear, degree=0).x.array.copy())
     return np.array(fields), np.array(values)
+
+
+def cyclic_harmonic_frequencies(sector, n_families: int, K=None, M=None, ops=None, harmonics=None) -> np.ndarray:
+    """(len(harmonics), n_families) rad/s: the full-order frequencies of the cyclic ``sector`` at each harmonic index
+    of ``harmonics`` (default k = 0 ... N/2; ``fem.CyclicOperators``, kept over k; each cos/sin pair counted once)."""
+    if n_families < 1:
+        raise ValueError(f"n_families must be >= 1, got {n_families}")
+    half = sector.cyclic.n_sectors // 2
+    harmonics = range(half + 1) if harmonics is None else [int(k) for k in harmonics]
+    if any(not 0 <= k <= half for k in harmonics):
+        raise ValueError(f"harmonics must be in 0 ... {half}, got {list(harmonics)}")
+    cyc = fem.CyclicOperators(sector, K, M, ops)
+    try:
+        return np.array([cyc.modes(k, n_families).distinct()[0][:n_families] for k in harmonics])
+    finally:
+        cyc.destroy()

@@ -179,12 +179,15 @@ def training_states(K_lin: np.ndarray, M_lin: np.ndarray, pairs: np.ndarray, md_
 
 def cached_model(metadata: dict, cache_dir: str | Path | None, prefix: str):
     """(path, model): the cache file of a reduced model with this metadata (None without cache_dir) and the model
-    read from it when it exists (else None)."""
+    read from it when it exists (else None: also when the file is damaged or another model's, to be built again)."""
     key = reduced_model_key(metadata)
     cache = Path(cache_dir) / f"{prefix}_{key}.npz" if cache_dir else None
     if cache is not None and cache.is_file():
         LOG.info("loading cached reduced model %s", cache)
-        return cache, load_reduced_model(cache, expected_key=key)
+        try:
+            return cache, load_reduced_model(cache, expected_key=key)
+        except ValueError as exc:
+            LOG.warning("ignoring the cached model (%s): built again", exc)
     return cache, None
 
 

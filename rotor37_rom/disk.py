@@ -32,7 +32,7 @@ __all__ = ["SectorForces", "SectorMatrices", "DiskBasis", "HarmonicBlocks", "int
            "disk_node_map", "sector_harmonics", "harmonic_node_load", "harmonic_field_load", "repeat_count",
            "performance_indicator", "travelling_wave_departure", "INDICATOR_CRITERIA", "mistuning_factors",
            "best_approximation", "face_shapes", "travelling_load", "sector_force_basis",
-           "indicator_histories"]
+           "indicator_histories", "harmonic_frequencies"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -440,6 +440,51 @@ def sector_harmonics(V: np.ndarray, blocks: np.ndarray) -> np.ndarray:
     folded = spectrum[: N // 2 + 1].copy()
     folded[1:(N + 1) // 2] += spectrum[N - 1:N // 2:-1]             # k and N - k are the same pattern
     return np.argmax(folded, axis=0)
+
+
+def harmonic_frequencies(model, n_families: int, tol: float = 1e-8) -> np.ndarray:
+    """(N // 2 + 1, n_families) rad/s: a tuned disk model's lowest ``n_families`` frequencies at each harmonic index
+    k = 0 ... N/2 (each cos/sin pair of 0 < k < N/2 counted once); NaN where the model has fewer modes of that k.
+
+    Each k is solved on its own subspace: the real DFT over the sector index of the sector blocks (``real_dft``) and
+    the interface modes of index k (each column of Pi is one harmonic exactly: its DFT over the sectors). So a model
+    whose families of different k coincide (e.g. nodal diameters left without interface modes, all with the faces
+    held) still gives each k its own values; sorting the disk's eigenvectors by their dominant harmonic
+    (``sector_harmonics``) would mix such degenerate modes as the eigensolver's round-off falls. ValueError for a
+    mistuned disk (its K or M couple the harmonics by more than ``tol`` of their norm)."""
+    basis = getattr(model, "sectors", None)
+    if basis is None:
+        raise ValueError("harmonic_frequencies needs a disk model (model.sectors is None: a single blade's model)")
+    if n_families < 1:
+        raise ValueError(f"n_families must be >= 1, got {n_families}")
+    N, rs = basis.blocks.shape
+    if not np.array_equal(basis.blocks.ravel(), np.arange(N * rs)):
+        raise ValueError("harmonic_frequencies needs the sector blocks first in q, in order")
+    nL = basis.Psi_L.shape[1]
+    spectrum = np.abs(np.fft.fft(basis.Pi.reshape(N, nL, -1), axis=0)) ** 2            # (N, n_L, r_cyclic)
+    power = spectrum.sum(axis=1)
+    folded = power[: N // 2 + 1].copy()
+    folded[1:(N + 1) // 2] += power[N - 1:N // 2:-1]
+    k_pi = np.argmax(folded, axis=0)                                                    # exact: one harmonic each
+    F = real_dft(N)
+    dft_k = np.array([0] + [k for k in range(1, (N + 1) // 2) for _ in (0, 1)] + ([N // 2] if N % 2 == 0 else []))
+    T = scipy.sparse.block_diag([scipy.sparse.kron(F, np.eye(rs)), scipy.sparse.identity(model.K.shape[0] - N * rs)]
+                                ).tocsr()
+    Kt, Mt = (np.asarray(T @ np.asarray(T @ A).T).T for A in (model.K, model.M))       # T A T^T
+    k_of = np.concatenate([np.repeat(dft_k, rs), k_pi])
+    outside = k_of[:, None] != k_of[None, :]
+    for name, A in (("K", Kt), ("M", Mt)):
+        if np.linalg.norm(A[outside]) > tol * np.linalg.norm(A):
+            raise ValueError(f"the model's {name} couples the harmonic indices (a mistuned disk): no frequencies "
+                             f"per nodal diameter")
+    out = np.full((N // 2 + 1, n_families), np.nan)
+    for k in range(N // 2 + 1):
+        idx = np.flatnonzero(k_of == k)
+        lam = scipy.linalg.eigh(Kt[np.ix_(idx, idx)], Mt[np.ix_(idx, idx)], eigvals_only=True)
+        m = 1 if k == 0 or 2 * k == N else 2                                            # cos/sin: each value twice
+        values = np.sqrt(np.maximum(lam, 0.0))[::m][:n_families]
+        out[k, :values.size] = values
+    return out
 
 
 def travelling_wave_departure(u: np.ndarray, window: np.ndarray, shift: int) -> tuple[float, float]:

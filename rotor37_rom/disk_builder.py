@@ -11,7 +11,6 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import logging
-import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +22,7 @@ from rotor37_rom.cyclic import rotation_z
 from rotor37_rom.disk import (DiskBasis, SectorForces, SectorMatrices, assemble_disk_matrices, disk_node_map,
                               face_shapes, interface_modes)
 from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces
+from rotor37_rom.npz import load_npz, save_npz
 from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, ReducedModel, craig_bampton, modal_damping,
                                    reduced_model_key, save_reduced_model, select_pairs, selection_weights,
                                    simulate_linear_newmark)
@@ -166,19 +166,15 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
                "kind": "disk Craig-Bampton", "boundary": boundary.tolist(),
                "free": hashlib.sha256(np.ascontiguousarray(free, np.int64).tobytes()).hexdigest()}
     cb_file = Path(cache_dir) / f"disk_cb_{reduced_model_key(cb_meta)}.npz" if cache_dir else None
-    cb = None
-    if cb_file is not None and cb_file.is_file():
-        try:
-            with np.load(cb_file) as data:
-                cb = data["Psi"], data["Theta"], data["omega_c"]
-            if cb[0].shape != (free.size, boundary.size) or cb[1].shape != (free.size, config.r_c):
-                raise ValueError(f"shapes {cb[0].shape}, {cb[1].shape}")
-            LOG.info("Craig-Bampton modes read from %s", cb_file)
-        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:   # a damaged file: again
-            LOG.warning("ignoring %s (%s): Craig-Bampton computed again", cb_file, exc)
-            cb = None
+
+    def shapes(arrays: dict) -> None:
+        if arrays["Psi"].shape != (free.size, boundary.size) or arrays["Theta"].shape != (free.size, config.r_c):
+            raise ValueError(f"shapes {arrays['Psi'].shape}, {arrays['Theta'].shape}")
+
+    cb = load_npz(cb_file, ("Psi", "Theta", "omega_c"), shapes, what="Craig-Bampton cache")
     if cb is not None:
-        Psi_f, Theta_f, omega_c = cb
+        LOG.info("Craig-Bampton modes read from %s", cb_file)
+        Psi_f, Theta_f, omega_c = cb["Psi"], cb["Theta"], cb["omega_c"]
         if config.load_patch:               # the correction's solve on the interior DOFs
             interior = np.setdiff1d(np.arange(free.size), pos)
             factorised.append(fem.mumps_solver(K_f[interior][:, interior]))
@@ -186,10 +182,7 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
         Psi_f, Theta_f, omega_c = craig_bampton(K_f, M_f, pos, config.r_c, solve=solve,
                                                 eigensolve=fem.slepc_eigenpairs)
         if cb_file is not None:
-            cb_file.parent.mkdir(parents=True, exist_ok=True)
-            tmp = cb_file.with_suffix(".tmp.npz")
-            np.savez(tmp, Psi=Psi_f, Theta=Theta_f, omega_c=omega_c)
-            tmp.replace(cb_file)
+            save_npz(cb_file, Psi=Psi_f, Theta=Theta_f, omega_c=omega_c)
     nb, nL = tip_dofs.size, left.size
     R_blk = np.kron(np.eye(nL // 3), rotation_z(pairs.angle))          # u_R = R u_L of the next sector, per node
     Psi_tip, Psi_L, Psi_Rr = Psi_f[:, :nb], Psi_f[:, nb:nb + nL], Psi_f[:, nb + nL:] @ R_blk

@@ -16,6 +16,7 @@ import scipy.integrate
 import scipy.linalg
 
 from rotor37_rom.nonlinear_forces import PolynomialForces, QuadratureForces
+from rotor37_rom.npz import save_npz
 
 __all__ = [
     "NodeMap",
@@ -508,10 +509,7 @@ def save_reduced_model(model: ReducedModel, path: str | Path) -> Path:
         arrays["forces"] = "none"
     if model.sectors is not None:
         arrays.update({f"sectors_{name}": value for name, value in dataclasses.asdict(model.sectors).items()})
-    tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez(tmp, **arrays)
-    tmp.replace(path)
-    return path
+    return save_npz(path, **arrays)
 
 
 def load_reduced_model(path: str | Path, expected_key: str | None = None) -> ReducedModel:

@@ -11,7 +11,6 @@ import dataclasses
 import hashlib
 import json
 import logging
-import os
 from pathlib import Path
 from collections.abc import Iterator, Mapping
 from typing import Sequence
@@ -20,6 +19,7 @@ import numpy as np
 
 from rotor37_rom.casing import Casing
 from rotor37_rom.integrator import CentralDifference, simulate
+from rotor37_rom.npz import save_npz
 
 __all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "load_speed", "sweep_folder", "interaction_map",
            "InteractionMap", "engine_order_resonance", "record_row", "last_revolution_max", "sector_maxima",
@@ -90,12 +90,6 @@ def load_speed(folder: str | Path, omega: float) -> Mapping | None:
     return _load_result(path) if path.exists() else None
 
 
-def _atomic_savez(path: Path, **arrays) -> None:
-    tmp = path.with_name(path.name + f".tmp{os.getpid()}.npz")
-    np.savez(tmp, **arrays)
-    tmp.replace(path)
-
-
 class SavedRecord(Mapping):
     """A saved result (one speed's record, a checkpoint) read from its .npz file on demand: entries under 1 MB are
     read when it opens, each larger one when first asked for, then kept. A 200-revolution disk record holds ~230 MB of
@@ -128,7 +122,7 @@ class SavedRecord(Mapping):
 
 def _load_result(path: Path) -> SavedRecord | None:
     """The saved result at ``path`` (``SavedRecord``), None if its file cannot be opened (truncated, corrupted: the
-    caller computes it again; files are written whole by ``_atomic_savez``, so a member that opens reads)."""
+    caller computes it again; files are written whole by ``save_npz``, so a member that opens reads)."""
     try:
         return SavedRecord(path)
     except Exception:
@@ -163,31 +157,34 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
         if data is None or "speeds" not in data:
             ckpt.unlink(missing_ok=True)
             continue
-        resumed.append((ckpt, np.asarray(data["speeds"], float)))
-    in_ckpt = set(np.concatenate([b for _, b in resumed]).tolist()) if resumed else set()
+        resumed.append((ckpt, np.asarray(data["speeds"], float), int(data["n"]) if "n" in data else 0))
+    in_ckpt = set(np.concatenate([b for _, b, _ in resumed]).tolist()) if resumed else set()
     todo = [w for w in speeds if w not in in_ckpt and not _readable(_speed_file(folder, w))]
     mine = todo[rank::size]
-    batches = [b for _, b in resumed[rank::size]] + [np.array(mine[i:i + spec.batch_size])
+    batches = [b for _, b, _ in resumed[rank::size]] + [np.array(mine[i:i + spec.batch_size])
                                                      for i in range(0, len(mine), spec.batch_size)]
     record_every = max(1, int(round(spec.record_dt / scheme.h)))
     bar = None
     if progress and rank == 0 and batches:
         try:
             from tqdm import tqdm
-            total = int(sum(np.ceil(spec.revolutions * 2 * np.pi / w / scheme.h) for b in batches for w in b))
+            steps = lambda w: np.ceil(spec.revolutions * 2 * np.pi / w / scheme.h)          # noqa: E731
+            total = int(sum(steps(w) for b in batches for w in b))
+            done = int(sum(min(n, steps(w)) for _, b, n in resumed[rank::size] for w in b))   # resumed batches
             # rank 0's simulation-steps, scaled by the ranks (they run equal shares)
-            bar = tqdm(total=total * size, unit="sim-step", unit_scale=True, desc=f"sweep ({len(todo)} speeds)")
+            bar = tqdm(total=total * size, initial=done * size, unit="sim-step", unit_scale=True,
+                       desc=f"sweep ({len(todo) + len(in_ckpt)} speeds, {len(in_ckpt)} resumed)")
         except ImportError:
             bar = None
     for batch in batches:
         ckpt = folder / f"batch_{hashlib.sha256(batch.tobytes()).hexdigest()[:12]}.ckpt.npz"
 
         def on_finish(p, rec, batch=batch):
-            _atomic_savez(_speed_file(folder, batch[p]), omega=batch[p], h=scheme.h, t=rec["t"], u_r=rec["u_r"],
-                          lam=rec["lam"], q_final=rec["q_final"], q_prev=rec["q_prev"],
-                          max_penetration=rec["max_penetration"], min_multiplier=rec["min_multiplier"],
-                          friction_power=rec["friction_power"], diverged_step=rec["diverged_step"],
-                          work=rec["work"], revolutions=spec.revolutions, labels=rec["labels"])
+            save_npz(_speed_file(folder, batch[p]), omega=batch[p], h=scheme.h, t=rec["t"], u_r=rec["u_r"],
+                     lam=rec["lam"], q_final=rec["q_final"], q_prev=rec["q_prev"],
+                     max_penetration=rec["max_penetration"], min_multiplier=rec["min_multiplier"],
+                     friction_power=rec["friction_power"], diverged_step=rec["diverged_step"],
+                     work=rec["work"], revolutions=spec.revolutions, labels=rec["labels"])
 
         state = _load_state(ckpt, batch.size)
 
@@ -244,7 +241,7 @@ def _save_state(path: Path, st: dict, speeds: np.ndarray) -> None:
     for p in range(len(st["u_r"])):
         arrays[f"u_r{p}"] = st["u_r"][p]
         arrays[f"lam{p}"] = st["lam"][p]
-    _atomic_savez(path, **arrays)
+    save_npz(path, **arrays)
 
 
 def _load_state(path: Path, P: int) -> dict | None:
@@ -410,7 +407,8 @@ class ContinuationPoint:
     amplitude: float
     steady: bool
     halvings: int
-    period: int = 0            # in half revolutions (``response_period``); 0: not periodic within 12 T, -1: unknown
+    period: int = 0            # in half revolutions (``response_period``); 0: not periodic within 12 T; -1: unknown
+                               # (record too short, or the run diverged)
 
 
 def continuation(scheme: CentralDifference, start: float, stop: float, step: float, casing: Casing = Casing(),
@@ -462,9 +460,9 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
     def save(finished: bool) -> None:
         if path is not None:
             path.parent.mkdir(parents=True, exist_ok=True)
-            _atomic_savez(path, points=np.array([[p.omega, p.amplitude, p.steady, p.halvings, p.period]
-                                                        for p in points]),
-                          q=state[0], q_prev=state[1], phase=phase, omega=omega, finished=finished)
+            save_npz(path, points=np.array([[p.omega, p.amplitude, p.steady, p.halvings, p.period]
+                                            for p in points]),
+                     q=state[0], q_prev=state[1], phase=phase, omega=omega, finished=finished)
 
     if saved is not None:
         points = [ContinuationPoint(float(w), float(a), bool(s), int(k), *(int(x) for x in rest))
@@ -479,7 +477,7 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
         state, omega = (res.q_final[:, 0], res.q_prev[:, 0]), start
         phase = casing.rotation_sense * start * res.n_steps[0] * scheme.h    # the casing angle carries over
         if res.diverged_step[0] >= 0:
-            points = [ContinuationPoint(start, np.nan, False, 0)]
+            points = [ContinuationPoint(start, np.nan, False, 0, -1)]
             save(True)
             return points
         row = res.row(node)
@@ -519,7 +517,7 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
         u = r.u_r[p][r.row(node)]
         bounded = r.diverged_step[p] < 0
         points.append(ContinuationPoint(target, last_revolution_max(r.t[p], u, target) if bounded else np.nan,
-                                        steady, k, response_period(r.t[p], u, target, tol) if bounded else 0))
+                                        steady, k, response_period(r.t[p], u, target, tol) if bounded else -1))
         amp = points[-1].amplitude
         if r.diverged_step[p] >= 0:            # nothing sensible to continue from: the branch ends here
             LOG.warning("continuation stopped at %.1f rad/s: the run diverged at step %d", target,

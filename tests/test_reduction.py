@@ -4,15 +4,19 @@ Round-off tolerances are derived from u = 1.1e-16 (unit round-off), the cancella
 for linear solves, backward errors and the smallest eigenvalue of K; each assertion says which.
 """
 
+import json
+
 import numpy as np
 import pytest
 import scipy.linalg
 import scipy.sparse.linalg
 
 from rotor37_rom import fem
-from rotor37_rom.builder import ReductionConfig, build_reduced_model, compute_modal_derivatives, training_states
+from rotor37_rom.builder import (ReductionConfig, build_reduced_model, cached_model, compute_modal_derivatives,
+                                 training_states)
 from rotor37_rom.ecsw import state_errors, train_ecsw
 from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces
+from rotor37_rom.npz import load_npz, save_npz
 from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, craig_bampton, load_reduced_model,
                                    save_reduced_model, select_pairs, selection_weights)
 from rotor37_rom.step import identify_step
@@ -347,6 +351,40 @@ def test_save_load_and_refusals(rom, tmp_path):
     bad.write_bytes(path.read_bytes()[:1000])
     with pytest.raises(ValueError, match="corrupted"):
         load_reduced_model(bad)
+    # as a cache, a damaged file or another model's is built again, never trusted
+    metadata = json.loads(str(np.load(path)["meta"]))["metadata"]
+    cache, cached = cached_model(metadata, tmp_path, "rom")
+    assert cached is None and not cache.exists()
+    save_reduced_model(model, cache)
+    assert cached_model(metadata, tmp_path, "rom")[1].key == model.key
+    for damage in (cache.read_bytes()[:1000], path.read_bytes()[:-10], b"garbage"):
+        cache.write_bytes(damage)
+        assert cached_model(metadata, tmp_path, "rom")[1] is None
+
+
+def test_cache_files_are_whole_or_ignored(tmp_path):
+    """``save_npz`` leaves the file complete (no temporary beside it); ``load_npz`` gives None for a file that is
+    absent, truncated, garbage, short of a name or failing the caller's check, and the arrays otherwise."""
+    a, b = np.arange(12.0).reshape(3, 4), np.array(2.5)
+    path = save_npz(tmp_path / "sub" / "c.npz", a=a, b=b)
+    assert sorted(p.name for p in path.parent.iterdir()) == ["c.npz"]
+    got = load_npz(path, ("a", "b"))
+    np.testing.assert_array_equal(got["a"], a)
+    assert float(got["b"]) == 2.5
+
+    def shape(arrays):
+        if arrays["a"].shape != (3, 4):
+            raise ValueError(f"shape {arrays['a'].shape}")
+
+    assert load_npz(path, ("a",), shape)["a"].shape == (3, 4)
+    assert load_npz(None) is None and load_npz(tmp_path / "none.npz") is None
+    assert load_npz(path, ("a", "c")) is None                          # a name missing
+    save_npz(path, a=a.T, b=b)
+    assert load_npz(path, ("a",), shape) is None                       # the caller's check
+    whole = path.read_bytes()
+    for damage in (whole[: len(whole) // 2], whole[:-30], b"garbage", b""):
+        path.write_bytes(damage)
+        assert load_npz(path) is None, damage[:20]
 
 
 def test_bad_reduction_input(ci_blade, ci_ops, free_operators):

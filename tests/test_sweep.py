@@ -3,6 +3,7 @@ interaction-map spectra and the steady-state test recover known signals."""
 import dataclasses
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -25,7 +26,7 @@ class _Killed(Exception):
     pass
 
 
-def test_killed_sweep_resumes(ci_rom, tmp_path, monkeypatch):
+def test_killed_sweep_resumes(ci_rom, tmp_path, monkeypatch, capsys):
     scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
     spec = SweepSpec(revolutions=0.25, casing=Casing(), record_dt=2e-6)
     steps = np.ceil(0.25 * 2 * np.pi / SPEEDS / scheme.h).astype(int)     # 1600 rad/s finishes first
@@ -53,8 +54,13 @@ def test_killed_sweep_resumes(ci_rom, tmp_path, monkeypatch):
         return real(*args, state=state, **kwargs)
 
     monkeypatch.setattr(sweep_mod, "simulate", spy)
-    run_sweep(scheme, SPEEDS, spec, tmp_path / "a", progress=False)
+    capsys.readouterr()
+    run_sweep(scheme, SPEEDS, spec, tmp_path / "a", progress=True)
     assert resumed_from == [kill_at]                                          # one batch, resumed where it died
+    # the progress bar starts where the batch stopped: the finished speed whole, the other at its step
+    done = 100 * (steps.min() + kill_at) / steps.sum()
+    first = re.search(r"sweep \(2 speeds, 2 resumed\):\s+(\d+)%", capsys.readouterr().err)
+    assert first is not None and abs(int(first.group(1)) - done) <= 0.5, (first, done)    # tqdm rounds to 1 %
     assert not list(folder.glob("batch_*.ckpt.npz"))
     monkeypatch.setattr(sweep_mod, "simulate", real)
     ref_folder = run_sweep(scheme, SPEEDS, spec, tmp_path / "b", progress=False)

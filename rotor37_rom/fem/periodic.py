@@ -26,6 +26,7 @@ import scipy.sparse as sp
 from rotor37_rom.casing import (Casing, ContactSetError, ContactSolver, casing_clearance, contact_frames,
                                 friction_power, node_angles, ramp_rate)
 from rotor37_rom.cyclic import repeating_sector_maps
+from rotor37_rom.npz import save_npz
 
 from .operators import (SvkOperators, _require_serial, assemble_mass, assemble_stiffness, assemble_tangent_scipy,
                         create_svk_operators, evaluate_forces, free_dofs, petsc_to_scipy)
@@ -392,12 +393,10 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
             fields.append(per_sector)
             snaps.append(k)
         if checkpoint is not None and (time.perf_counter() - saved > checkpoint_seconds or k == n_steps):
-            tmp = Path(str(checkpoint) + ".tmp.npz")
-            np.savez(tmp, signature=signature, x=x, v=v, a=a, tips=np.array(tips),
+            save_npz(checkpoint, signature=signature, x=x, v=v, a=a, tips=np.array(tips),
                      fields=np.array(fields).reshape((-1, n_repeat, sector.n_dofs)),
                      snaps=np.array(snaps, np.int64), its=np.array(its, np.int64), refreshes=cache["refreshes"],
                      step=k, elapsed=time.perf_counter() - t_wall, lams=np.array(lams), checks=checks)
-            tmp.replace(checkpoint)
             saved = time.perf_counter()
     refreshes = cache["refreshes"]
     LOG.info("repeating-sector Newmark: %d steps, %d factorisations, %.1f s", n_steps, refreshes,

@@ -1,0 +1,50 @@
+"""Array files that are complete or absent: the one way the project writes its caches, checkpoints and records
+(``save_npz``: written under a temporary name, then renamed, so a reader never opens half a file and ranks writing
+the same file side by side do not clash), and reads a cache that may be damaged (``load_npz``: a damaged or
+mismatched file is reported and treated as absent, so the caller computes it again)."""
+from __future__ import annotations
+
+import logging
+import os
+import zipfile
+from pathlib import Path
+from typing import Callable, Iterable
+
+import numpy as np
+
+__all__ = ["save_npz", "load_npz", "DAMAGED"]
+
+LOG = logging.getLogger(__name__)
+
+DAMAGED = (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile)     # what reading a damaged .npz raises
+
+
+def save_npz(path: str | Path, **arrays) -> Path:
+    """Write ``arrays`` to ``path`` (.npz, its folder created) complete or not at all; returns the path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f"{path.name}.tmp{os.getpid()}.npz")
+    try:
+        np.savez(tmp, **arrays)
+        tmp.replace(path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return path
+
+
+def load_npz(path: str | Path | None, names: Iterable[str] | None = None,
+             check: Callable[[dict], None] | None = None, what: str = "cache") -> dict | None:
+    """The arrays ``names`` (default all) of the .npz file ``path``, or None when there is no file or it is damaged
+    (unreadable, a name missing, or ``check`` raising ValueError on the arrays read: a wrong shape, another key).
+    A damaged file is logged as ignored (``what`` names it) and left for the caller to write again."""
+    if path is None or not Path(path).is_file():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {name: data[name] for name in (data.files if names is None else names)}
+        if check is not None:
+            check(arrays)
+    except DAMAGED as exc:
+        LOG.warning("ignoring %s %s (%s: %s): computed again", what, path, exc.__class__.__name__, exc)
+        return None
+    return arrays
