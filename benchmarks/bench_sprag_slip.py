@@ -13,7 +13,12 @@ det(N G (N + mu S)^T) = 0 (``friction.sprag_slip_friction``). Choices measured, 
   -theta) in the casing's tangent plane;
 - clamp: the blade clamped at section 1, or the 4 mm shorter blade on its disk (the bladed-disk sector, bore
   clamped) for all blades in phase (k = 0) and in antiphase (k = 18);
-- tip nodes: 8 or 16 along the tip camber line; the full or the 4 mm shorter blade.
+- tip nodes: 8 or 16 along the tip camber line; the full or the 4 mm shorter blade;
+- centrifugal prestress (the paper has none): the full blade clamped at section 1 turning at 1,400 and 1,800 rad/s
+  about the machine axis, G from the tangent of the rotating blade at its centrifugal equilibrium,
+  K_T(u_c) - Omega^2 M_P (``fem.solve_static(spin=...)``, ``fem.assemble_tangent``). Printed beside it: the
+  prestressed 1B, 1T, 2B frequencies, Southwell's coefficient S (omega_1^2 = omega_1,0^2 + S Omega^2) and the speed
+  where the prestressed 1B meets engine order 4 (omega_1(Omega) = 4 Omega, by fixed point on S).
 
 Rows: mu* of the weakest node, of the LE half of the tip (the nodes that touch first at the 1B/EO4 interaction) and
 of all nodes. Results to results/bench_sprag_slip.json, printed as Markdown (docs/results.md).
@@ -36,6 +41,7 @@ from rotor37_rom.casing import contact_frames  # noqa: E402
 from rotor37_rom.friction import sprag_slip_friction  # noqa: E402
 
 SENSES = (-1, 1)             # rotor 37 is taken to turn towards -theta (inferred from the stagger); +1 for contrast
+SPINS = (1400.0, 1800.0)     # rad/s: the 1B/EO4 region and the design speed
 
 
 def frames(nodes: np.ndarray, normal: str, sense: int, root: np.ndarray, tip: np.ndarray):
@@ -66,19 +72,69 @@ def onsets(G: np.ndarray, nodes: np.ndarray, normal: str, sense: int, root, tip)
             "le_half": sprag_slip_friction(K, N, S, list(range(n_nodes // 2))), "all": sprag_slip_friction(K, N, S)}
 
 
+def rotating_tangent(blade, ops, spin: float):
+    """K_T(u_c) - spin^2 M_P at the blade's centrifugal equilibrium u_c (PETSc, clamped)."""
+    from rotor37_rom import fem
+
+    u = fem.solve_static(blade, spin=spin, n_steps=2, ops=ops).u.x.array
+    return fem.assemble_tangent(blade, u, ops, spin)
+
+
+def prestressed_frequencies(preset: str) -> dict:
+    """The full blade's 1B, 1T, 2B (rad/s) at rest and turning at each of SPINS, Southwell's S of 1B, and the EO4
+    crossing of the prestressed 1B: Omega = omega_1,0 / sqrt(16 - S(Omega)), iterated to 0.01 rad/s."""
+    from rotor37_rom import fem
+
+    blade = fem.create_blade_sector(preset=preset)
+    ops = fem.create_svk_operators(blade)
+    M, K = fem.assemble_mass(blade, ops), fem.assemble_stiffness(blade, ops)
+    rest = np.asarray(fem.solve_eigenproblem(K, M, 3)[0])
+    K.destroy()
+
+    def turning(spin):
+        K = rotating_tangent(blade, ops, spin)
+        w = np.asarray(fem.solve_eigenproblem(K, M, 3)[0])
+        K.destroy()
+        return w, (w[0] ** 2 - rest[0] ** 2) / spin**2
+
+    out = {"preset": preset, "rest_rad_s": rest.tolist(), "turning": []}
+    for spin in SPINS:
+        w, S = turning(spin)
+        out["turning"].append({"spin_rad_s": spin, "frequencies_rad_s": w.tolist(), "southwell": S})
+    crossing, S = rest[0] / 4, 0.0
+    for _ in range(8):
+        w, S = turning(crossing)
+        new = rest[0] / np.sqrt(16 - S)
+        done, crossing = abs(new - crossing) < 1e-2, new
+        if done:
+            break
+    M.destroy()
+    out.update(eo4_crossing_rad_s=float(crossing), eo4_crossing_at_rest_rad_s=float(rest[0] / 4), southwell=S)
+    return out
+
+
 def configurations(preset: str):
-    """(clamp, blade shortening (m), tip nodes, sector, K) one at a time; K None: the sector's own clamped stiffness,
-    else the disk's cyclic K_k (the sector is freed after its rows)."""
+    """(clamp, blade shortening (m), tip nodes, prestress speed (rad/s), sector, K) one at a time; K None: the
+    sector's own clamped stiffness, else the rotating blade's prestressed tangent or the disk's cyclic K_k (freed
+    after its rows)."""
     from rotor37_rom import fem
     from rotor37_rom.fem.cyclic import CyclicOperators
 
     for shorten, n_tip in ((0.0, 8), (4e-3, 8), (0.0, 16)):
-        yield "section 1", shorten, n_tip, fem.create_blade_sector(preset=preset, shorten=shorten, n_tip_nodes=n_tip), None
+        blade = fem.create_blade_sector(preset=preset, shorten=shorten, n_tip_nodes=n_tip)
+        yield "section 1", shorten, n_tip, 0.0, blade, None
+        if shorten or n_tip != 8:
+            continue
+        ops = fem.create_svk_operators(blade)
+        for spin in SPINS:
+            K = rotating_tangent(blade, ops, spin)
+            yield "section 1", shorten, n_tip, spin, blade, K
+            K.destroy()
     disk = fem.create_disk_sector(preset=preset)
     cyclic = CyclicOperators(disk)
     for k in (0, 18):
         Kk, Mk, T = cyclic.project(k)
-        yield f"disk, k = {k}", 4e-3, len(disk.tip_nodes), disk, Kk
+        yield f"disk, k = {k}", 4e-3, len(disk.tip_nodes), 0.0, disk, Kk
         for A in (Kk, Mk, T):
             A.destroy()
     cyclic.destroy()
@@ -96,40 +152,58 @@ def main(argv=None) -> int:
     rows = []
     for preset in args.presets:
         roots = {}                                         # blade shortening -> root face centroid (section 1)
-        for clamp, shorten, n_tip, sector, K in configurations(preset):
-            t0 = time.perf_counter()
+        t0 = time.perf_counter()
+        for clamp, shorten, n_tip, spin, sector, K in configurations(preset):
             G = fem.static_compliance(sector, sector.tip_dofs, K=K)
-            if K is None:
+            seconds = time.perf_counter() - t0             # meshing or prestress (in the generator) and G
+            if clamp == "section 1":
                 roots[shorten] = fem.facet_centroid(sector, "clamp")
             root, tip = roots[shorten], fem.facet_centroid(sector, "tip")    # the disk's blade: its own tip face
             for sense in SENSES:
                 for normal in NORMALS:
                     res = onsets(G, sector.tip_nodes, normal, sense, root, tip)
                     rows.append({"preset": preset, "clamp": clamp, "shorten_mm": 1e3 * shorten, "tip_nodes": n_tip,
-                                 "sense": sense, "normal": normal, "dofs": sector.n_dofs,
-                                 "seconds": time.perf_counter() - t0,
+                                 "prestress_rad_s": spin, "sense": sense, "normal": normal, "dofs": sector.n_dofs,
+                                 "seconds": seconds,
                                  "root_centroid_deg": float(np.degrees(np.arctan2(root[1], root[0]))),
                                  "tip_centroid_deg": float(np.degrees(np.arctan2(tip[1], tip[0]))), **res})
-                    print(f"{preset:6s} {clamp:12s} L-{1e3 * shorten:.0f} mm {n_tip:2d} nodes sense {sense:+d} "
+                    print(f"{preset:6s} {clamp:12s} L-{1e3 * shorten:.0f} mm {n_tip:2d} nodes spin {spin:4.0f} "
+                          f"sense {sense:+d} "
                           f"{normal:14s} weakest {res['weakest']:.3f}  LE half {res['le_half']:.3f}  all "
                           f"{res['all']:.3f}", flush=True)
-    machine = write_results("bench_sprag_slip", [{k: _json(v) for k, v in r.items()} for r in rows])
+            t0 = time.perf_counter()
+    turning = [prestressed_frequencies(preset) for preset in args.presets]
+    machine = write_results("bench_sprag_slip", [{k: _json(v) for k, v in r.items()} for r in rows],
+                            prestressed_frequencies=turning)
     print(f"\nMachine: {machine}. Command: python benchmarks/bench_sprag_slip.py --presets {' '.join(args.presets)}\n")
     print("mu* of the LE half / the weakest node / all nodes ('none': friction never wedges them)\n")
-    print("| preset | clamp | blade | tip nodes | sense | " + " | ".join(NORMALS) + " |")
-    print("|---|---|---|---|---|" + "---|" * len(NORMALS))
+    print("| preset | clamp | blade | tip nodes | prestress | sense | " + " | ".join(NORMALS) + " |")
+    print("|---|---|---|---|---|---|" + "---|" * len(NORMALS))
 
     def key(r):
-        return r["preset"], r["clamp"], r["shorten_mm"], r["tip_nodes"], r["sense"]
+        return r["preset"], r["clamp"], r["shorten_mm"], r["tip_nodes"], r["prestress_rad_s"], r["sense"]
 
     for k in dict.fromkeys(key(r) for r in rows):          # configurations in the order they ran
         cells = []
         for normal in NORMALS:
             r = next(r for r in rows if key(r) == k and r["normal"] == normal)
             cells.append(f"{_fmt(r['le_half'])} / {_fmt(r['weakest'])} / {_fmt(r['all'])}")
-        preset, clamp, shorten, n_tip, sense = k
-        print(f"| {preset} | {clamp} | {'4 mm shorter' if shorten else 'full'} | {n_tip} | {sense:+d} | "
+        preset, clamp, shorten, n_tip, spin, sense = k
+        print(f"| {preset} | {clamp} | {'4 mm shorter' if shorten else 'full'} | {n_tip} | "
+              f"{f'{spin:,.0f} rad/s' if spin else 'none'} | {sense:+d} | "
               + " | ".join(cells) + " |")
+    print("\nThe full blade turning (section 1 clamped, centrifugal equilibrium and its tangent)\n")
+    print("| preset | speed (rad/s) | 1B | 1T | 2B (rad/s) | Southwell S of 1B |")
+    print("|---|---|---|---|---|---|")
+    for t in turning:
+        print(f"| {t['preset']} | 0 | " + " | ".join(f"{w:,.0f}" for w in t["rest_rad_s"]) + " | |")
+        for r in t["turning"]:
+            print(f"| {t['preset']} | {r['spin_rad_s']:,.0f} | " + " | ".join(f"{w:,.0f}" for w in
+                                                                            r["frequencies_rad_s"])
+                  + f" | {r['southwell']:.3f} |")
+    for t in turning:
+        print(f"{t['preset']}: 1B meets EO4 at {t['eo4_crossing_rad_s']:,.1f} rad/s turning (S = {t['southwell']:.3f}),"
+              f" {t['eo4_crossing_at_rest_rad_s']:,.1f} rad/s from the frequency at rest")
     return 0
 
 

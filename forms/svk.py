@@ -21,6 +21,8 @@ __all__ = [
     "tangent_stiffness",
     "linear_stiffness",
     "mass",
+    "centrifugal_force",
+    "spin_softening",
     "nonlinear_force",
     "second_derivative",
     "third_derivative",
@@ -76,6 +78,24 @@ def linear_stiffness(v, du, lmbda, mu, dx=ufl.dx):
 def mass(v, du, rho, dx=ufl.dx):
     """M: consistent mass, rho du . v."""
     return rho * ufl.inner(du, v) * dx
+
+
+def _radial(w):
+    """P w: the part of a vector normal to the machine axis e_z (the rotation axis; x = r cos theta, y = r sin theta)."""
+    return ufl.as_vector((w[0], w[1], 0.0))
+
+
+def centrifugal_force(u, v, rho, spin, dx=ufl.dx):
+    """rho spin^2 P (X + u) . v: the centrifugal body force on the structure turning at ``spin`` (rad/s) about e_z
+    through the origin, at the deformed position X + u (a 1-form in v; its dead part is the u = 0 value)."""
+    X = ufl.SpatialCoordinate(u.ufl_domain())
+    return rho * spin**2 * ufl.inner(_radial(X + u), v) * dx
+
+
+def spin_softening(v, du, rho, dx=ufl.dx):
+    """M_P: rho P du . v, so that -spin^2 M_P is the derivative of ``centrifugal_force`` in u, negated (the spin
+    softening of the rotating structure's tangent: K_T(u) - spin^2 M_P)."""
+    return rho * ufl.inner(_radial(du), v) * dx
 
 
 def nonlinear_force(u, v, lmbda, mu, dx=ufl.dx):

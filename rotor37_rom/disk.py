@@ -271,6 +271,29 @@ def disk_node_map(sector_nodes, n_sectors: int, r_s: int):
                    2 * np.pi / n_sectors)
 
 
+def _harmonic_transform(n_sectors: int, r_s: int, r: int):
+    """(F, transform): the real DFT F over the sector index (``real_dft``) and A -> T A T^T, T = (F (x) I_{r_s}) (+) I
+    on q = [q^0 .. q^{N-1} (r_s each), the r - N r_s interface coordinates]: a tuned disk's operator in harmonic
+    coordinates, where it is block-diagonal by harmonic index."""
+    F = real_dft(n_sectors)
+    T = scipy.sparse.block_diag([scipy.sparse.kron(F, np.eye(r_s)), scipy.sparse.identity(r - n_sectors * r_s)]
+                                ).tocsr()
+
+    def transform(A: np.ndarray) -> np.ndarray:
+        return np.asarray(T @ np.asarray(T @ np.asarray(A, float)).T).T
+    return F, transform
+
+
+def _dominant_harmonic(X: np.ndarray) -> np.ndarray:
+    """The harmonic index k = 0 .. N/2 carrying most of each column of X (N, n, m) over its first axis, the sector
+    index: the DFT's energy summed over the n entries, k and N - k folded together (the same travelling pattern)."""
+    N = X.shape[0]
+    power = (np.abs(np.fft.fft(X, axis=0)) ** 2).sum(axis=1)        # (N, m)
+    folded = power[: N // 2 + 1].copy()
+    folded[1:(N + 1) // 2] += power[N - 1:N // 2:-1]
+    return np.argmax(folded, axis=0)
+
+
 def real_dft(n: int) -> np.ndarray:
     """The orthogonal real DFT over n sectors (n, n): rows cos 0, (cos k, sin k) for 0 < k < n/2, cos n/2 (n even)."""
     phase = 2 * np.pi * np.arange(n) / n
@@ -318,12 +341,7 @@ class HarmonicBlocks:
         r = operators[0].shape[0]
         if not np.array_equal(blocks.ravel(), np.arange(N * rs)):
             return None
-        F = real_dft(N)
-        T = scipy.sparse.block_diag([scipy.sparse.kron(F, np.eye(rs)), scipy.sparse.identity(r - N * rs)]).tocsr()
-
-        def harmonic(A):                                               # T A T^T
-            return np.asarray(T @ np.asarray(T @ np.asarray(A, float)).T).T
-
+        F, harmonic = _harmonic_transform(N, rs, r)
         pattern = sum(np.abs(A) > 1e-12 * np.abs(A).max() for A in map(harmonic, structure))
         n_comp, labels = scipy.sparse.csgraph.connected_components(scipy.sparse.csr_matrix(pattern), directed=False)
         if n_comp < 3:
@@ -434,12 +452,7 @@ def mistuning_factors(n_sectors: int, scatter: float, seed: int = 0) -> np.ndarr
 def sector_harmonics(V: np.ndarray, blocks: np.ndarray) -> np.ndarray:
     """The harmonic index k (nodal diameters) carrying most of each column of V (r, m) across the sectors' q blocks
     (N, r_s): the DFT over the sector index of each block's entries, its energy summed over the entries."""
-    N = blocks.shape[0]
-    X = V[blocks.ravel()].reshape(N, blocks.shape[1], -1)          # (N, r_s, m)
-    spectrum = (np.abs(np.fft.fft(X, axis=0)) ** 2).sum(axis=1)      # (N, m)
-    folded = spectrum[: N // 2 + 1].copy()
-    folded[1:(N + 1) // 2] += spectrum[N - 1:N // 2:-1]             # k and N - k are the same pattern
-    return np.argmax(folded, axis=0)
+    return _dominant_harmonic(V[blocks.ravel()].reshape(blocks.shape[0], blocks.shape[1], -1))
 
 
 def harmonic_frequencies(model, n_families: int, tol: float = 1e-8) -> np.ndarray:
@@ -461,16 +474,10 @@ def harmonic_frequencies(model, n_families: int, tol: float = 1e-8) -> np.ndarra
     if not np.array_equal(basis.blocks.ravel(), np.arange(N * rs)):
         raise ValueError("harmonic_frequencies needs the sector blocks first in q, in order")
     nL = basis.Psi_L.shape[1]
-    spectrum = np.abs(np.fft.fft(basis.Pi.reshape(N, nL, -1), axis=0)) ** 2            # (N, n_L, r_cyclic)
-    power = spectrum.sum(axis=1)
-    folded = power[: N // 2 + 1].copy()
-    folded[1:(N + 1) // 2] += power[N - 1:N // 2:-1]
-    k_pi = np.argmax(folded, axis=0)                                                    # exact: one harmonic each
-    F = real_dft(N)
+    k_pi = _dominant_harmonic(basis.Pi.reshape(N, nL, -1))                             # exact: one harmonic each
     dft_k = np.array([0] + [k for k in range(1, (N + 1) // 2) for _ in (0, 1)] + ([N // 2] if N % 2 == 0 else []))
-    T = scipy.sparse.block_diag([scipy.sparse.kron(F, np.eye(rs)), scipy.sparse.identity(model.K.shape[0] - N * rs)]
-                                ).tocsr()
-    Kt, Mt = (np.asarray(T @ np.asarray(T @ A).T).T for A in (model.K, model.M))       # T A T^T
+    _, harmonic = _harmonic_transform(N, rs, model.K.shape[0])
+    Kt, Mt = harmonic(model.K), harmonic(model.M)
     k_of = np.concatenate([np.repeat(dft_k, rs), k_pi])
     outside = k_of[:, None] != k_of[None, :]
     for name, A in (("K", Kt), ("M", Mt)):

@@ -1,9 +1,11 @@
 """Array files that are complete or absent: the one way the project writes its caches, checkpoints and records
-(``save_npz``: written under a temporary name, then renamed, so a reader never opens half a file and ranks writing
-the same file side by side do not clash), and reads a cache that may be damaged (``load_npz``: a damaged or
+(``save_npz``: written under a hidden temporary name, then renamed, so a reader never opens half a file, ranks
+writing the same file side by side do not clash, and a writer killed half-way leaves nothing a glob of the real
+names picks up), and reads a cache that may be damaged (``load_npz``: a damaged or
 mismatched file is reported and treated as absent, so the caller computes it again)."""
 from __future__ import annotations
 
+import glob
 import logging
 import os
 import zipfile
@@ -19,11 +21,29 @@ LOG = logging.getLogger(__name__)
 DAMAGED = (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile)     # what reading a damaged .npz raises
 
 
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:                        # another user's process
+        return True
+    return True
+
+
 def save_npz(path: str | Path, **arrays) -> Path:
-    """Write ``arrays`` to ``path`` (.npz, its folder created) complete or not at all; returns the path."""
+    """Write ``arrays`` to ``path`` (.npz, its folder created) complete or not at all; returns the path.
+
+    The temporary file is ``.<name>.tmp<pid>.npz`` beside it (hidden: ``omega_*.npz`` does not match it). Those a
+    killed writer left (its pid no longer running; a checkpoint's can be GBs) are removed first."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f"{path.name}.tmp{os.getpid()}.npz")
+    for stale in path.parent.glob(f".{glob.escape(path.name)}.tmp*.npz"):
+        pid = stale.name[len(path.name) + 5:-4]
+        if pid.isdigit() and int(pid) != os.getpid() and not _alive(int(pid)):
+            LOG.info("removing %s (its writer, pid %s, was stopped)", stale, pid)
+            stale.unlink(missing_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}.npz")
     try:
         np.savez(tmp, **arrays)
         tmp.replace(path)

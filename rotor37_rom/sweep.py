@@ -150,7 +150,7 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
     if comm is not None:
         comm.Barrier()
     # batches interrupted earlier resume first (their speeds stay together); then the speeds not done yet
-    pending = sorted(folder.glob("batch_*.ckpt.npz"))
+    pending = sorted(p for p in folder.glob("batch_*.ckpt.npz") if ".tmp" not in p.name)
     resumed = []
     for ckpt in pending:
         data = _load_result(ckpt)
@@ -271,7 +271,7 @@ def _readable(path: Path) -> bool:
 
 def load_sweep(folder: str | Path) -> list[Mapping]:
     """All per-speed results of a sweep folder, sorted by speed (``SavedRecord``: large arrays read on demand)."""
-    files = sorted(Path(folder).glob("omega_*.npz"))
+    files = sorted(p for p in Path(folder).glob("omega_*.npz") if ".tmp" not in p.name)   # (older temporaries)
     out = [r for r in (_load_result(f) for f in files) if r is not None]
     return sorted(out, key=lambda r: float(r["omega"]))
 

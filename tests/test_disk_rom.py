@@ -20,9 +20,10 @@ import scipy.sparse.linalg as spla
 from rotor37_rom import fem
 from rotor37_rom.analysis import cyclic_harmonic_frequencies
 from rotor37_rom.cyclic import assemble_full_structure, to_global_frame
-from rotor37_rom.disk import (DiskBasis, best_approximation, face_shapes, harmonic_field_load, harmonic_node_load,
-                              indicator_histories, performance_indicator, repeat_count, sector_force_basis,
-                              harmonic_frequencies, sector_harmonics)
+from rotor37_rom.disk import (DiskBasis, SectorMatrices, assemble_disk_matrices, best_approximation, face_shapes,
+                              harmonic_field_load, harmonic_frequencies, harmonic_node_load, indicator_histories,
+                              interface_modes, performance_indicator, repeat_count, sector_force_basis,
+                              sector_harmonics)
 from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
 from rotor37_rom.reduction import load_reduced_model, save_reduced_model, simulate_newmark
 
@@ -170,6 +171,42 @@ def test_disk_frequencies_bound_the_cyclic_reference(ci_disk, ci_disk_ops, disk_
     print(ref, rom)
     assert np.all(rom >= ref * (1 - 1e-9)), (rom, ref)
     np.testing.assert_array_less(rom, ref * 1.01)
+
+
+def test_harmonic_frequencies_split_the_disk_by_nodal_diameter():
+    """A random tuned disk (N = 6 sectors, r_s = 4, 3 face DOFs): the frequencies per harmonic index, each cos/sin
+    pair of 0 < k < 3 counted twice, are all the disk model's eigenvalues (round-off: 1e-9 relative). With the
+    interface modes of k = 2, 3 left out (their faces held), those k's families are the sector's fixed-interface
+    frequencies exactly, the same values at two k, and still assigned to both (the degenerate case an eigenvector sort
+    gets wrong). A disk mistuned by 1 % is refused."""
+    from types import SimpleNamespace
+
+    rng = np.random.default_rng(21)
+    N, rs, nL = 6, 4, 3
+    A = rng.standard_normal((rs + 2 * nL, rs + 2 * nL))
+    B = rng.standard_normal((rs + 2 * nL, rs + 2 * nL))
+    K, M = A @ A.T + np.eye(rs + 2 * nL), B @ B.T + np.eye(rs + 2 * nL)
+    omega_c = np.sqrt(np.linalg.eigvals(np.linalg.solve(M[:rs, :rs], K[:rs, :rs])).real)
+    s = SectorMatrices(K=K, M=M, r_s=rs, n_L=nL, omega_c=np.sort(omega_c))
+    Pi, _, k_pi = interface_modes(s, N, N * nL, per_k=nL)
+    blocks = np.arange(N * rs).reshape(N, rs)
+
+    def model(Pi, scales=None):
+        Kd, Md = assemble_disk_matrices(s, Pi, N, scales)
+        basis = DiskBasis(np.zeros((1, rs)), np.zeros((1, nL)), np.zeros((1, nL)), Pi, blocks, N)
+        return SimpleNamespace(sectors=basis, K=Kd, M=Md)
+
+    for keep in (np.ones(Pi.shape[1], bool), k_pi < 2):
+        m = model(Pi[:, keep])
+        w = harmonic_frequencies(m, 50)
+        counts = [1, 2, 2, 1]
+        split = np.sort(np.concatenate([np.repeat(w[k][~np.isnan(w[k])], c) for k, c in enumerate(counts)]))
+        full = np.sqrt(np.sort(np.linalg.eigvals(np.linalg.solve(m.M, m.K)).real))
+        np.testing.assert_allclose(split, full, rtol=1e-9)
+    for k in (2, 3):                                   # no interface modes of k: the faces held
+        np.testing.assert_allclose(w[k][~np.isnan(w[k])], s.omega_c, rtol=1e-9)
+    with pytest.raises(ValueError, match="mistuned"):
+        harmonic_frequencies(model(Pi, 1 + 0.01 * rng.standard_normal(N)), 3)
 
 
 def _tips_moving(basis, r: int, rng) -> np.ndarray:

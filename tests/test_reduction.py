@@ -6,6 +6,8 @@ for linear solves, backward errors and the smallest eigenvalue of K; each assert
 
 import json
 
+import os
+
 import numpy as np
 import pytest
 import scipy.linalg
@@ -385,6 +387,18 @@ def test_cache_files_are_whole_or_ignored(tmp_path):
     for damage in (whole[: len(whole) // 2], whole[:-30], b"garbage", b""):
         path.write_bytes(damage)
         assert load_npz(path) is None, damage[:20]
+    # a writer killed half-way leaves a hidden temporary (no glob of the real names sees it); the next write of the
+    # same file removes it when its writer is gone, and keeps a running writer's
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    dead, running = int(done.stdout), os.getppid()
+    for pid in (dead, running):
+        (path.parent / f".c.npz.tmp{pid}.npz").write_bytes(whole[:100])
+    assert [p.name for p in path.parent.glob("c*.npz")] == ["c.npz"]
+    save_npz(path, a=a, b=b)
+    assert sorted(p.name for p in path.parent.iterdir()) == [f".c.npz.tmp{running}.npz", "c.npz"]
 
 
 def test_bad_reduction_input(ci_blade, ci_ops, free_operators):

@@ -21,7 +21,8 @@ from .cyclic import (CyclicModes, CyclicOperators, assemble_cyclic_operators, cr
 from .fields import (cell_midpoints, cells_touching_points, displacement_function, von_mises_at_quadrature,
                      von_mises_function)
 from .operators import (JIT_PARAMS, MASS_DIAGONAL, SvkOperators, assemble_free_operators, assemble_mass,
-                        assemble_scalar, assemble_stiffness, assemble_tangent_scipy, assemble_vector,
+                        assemble_scalar, assemble_spin_softening, assemble_stiffness, assemble_tangent,
+                        assemble_tangent_scipy, assemble_vector,
                         create_svk_operators, evaluate_forces, evaluate_second_derivative, facet_centroid,
                         free_dofs, gather_dof_values, patch_load, petsc_to_scipy, quadrature_gradients,
                         scipy_to_petsc)
@@ -39,6 +40,7 @@ __all__ = [
     "tip_node_names", "create_svk_operators", "assemble_stiffness", "assemble_mass", "assemble_vector",
     "assemble_scalar", "gather_dof_values", "free_dofs", "petsc_to_scipy", "scipy_to_petsc",
     "assemble_free_operators", "evaluate_forces", "evaluate_second_derivative", "assemble_tangent_scipy",
+    "assemble_tangent", "assemble_spin_softening",
     "quadrature_gradients", "solve_eigenproblem", "compute_clamped_modes", "solve_static", "solve_newmark",
     "solve_clamped_static", "mumps_solver", "slepc_eigenpairs", "displacement_function", "von_mises_function",
     "von_mises_at_quadrature", "cell_midpoints", "cells_touching_points", "MASS_DIAGONAL", "JIT_PARAMS",

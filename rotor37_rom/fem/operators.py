@@ -25,7 +25,8 @@ if TYPE_CHECKING:
 __all__ = ["SvkOperators", "create_svk_operators", "assemble_stiffness", "assemble_mass", "assemble_vector",
            "assemble_scalar", "facet_centroid", "patch_load", "gather_dof_values", "free_dofs", "petsc_to_scipy",
            "scipy_to_petsc", "assemble_free_operators", "evaluate_forces", "evaluate_second_derivative",
-           "assemble_tangent_scipy", "quadrature_gradients", "MASS_DIAGONAL", "JIT_PARAMS"]
+           "assemble_tangent_scipy", "assemble_tangent", "assemble_spin_softening", "quadrature_gradients",
+           "MASS_DIAGONAL", "JIT_PARAMS"]
 
 MASS_DIAGONAL = 1.0e-14
 JIT_PARAMS = {"cffi_extra_compile_args": ["-O2", "-march=native"], "cffi_libraries": ["m"]}
@@ -100,6 +101,32 @@ def assemble_mass(sector: Sector, ops: SvkOperators | None = None, clamped: bool
     """Consistent mass M (kg) with the clamp: clamped rows/columns zero, MASS_DIAGONAL on the diagonal."""
     ops = ops or create_svk_operators(sector)
     return _assemble_matrix(ops.mass, [sector.clamp_bc] if clamped else [], MASS_DIAGONAL)
+
+
+def assemble_spin_softening(sector: Sector, ops: SvkOperators | None = None) -> PETSc.Mat:
+    """M_P (kg): the mass of the motions normal to the machine axis e_z (``forms.spin_softening``), clamped rows and
+    columns zero (0 on their diagonal, so that K - spin^2 M_P keeps the clamp's identity rows)."""
+    ops = ops or create_svk_operators(sector)
+    v, du = ufl.TestFunction(sector.V), ufl.TrialFunction(sector.V)
+    form = fem.form(forms.spin_softening(v, du, ops.constants["rho"]), jit_params=JIT_PARAMS)
+    return _assemble_matrix(form, [sector.clamp_bc], 0.0)
+
+
+def assemble_tangent(sector: Sector, u: np.ndarray, ops: SvkOperators | None = None, spin: float = 0.0
+                     ) -> PETSc.Mat:
+    """K_T(u) - spin^2 M_P (N/m), clamped: the exact tangent at the state u (local DOF values with ghosts, as
+    ``Function.x.array``) of the structure turning at ``spin`` rad/s about e_z, e.g. at its centrifugal equilibrium
+    (``solve_static(spin=...)``): the prestressed stiffness, whose inverse is the rotating structure's static
+    compliance (``static_compliance(K=...)``). Sets ``ops.u`` to u."""
+    ops = ops or create_svk_operators(sector)
+    ops.u.x.array[:] = u
+    ops.u.x.scatter_forward()
+    A = _assemble_matrix(ops.tangent, [sector.clamp_bc], 1.0)
+    if spin:
+        M_P = assemble_spin_softening(sector, ops)
+        A.axpy(-spin**2, M_P, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        M_P.destroy()
+    return A
 
 
 def assemble_vector(form) -> PETSc.Vec:

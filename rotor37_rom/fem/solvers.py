@@ -17,8 +17,10 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from .operators import (JIT_PARAMS, SvkOperators, _require_serial, assemble_mass, assemble_stiffness,
-                        assemble_vector, create_svk_operators, gather_dof_values, scipy_to_petsc)
+from rotor37_rom import forms
+
+from .operators import (JIT_PARAMS, SvkOperators, _require_serial, assemble_mass, assemble_spin_softening,
+                        assemble_stiffness, assemble_vector, create_svk_operators, gather_dof_values, scipy_to_petsc)
 from .sector import Sector
 
 __all__ = ["ModalResult", "StaticResult", "TransientResult", "solve_eigenproblem", "compute_clamped_modes",
@@ -176,7 +178,7 @@ class StaticResult:
 def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec | None = None,
                  prescribed: Sequence[tuple[np.ndarray, np.ndarray]] = (), n_steps: int = 10,
                  rtol: float = 1e-10, max_iterations: int = 25, ops: SvkOperators | None = None,
-                 linear: bool = False) -> StaticResult:
+                 linear: bool = False, spin: float = 0.0) -> StaticResult:
     """Nonlinear static equilibrium f_int(u) = lambda f_ext by Newton with the exact tangent and load stepping.
 
     Args:
@@ -186,9 +188,16 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
         n_steps: equal load increments (1..10000).
         rtol: Newton stops when ||r|| <= rtol * max(||lambda f_ext||, ||reaction||) (relative residual).
         linear: solve K u = lambda f (one factorisation) instead.
+        spin: the structure turns at this speed (rad/s) about the machine axis e_z: the centrifugal force
+            rho spin^2 P (X + u) (``forms.centrifugal_force``, following the deformed position) joins the load, scaled
+            by lambda with it (load steps in spin^2), and -lambda spin^2 M_P joins the exact tangent. Nonlinear only.
     """
     if not (1 <= n_steps <= 10000):
         raise ValueError(f"n_steps must be in [1, 10000], got {n_steps}")
+    if not (np.isfinite(spin) and spin >= 0.0):
+        raise ValueError(f"spin must be a finite speed >= 0 rad/s, got {spin}")
+    if linear and spin:
+        raise ValueError("spin needs the nonlinear solve (linear=False): the spin softening follows the load factor")
     ops = ops or create_svk_operators(sector)
     V = sector.V
     u = ops.u
@@ -211,6 +220,11 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
         raise ValueError("prescribed: DOF indices must be owned local (unblocked) indices, as in Sector.tip_dofs")
     global_rows = (V.dofmap.index_map.local_range[0] * bs + dofs).astype(PETSc.IntType)
     bcs = [sector.clamp_bc]
+    if spin:
+        rho, v = ops.constants["rho"], ufl.TestFunction(V)
+        spin_c = fem.Constant(sector.mesh, PETSc.ScalarType(spin))
+        centrifugal = fem.form(forms.centrifugal_force(u, v, rho, spin_c), jit_params=JIT_PARAMS)
+        M_P = assemble_spin_softening(sector, ops)
     lambdas = np.linspace(0.0, 1.0, n_steps + 1)[1:]
     tips, its, history = [], [], []
     du = u.vector.duplicate()
@@ -236,6 +250,11 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
             if f_ext is not None:
                 r.axpy(-lam, f_ext)
                 load_norm = abs(lam) * f_ext.norm()
+            if spin:
+                f_spin = assemble_vector(centrifugal)
+                r.axpy(-lam, f_spin)
+                load_norm = max(load_norm, abs(lam) * f_spin.norm())
+                f_spin.destroy()
             fem_petsc.set_bc(r, bcs, scale=0.0)
             r.array[dofs] = 0.0
             res, ref = r.norm(), max(load_norm, reaction, 1e-300)
@@ -250,6 +269,8 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
             if not linear:
                 A = fem_petsc.assemble_matrix(ops.tangent, bcs=bcs, diagonal=1.0)
                 A.assemble()
+                if spin:
+                    A.axpy(-lam * spin**2, M_P, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
             # rhs = -r - A lift on the free rows, = lift on the prescribed rows (a lifted predictor: no spike)
             A.mult(lift, rhs)
             rhs.axpy(1.0, r)
@@ -268,6 +289,8 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
         tips.append(gather_dof_values(sector, u.x.array, sector.tip_dofs))
         its.append(it)
         history.append(np.array(step_history))
+    if spin:
+        M_P.destroy()
     out = fem.Function(V, name="u")
     out.x.array[:] = u.x.array
     return StaticResult(load_factors=lambdas, tip_displacements=np.array(tips), iterations=np.array(its), u=out,
