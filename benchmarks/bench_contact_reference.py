@@ -244,7 +244,10 @@ def main(argv=None) -> int:
         print(f"per revolution, LE inward peak / mean / outward peak (mm); RMS error over the first revolution:")
         t_ref = np.asarray(ref["t"])
         one = t_ref <= 2 * np.pi / w
-        for label, run in [("reference", ref)] + [(f"{k} (r = {r})", run) for k, (r, run) in runs.items()]:
+        coarser = [] if args.no_full_order else [(f"full order h {h:.3g}", store["reference"][ref_key(w, h)])
+                                                 for h in sorted(args.h_full, reverse=True) if h != min(args.h_full)]
+        for label, run in ([("reference", ref)] + coarser
+                           + [(f"{k} (r = {r})", run) for k, (r, run) in runs.items()]):
             rows = "  ".join(f"{-1e3 * a:.3f}/{1e3 * m:+.3f}/{1e3 * b:.3f}" for a, m, b in per_revolution(run, w))
             u = np.interp(t_ref[one], np.asarray(run["t"]), np.asarray(run["u_le"]))
             e1 = np.linalg.norm(u - np.asarray(ref["u_le"])[one]) / np.linalg.norm(np.asarray(ref["u_le"])[one])
