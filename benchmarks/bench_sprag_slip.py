@@ -80,43 +80,52 @@ def rotating_tangent(blade, ops, spin: float):
     return fem.assemble_tangent(blade, u, ops, spin)
 
 
-def prestressed_frequencies(preset: str) -> dict:
-    """The full blade's 1B, 1T, 2B (rad/s) at rest and turning at each of SPINS, Southwell's S of 1B, and the EO4
-    crossing of the prestressed 1B: Omega = omega_1,0 / sqrt(16 - S(Omega)), iterated to 0.01 rad/s."""
-    from rotor37_rom import fem
+class Turning:
+    """The full blade's 1B, 1T, 2B (rad/s) at rest and turning, Southwell's S of 1B, and the EO4 crossing of the
+    prestressed 1B: Omega = omega_1,0 / sqrt(16 - S(Omega)), iterated to 0.01 rad/s. The speeds of the mu* rows
+    reuse those rows' tangents (one centrifugal equilibrium per speed)."""
 
-    blade = fem.create_blade_sector(preset=preset)
-    ops = fem.create_svk_operators(blade)
-    M, K = fem.assemble_mass(blade, ops), fem.assemble_stiffness(blade, ops)
-    rest = np.asarray(fem.solve_eigenproblem(K, M, 3)[0])
-    K.destroy()
+    def __init__(self, preset: str, blade, ops):
+        from rotor37_rom import fem
 
-    def turning(spin):
-        K = rotating_tangent(blade, ops, spin)
-        w = np.asarray(fem.solve_eigenproblem(K, M, 3)[0])
+        self.blade, self.ops = blade, ops
+        self.M = fem.assemble_mass(blade, ops)
+        K = fem.assemble_stiffness(blade, ops)
+        self.rest = np.asarray(fem.solve_eigenproblem(K, self.M, 3)[0])
         K.destroy()
-        return w, (w[0] ** 2 - rest[0] ** 2) / spin**2
+        self.record = {"preset": preset, "rest_rad_s": self.rest.tolist(), "turning": []}
 
-    out = {"preset": preset, "rest_rad_s": rest.tolist(), "turning": []}
-    for spin in SPINS:
-        w, S = turning(spin)
-        out["turning"].append({"spin_rad_s": spin, "frequencies_rad_s": w.tolist(), "southwell": S})
-    crossing, S = rest[0] / 4, 0.0
-    for _ in range(8):
-        w, S = turning(crossing)
-        new = rest[0] / np.sqrt(16 - S)
-        done, crossing = abs(new - crossing) < 1e-2, new
-        if done:
-            break
-    M.destroy()
-    out.update(eo4_crossing_rad_s=float(crossing), eo4_crossing_at_rest_rad_s=float(rest[0] / 4), southwell=S)
-    return out
+    def frequencies(self, K, spin: float):
+        """Frequencies of the rotating blade's tangent K at ``spin`` and Southwell's S of 1B."""
+        from rotor37_rom import fem
+
+        w = np.asarray(fem.solve_eigenproblem(K, self.M, 3)[0])
+        return w, (w[0] ** 2 - self.rest[0] ** 2) / spin**2
+
+    def add(self, K, spin: float) -> None:
+        w, S = self.frequencies(K, spin)
+        self.record["turning"].append({"spin_rad_s": spin, "frequencies_rad_s": w.tolist(), "southwell": S})
+
+    def finish(self) -> dict:
+        crossing, S = self.rest[0] / 4, 0.0
+        for _ in range(8):
+            K = rotating_tangent(self.blade, self.ops, crossing)
+            w, S = self.frequencies(K, crossing)
+            K.destroy()
+            new = self.rest[0] / np.sqrt(16 - S)
+            done, crossing = abs(new - crossing) < 1e-2, new
+            if done:
+                break
+        self.M.destroy()
+        self.record.update(eo4_crossing_rad_s=float(crossing), eo4_crossing_at_rest_rad_s=float(self.rest[0] / 4),
+                           southwell=S)
+        return self.record
 
 
-def configurations(preset: str):
+def configurations(preset: str, turning: list):
     """(clamp, blade shortening (m), tip nodes, prestress speed (rad/s), sector, K) one at a time; K None: the
     sector's own clamped stiffness, else the rotating blade's prestressed tangent or the disk's cyclic K_k (freed
-    after its rows)."""
+    after its rows). The full blade turning is appended to ``turning`` (a ``Turning``, finished by the caller)."""
     from rotor37_rom import fem
     from rotor37_rom.fem.cyclic import CyclicOperators
 
@@ -126,10 +135,13 @@ def configurations(preset: str):
         if shorten or n_tip != 8:
             continue
         ops = fem.create_svk_operators(blade)
+        spinning = Turning(preset, blade, ops)
         for spin in SPINS:
             K = rotating_tangent(blade, ops, spin)
+            spinning.add(K, spin)
             yield "section 1", shorten, n_tip, spin, blade, K
             K.destroy()
+        turning.append(spinning)                       # its EO4 crossing after the mu* rows
     disk = fem.create_disk_sector(preset=preset)
     cyclic = CyclicOperators(disk)
     for k in (0, 18):
@@ -149,11 +161,11 @@ def main(argv=None) -> int:
 
     for preset in args.presets:
         get_mesh_preset(preset)                            # a bad name: one line before any meshing
-    rows = []
+    rows, turning = [], []
     for preset in args.presets:
         roots = {}                                         # blade shortening -> root face centroid (section 1)
         t0 = time.perf_counter()
-        for clamp, shorten, n_tip, spin, sector, K in configurations(preset):
+        for clamp, shorten, n_tip, spin, sector, K in configurations(preset, turning):
             G = fem.static_compliance(sector, sector.tip_dofs, K=K)
             seconds = time.perf_counter() - t0             # meshing or prestress (in the generator) and G
             if clamp == "section 1":
@@ -172,7 +184,7 @@ def main(argv=None) -> int:
                           f"{normal:14s} weakest {res['weakest']:.3f}  LE half {res['le_half']:.3f}  all "
                           f"{res['all']:.3f}", flush=True)
             t0 = time.perf_counter()
-    turning = [prestressed_frequencies(preset) for preset in args.presets]
+    turning = [t.finish() for t in turning]
     machine = write_results("bench_sprag_slip", [{k: _json(v) for k, v in r.items()} for r in rows],
                             prestressed_frequencies=turning)
     print(f"\nMachine: {machine}. Command: python benchmarks/bench_sprag_slip.py --presets {' '.join(args.presets)}\n")
