@@ -247,7 +247,7 @@ def main(argv=None) -> int:
         coarser = [] if args.no_full_order else [(f"full order h {h:.3g}", store["reference"][ref_key(w, h)])
                                                  for h in sorted(args.h_full, reverse=True) if h != min(args.h_full)]
         for label, run in ([("reference", ref)] + coarser
-                           + [(f"{k} (r = {r})", run) for k, (r, run) in runs.items()]):
+                           + [(f"{k} (r = {r})", run) for k, (r, run) in runs.items() if not run["diverged"]]):
             rows = "  ".join(f"{-1e3 * a:.3f}/{1e3 * m:+.3f}/{1e3 * b:.3f}" for a, m, b in per_revolution(run, w))
             u = np.interp(t_ref[one], np.asarray(run["t"]), np.asarray(run["u_le"]))
             e1 = np.linalg.norm(u - np.asarray(ref["u_le"])[one]) / np.linalg.norm(np.asarray(ref["u_le"])[one])
