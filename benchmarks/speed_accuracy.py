@@ -395,6 +395,8 @@ GNL_CANDIDATES = [  # the reference is r_c 15 (r = 45) with exact tensors, no ca
     ("cubature 1e-4", {"r_c": 15, "cubature": 1e-4}),
     ("cubature 1e-4 float32", {"r_c": 15, "cubature": 1e-4, "precision": "single"}),
     ("cubature 1e-5 float32", {"r_c": 15, "cubature": 1e-5, "precision": "single"}),
+    ("cubature 1e-5", {"r_c": 15, "cubature": 1e-5}),
+    ("cubature 1e-6 float32", {"r_c": 15, "cubature": 1e-6, "precision": "single"}),
 ]
 
 

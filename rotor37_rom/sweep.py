@@ -23,7 +23,7 @@ from rotor37_rom.npz import save_npz
 
 __all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "load_speed", "sweep_folder", "interaction_map",
            "InteractionMap", "engine_order_resonance", "record_row", "last_revolution_max", "sector_maxima",
-           "continuation", "ContinuationPoint", "is_steady", "response_period"]
+           "continuation", "ContinuationPoint", "is_steady", "response_period", "engine_order_content"]
 
 LOG = logging.getLogger(__name__)
 LE = "0:LE"     # the node whose response makes the maps and NFRC: node LE of sector 0 (a NodeMap label)
@@ -360,6 +360,39 @@ def engine_order_resonance(imap: InteractionMap, order: int, revolutions: float)
         if abs(dominant - order * omega) <= max(2 * omega / revolutions, 2 * grid) and amplitude > best:
             best, speed = amplitude, float(omega)
     return speed
+
+
+def engine_order_content(t: np.ndarray, u: np.ndarray, omega: float, revolutions: float = 40.0,
+                         max_order: int = 29, band: float = 0.004) -> tuple[float, float]:
+    """(dominant frequency in rad/s, share of the power on engine-order lines) of u over its last ``revolutions``
+    revolutions (uniform samples; the mean removed, no window, so a response locked to the rotor puts all its power
+    on the lines k omega when the span is whole revolutions). The share is the power within ``band`` x k omega of
+    k omega, k = 1 ... ``max_order`` (at least the nearest bin: half the bin spacing omega / ``revolutions`` either
+    side), over the power of every bin but the mean. 1: a forced (engine-order) response; well below 1: a response
+    the contact sustains at the structure's own frequencies (a critical-speed band of the disk). NaN, NaN for a
+    non-finite or constant record."""
+    if not omega > 0 or not revolutions > 0 or max_order < 1 or not band >= 0:
+        raise ValueError(f"need omega > 0, revolutions > 0, max_order >= 1 and band >= 0; got {omega}, "
+                         f"{revolutions}, {max_order}, {band}")
+    t, u = np.asarray(t, float), np.asarray(u, float)
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    n = int(round(revolutions * 2 * np.pi / omega / dt))
+    if n < 4 or n > u.size:
+        raise ValueError(f"the record spans {(t[-1] - t[0]) * omega / (2 * np.pi):.3g} revolutions at "
+                         f"{t.size} samples; {revolutions:g} revolutions asked")
+    seg = u[-n:]
+    if not np.all(np.isfinite(seg)):
+        return float("nan"), float("nan")
+    power = np.abs(np.fft.rfft(seg - seg.mean())) ** 2
+    w = 2 * np.pi * np.fft.rfftfreq(n, dt)
+    power, w = power[1:], w[1:]
+    total = power.sum()
+    if total == 0.0:
+        return float("nan"), float("nan")
+    lines = omega * np.arange(1, max_order + 1)
+    width = np.maximum(band * lines, 0.5 * (w[1] - w[0]) if w.size > 1 else 0.0)
+    on_line = (np.abs(w[:, None] - lines[None, :]) <= width[None, :] * (1 + 1e-12)).any(axis=1)
+    return float(w[np.argmax(power)]), float(power[on_line].sum() / total)
 
 
 def is_steady(t: np.ndarray, u: np.ndarray, omega: float, tol: float = 0.02, window: int = 1) -> bool:

@@ -215,6 +215,31 @@ def test_engine_order_resonance_picks_the_1b_eo4_speeds():
         sweep_mod.engine_order_resonance(imap, 4, 0)
 
 
+def test_engine_order_content_splits_forced_from_sustained_power():
+    """On whole revolutions of uniform samples the DFT is exact: a 4 Omega tone of amplitude a over a tone at 5.3
+    Omega (not an engine order) of amplitude b puts a^2 / (a^2 + b^2) of the power on the lines, to round-off; the
+    dominant frequency is the larger tone's bin. A start-up transient before the window leaves it unchanged; a
+    record off the revolution grid (dt not dividing T) still finds the forced tone's share within its leakage."""
+    omega, per_rev, revolutions = 1400.0, 64, 40
+    T = 2 * np.pi / omega
+    t = np.arange(60 * per_rev + 1) * T / per_rev
+    for a, b in ((3e-4, 1e-4), (1e-4, 3e-4)):
+        u = a * np.sin(4 * omega * t + 0.3) + b * np.cos(5.3 * omega * t) + 2e-5
+        u[: 10 * per_rev] += 1e-3 * np.exp(-t[: 10 * per_rev] / T)          # the transient, outside the window
+        dominant, share = sweep_mod.engine_order_content(t, u, omega, revolutions)
+        assert share == pytest.approx(a ** 2 / (a ** 2 + b ** 2), abs=1e-10)
+        assert dominant == pytest.approx(4 * omega if a > b else 5.3 * omega, rel=1e-12)
+    t2 = np.arange(0.0, 60 * T, T / 61.3)
+    u2 = 3e-4 * np.sin(4 * omega * t2) + 1e-4 * np.cos(5.3 * omega * t2)
+    _, share2 = sweep_mod.engine_order_content(t2, u2, omega, revolutions)
+    assert share2 == pytest.approx(0.9, abs=0.02)
+    assert np.isnan(sweep_mod.engine_order_content(t, np.zeros_like(t), omega)[1])
+    with pytest.raises(ValueError, match="revolutions asked"):
+        sweep_mod.engine_order_content(t, u, omega, 80)
+    with pytest.raises(ValueError, match="omega > 0"):
+        sweep_mod.engine_order_content(t, u, -1.0)
+
+
 def test_diverged_runs_are_reported_as_results(ci_rom):
     """A run that blows up is a result: on_finish receives it with its step (run_sweep saves it, so a resumed sweep
     does not redo it), and the map draws it as NaN."""

@@ -1,0 +1,93 @@
+"""What each speed of a disk contact map is: its amplitudes, its dominant frequency and how much of its power the
+casing forces (engine-order lines), next to the disk's critical speeds (paper §3.4; docs/results.md, the disk maps).
+
+Reads a finished (or partly finished) sweep folder of ``demos/contact_map.py --disk`` (``<out>/sweeps/<key>``); per
+speed: node LE of sector 0 and the largest over the blades (max over the last revolution), the dominant frequency of
+node LE of sector 0 over the last ``--revolutions`` revolutions and the share of its power within 0.4 % of k Omega
+(k = 1..29; ``sweep.engine_order_content``). With ``--model`` (the map's rom.npz) also the critical speeds
+omega_{f,k} / k of the model's lowest families inside the map's range, where a wave of k nodal diameters stands still
+under the stationary casing, and the 1B/EO4 point omega_{1,4} / 4.
+
+    python benchmarks/disk_map_spectra.py results/disk_map200/sweeps/<key> --model results/disk_map200/rom.npz
+
+Results: results/disk_map_spectra_<key>.json (or --name). No computation beyond the FFTs: a 90-speed map reads in a
+few minutes (the records' time and displacement histories only).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import write_results  # noqa: E402
+
+from rotor37_rom.sweep import engine_order_content, load_sweep, record_row, sector_maxima  # noqa: E402
+
+
+def critical_speeds(model_path: Path, lo: float, hi: float, families: int = 3) -> tuple[float, list[dict]]:
+    """The model's 1B/EO4 point omega_{1,4} / 4 and its critical speeds omega_{f,k} / k in [lo, hi] (rad/s)."""
+    from rotor37_rom.disk import harmonic_frequencies
+    from rotor37_rom.reduction import load_reduced_model
+
+    freqs = harmonic_frequencies(load_reduced_model(model_path), families)
+    found = [{"family": f + 1, "k": k, "frequency": float(freqs[k, f]), "speed": float(freqs[k, f] / k)}
+             for k in range(1, freqs.shape[0]) for f in range(families)
+             if np.isfinite(freqs[k, f]) and lo <= freqs[k, f] / k <= hi]
+    return float(freqs[4, 0] / 4), sorted(found, key=lambda c: c["speed"])
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("folder", type=Path, help="a disk map's sweep folder (<out>/sweeps/<key>)")
+    parser.add_argument("--model", type=Path, help="the map's reduced model (rom.npz): critical speeds")
+    parser.add_argument("--revolutions", type=float, default=40.0, help="spectral window (default the last 40)")
+    parser.add_argument("--name", help="results/disk_map_spectra_<name>.json (default: the folder's key)")
+    args = parser.parse_args(argv)
+    if not args.folder.is_dir():
+        print(f"error: folder {args.folder} is not a sweep folder (a directory of omega_*.npz)", file=sys.stderr)
+        return 2
+    if not 1 <= args.revolutions <= 200:
+        print(f"error: --revolutions must be in [1, 200], got {args.revolutions:g}", file=sys.stderr)
+        return 2
+    records = load_sweep(args.folder)
+    if not records:
+        print(f"error: folder {args.folder} holds no finished speed", file=sys.stderr)
+        return 2
+    rows = []
+    print(f"{'rad/s':>8} {'LE0 mm':>7} {'max mm':>7} {'blade':>5} {'dominant':>9} {'/Omega':>7} {'EO share':>8}")
+    for rec in records:
+        omega = float(rec["omega"])
+        per_blade = sector_maxima(rec)
+        row = {"omega": omega, "diverged": int(rec["diverged_step"]) >= 0}
+        if not row["diverged"]:
+            u = rec["u_r"][record_row(rec, "0:LE")]
+            try:
+                dominant, share = engine_order_content(rec["t"], u, omega, args.revolutions)
+            except ValueError as exc:                                   # a window longer than the record
+                print(f"error: --revolutions at {omega:g} rad/s: {exc}", file=sys.stderr)
+                return 2
+            row.update(le0_m=float(per_blade[0]), largest_m=float(per_blade.max()),
+                       largest_blade=int(np.argmax(per_blade)), dominant=dominant, eo_share=share)
+            print(f"{omega:8.1f} {1e3 * per_blade[0]:7.3f} {1e3 * per_blade.max():7.3f} {np.argmax(per_blade):5d} "
+                  f"{dominant:9.0f} {dominant / omega:7.2f} {share:8.2f}")
+        else:
+            print(f"{omega:8.1f} diverged at step {int(rec['diverged_step'])}")
+        rows.append(row)
+    extra = {"folder": str(args.folder), "window_revolutions": args.revolutions}
+    if args.model is not None:
+        speeds = [r["omega"] for r in rows]
+        eo4, found = critical_speeds(args.model, min(speeds), max(speeds))
+        extra.update(one_b_eo4_point=eo4, critical_speeds=found)
+        print(f"1B/EO4 point omega_(1,4) / 4 = {eo4:.1f} rad/s; critical speeds in the range: "
+              + "; ".join(f"family {c['family']} k = {c['k']}: {c['speed']:.1f}" for c in found))
+    name = f"disk_map_spectra_{args.name or args.folder.name}"
+    machine = write_results(name, rows, **extra)
+    print(f"results/{name}.json ({machine})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
