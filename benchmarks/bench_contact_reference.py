@@ -130,6 +130,9 @@ def main(argv=None) -> int:
                         help="steps of the ROMs with --rom-cap (s; several: each model at each step, the smallest "
                              "one's run of the largest model the reference; without a cap: 0.5 x the stability "
                              "limit)")
+    parser.add_argument("--contact-patch", type=float, default=0.0, metavar="MM",
+                        help="the ROMs' contact force spread over the tip facets within MM of each node (issue #23; "
+                             "default 0: point contact, as the full order)")
     parser.add_argument("--plot", default=None, metavar="PNG",
                         help="draw the LE histories of the reference and the compared models, one file per speed "
                              "(the speed appended to the name)")
@@ -139,7 +142,8 @@ def main(argv=None) -> int:
               ("--record", [args.record], 1e-8, 1e-3), ("--r-c", args.r_c, 1, 500), ("--r-md", args.r_md, 0, 300),
               ("--rom-cap", [] if args.rom_cap is None else [args.rom_cap], 1.0, 1e4),
               ("--rom-step", args.rom_step or [], 1e-9, 1e-5),
-              ("--rho-inf", [] if args.rho_inf is None else [args.rho_inf], 0.0, 1.0))
+              ("--rho-inf", [] if args.rho_inf is None else [args.rho_inf], 0.0, 1.0),
+              ("--contact-patch", [args.contact_patch], 0.0, 10.0))
     for name, values, lo, hi in checks:
         if not all(np.isfinite(v) and lo <= v <= hi for v in values):
             parser.exit(2, f"bench_contact_reference.py: {name} must be in [{lo:g}, {hi:g}], got {values}\n")
@@ -196,14 +200,16 @@ def main(argv=None) -> int:
     steps = [None] if args.rom_step is None else sorted(args.rom_step, reverse=True)
 
     def rom_label(r_c, r_md, h):
-        return f"r_c {r_c} r_md {r_md}" + ("" if h is None else f" cap {args.rom_cap:g} h {h:.3g}")
+        return f"r_c {r_c} r_md {r_md}" + ("" if h is None else f" cap {args.rom_cap:g} h {h:.3g}") \
+            + (f" patch {args.contact_patch:g} mm" if args.contact_patch else "")
 
     for r_c, r_md, h in ((r_c, r_md, h) for r_c in args.r_c for r_md in args.r_md for h in steps):
         label = rom_label(r_c, r_md, h)
         todo = [w for w in speeds if f"{w:g}" not in store["roms"].get(label, {}).get("runs", {})]
         if todo:
             config = ReductionConfig(r_c=r_c, r_md=r_md, criterion="MI2b", global_md_modes=3,
-                                     forces="intrusive" if args.gnl else "none")
+                                     forces="intrusive" if args.gnl else "none",
+                                     contact_patch=1e-3 * args.contact_patch)
             model, _ = build_reduced_model(sector, config, ops=ops, cache_dir="results/cache")
             store["roms"].setdefault(label, {"r": model.r, "runs": {}})
             for w in todo:                         # one speed at a time: each has its own run length

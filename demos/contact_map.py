@@ -98,6 +98,9 @@ class ContactMapConfig:
         r_c: fixed-interface modes (per sector) of the model built (>= 1). None: 15 for the blade, 10 for the disk.
         r_md: modal derivatives (per sector) selected by the criterion (>= 0). None: 0 for the blade, 10 for the disk.
         global_md: also the modal derivatives of the first N clamped modes (0..10; the blade's).
+        contact_patch: 0 (point contact at the tip nodes, the paper's), or a radius (m, at most 0.01) of the tip
+            patches over which each node's contact force spreads (``ReductionConfig.contact_patch``; the blade's
+            model built here, not a --model or the disk's).
         r_cyclic: the disk's interface modes (eq. 51, >= 1; the paper's 144).
         mistuning: the disk's blade-to-blade stiffness scatter, a standard deviation in [0, 1) (0: tuned).
         seed: of the mistuning's random factors.
@@ -143,6 +146,7 @@ class ContactMapConfig:
     r_c: int | None = None
     r_md: int | None = None
     global_md: int = 3
+    contact_patch: float = 0.0
     r_cyclic: int = 144
     mistuning: float = 0.0
     seed: int = 0
@@ -193,6 +197,10 @@ class ContactMapConfig:
             raise ValueError(f"--global-md must be in 0..10, got {self.global_md}")
         if not self.r_cyclic >= 1:
             raise ValueError(f"--r-cyclic must be >= 1, got {self.r_cyclic}")
+        if not (np.isfinite(self.contact_patch) and 0 <= self.contact_patch <= 0.01):
+            raise ValueError(f"--contact-patch must be in [0, 0.01] m, got {self.contact_patch}")
+        if self.contact_patch and (self.disk or self.model is not None):
+            raise ValueError("--contact-patch shapes the blade's model built here: not with --disk or --model")
         if not 0 <= self.mistuning < 1:
             raise ValueError(f"--mistuning must be in [0, 1) (standard deviation of the blades' stiffness factors), "
                              f"got {self.mistuning}")
@@ -512,7 +520,8 @@ def build_model(config: ContactMapConfig) -> ReducedModel:
         from rotor37_rom.builder import ReductionConfig, build_reduced_model
 
         sector = fem.create_blade_sector(MPI.COMM_SELF, preset=config.preset)
-        reduction = ReductionConfig(r_c=r_c, r_md=r_md, global_md_modes=config.global_md, forces="intrusive")
+        reduction = ReductionConfig(r_c=r_c, r_md=r_md, global_md_modes=config.global_md, forces="intrusive",
+                                    contact_patch=config.contact_patch)
         model, _ = build_reduced_model(sector, reduction, cache_dir=config.out / "cache")
     print(f"reduced model: {config.preset} preset ({sector.n_dofs} DOF) -> r = {model.r} {model.sizes} "
           f"in {time.perf_counter() - t0:.1f} s")
@@ -1025,6 +1034,9 @@ def build_parser() -> ArgumentParser:
     parser.add_argument("--r-md", type=int, help="modal derivatives (per sector) of the model built (default 0; disk "
                                                  "10, by MI 2b)")
     parser.add_argument("--global-md", type=int, help="modal derivatives of the first N clamped modes (default 3)")
+    parser.add_argument("--contact-patch", type=float, metavar="RADIUS",
+                        help="spread each tip node's contact force over the tip facets within RADIUS (m, <= 0.01; "
+                             "default 0: point contact)")
     parser.add_argument("--r-cyclic", type=int, help="the disk's interface modes (default 144, the paper's)")
     parser.add_argument("--mistuning", type=float, metavar="SIGMA",
                         help="the disk's blade stiffness scatter: standard deviation in [0, 1) of log-normal factors "

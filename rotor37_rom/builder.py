@@ -50,6 +50,10 @@ class ReductionConfig:
         global_md_modes: n > 0 adds the modal derivatives of all pairs of the first n clamped normal modes (1B, 1T,
             2B, ...), fixed-interface corrected: n(n+1)/2 vectors that carry the global quadratic kinematics
             (foreshortening) which otherwise needs hundreds of constraint-mode pairs. 0 = the paper's basis.
+        contact_patch: 0 (the paper's point contact: the boundary DOFs are the tip nodes' own), or a radius (m):
+            each contact node's boundary coordinates are the area-mean displacement of the tip facets within it
+            (``fem.tip_patch_interface``), so its contact force acts as a uniform traction on that patch and no
+            constraint mode or modal derivative carries a point load's singular field (issue #23).
     """
 
     r_c: int = 15
@@ -65,8 +69,11 @@ class ReductionConfig:
     training_omega: float = 4000.0
     keep_basis: bool = True
     global_md_modes: int = 0
+    contact_patch: float = 0.0
 
     def __post_init__(self):
+        if not (np.isfinite(self.contact_patch) and 0 <= self.contact_patch <= 0.01):
+            raise ValueError(f"contact_patch must be in [0, 0.01] m, got {self.contact_patch}")
         if self.r_c < 1:
             raise ValueError(f"r_c must be >= 1, got {self.r_c}")
         if self.r_md < 0:
@@ -131,7 +138,7 @@ def compute_modal_derivatives(sector, ops, basis: CraigBamptonBasis, pairs: np.n
         solve = fem.mumps_solver(fem.assemble_free_operators(sector, ops)[0])
     xi = np.zeros((lin.shape[0], len(pairs)))
     xi[free] = solve(rhs[:, free].T)
-    return fixed_interface_correction(xi, basis.Psi, basis.boundary_dofs)
+    return fixed_interface_correction(xi, basis.Psi, basis.boundary_dofs, basis.interface)
 
 
 def boundary_node_map(sector, boundary_dofs: np.ndarray):
@@ -209,8 +216,15 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
                         ops=None, cache_dir: str | Path | None = None) -> tuple[ReducedModel, dict]:
     """Craig-Bampton + modal derivatives + reduced forces. Returns (model, report with timings and weights)."""
     ops = ops or fem.create_svk_operators(sector)
+    if config.contact_patch and boundary_dofs is not None \
+            and not np.array_equal(np.asarray(boundary_dofs).ravel(), sector.tip_dofs.ravel()):
+        raise ValueError("contact_patch: the patches replace the tip nodes' DOFs; other boundary DOFs are not "
+                         "supported with it (boundary_dofs must be None)")
     boundary_dofs = sector.tip_dofs.ravel() if boundary_dofs is None else np.asarray(boundary_dofs).ravel()
-    metadata = {"config": dataclasses.asdict(config), "boundary_dofs": boundary_dofs.tolist(),
+    meta_config = dataclasses.asdict(config)
+    if not config.contact_patch:          # absent from the point-contact models' keys: their caches stay valid
+        del meta_config["contact_patch"]
+    metadata = {"config": meta_config, "boundary_dofs": boundary_dofs.tolist(),
                 "mesh": mesh_signature(sector), "source": sector.source, "version": __version__}
     cache, cached = cached_model(metadata, cache_dir, "rom")
     if cached is not None:
@@ -223,11 +237,17 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
     if boundary_dofs.size == 0 or boundary_dofs.min() < 0 or boundary_dofs.max() >= n_full \
             or not np.array_equal(free[np.minimum(position, free.size - 1)], boundary_dofs):
         raise ValueError(f"boundary DOFs must be indices in [0, {n_full}) of DOFs on the mesh that are not clamped")
-    Psi_f, Theta_f, omega_c = craig_bampton(K_f, M_f, position, config.r_c, solve=fem.mumps_solver,
-                                            eigensolve=fem.slepc_eigenpairs)
+    interface = None
+    if config.contact_patch:
+        interface = fem.tip_patch_interface(sector, config.contact_patch)
+        if abs(interface).sum(axis=0).A.ravel()[np.setdiff1d(np.arange(n_full), free)].max(initial=0.0) > 0:
+            raise ValueError("contact_patch: a patch reaches the clamp; take a smaller radius")
+    Psi_f, Theta_f, omega_c = craig_bampton(K_f, M_f, position if interface is None else interface[:, free],
+                                            config.r_c, solve=fem.mumps_solver, eigensolve=fem.slepc_eigenpairs)
     Psi, Theta = np.zeros((n_full, Psi_f.shape[1])), np.zeros((n_full, Theta_f.shape[1]))
     Psi[free], Theta[free] = Psi_f, Theta_f
-    basis = CraigBamptonBasis(Psi=Psi, Theta=Theta, omega_c=omega_c, boundary_dofs=boundary_dofs)
+    basis = CraigBamptonBasis(Psi=Psi, Theta=Theta, omega_c=omega_c, boundary_dofs=boundary_dofs,
+                              interface=interface)
     nodes = boundary_node_map(sector, boundary_dofs)
     if "LE" not in nodes.names:
         raise ValueError("the boundary DOFs must hold the three DOFs of node LE (the training force acts there)")
@@ -240,8 +260,10 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
     # linear training response in the Craig-Bampton space (harmonic force at node LE along e_z, one period)
     K_lin, M_lin = lin[free].T @ (K_f @ lin[free]), lin[free].T @ (M_f @ lin[free])
     C_lin, _ = modal_damping(K_lin, M_lin)
-    le_z = boundary_dofs[nodes.q_index[nodes.row("LE"), 2]]
-    f_shape = config.training_force * lin[le_z]
+    le_z = nodes.q_index[nodes.row("LE"), 2]
+    # the force on node LE's z coordinate: a point force, or with patches the traction of that resultant
+    f_shape = config.training_force * (lin[boundary_dofs[le_z]] if interface is None
+                                         else np.asarray(interface[le_z] @ lin).ravel())
     period = 2 * np.pi / config.training_omega
     t, q_train = simulate_linear_newmark(M_lin, C_lin, K_lin,
                                          lambda tt: f_shape * np.sin(config.training_omega * tt), period / 400, 400)
@@ -260,11 +282,11 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
         normal = np.column_stack([m.x.array for m in fem.compute_clamped_modes(sector, n_g, ops).modes])
         gpairs = np.column_stack(np.triu_indices(n_g))
         global_basis = dataclasses.replace(basis, Psi=np.zeros((normal.shape[0], 0)), Theta=normal,
-                                           boundary_dofs=np.zeros(0, dtype=np.int64))
+                                           boundary_dofs=np.zeros(0, dtype=np.int64), interface=None)
         xi = compute_modal_derivatives(sector, ops, global_basis, gpairs, config.md_method, config.fd_step,
                                        solve_free)
         # the derivatives are of the free blade; remove their boundary part with the constraint modes (eq. 20)
-        Z = np.hstack([Z, fixed_interface_correction(xi, basis.Psi, boundary_dofs)])
+        Z = np.hstack([Z, fixed_interface_correction(xi, basis.Psi, boundary_dofs, basis.interface)])
         pairs = np.vstack([pairs, -1 - gpairs])  # negative: pairs of clamped normal modes
     Z, md_scale = _m_normalise(Z, M_f, free) if Z.shape[1] else (Z, np.zeros(0))
     basis = dataclasses.replace(basis, Z=Z, md_pairs=pairs)

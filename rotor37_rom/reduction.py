@@ -22,6 +22,7 @@ __all__ = [
     "NodeMap",
     "CraigBamptonBasis",
     "craig_bampton",
+    "interface_transform",
     "modal_derivative_pairs",
     "fixed_interface_correction",
     "selection_weights",
@@ -164,6 +165,9 @@ class CraigBamptonBasis:
         omega_c: (r_c,) their frequencies (rad/s).
         boundary_dofs: (r_b,) full-vector indices of the boundary DOFs.
         Z: (n, r_MD) fixed-interface modal derivatives (eq. 20), M-normalised; md_pairs: (r_MD, 2) their (j, k).
+        interface: None (the boundary coordinates are the DOFs ``boundary_dofs``), or (r_b, n) sparse C whose rows
+            define them as functionals C u of the field (contact patches: each row a patch mean); then C Psi = I
+            and C Theta = C Z = 0 take the place of "identity / zero on the boundary DOFs".
     """
 
     Psi: np.ndarray
@@ -172,6 +176,7 @@ class CraigBamptonBasis:
     boundary_dofs: np.ndarray
     Z: np.ndarray | None = None
     md_pairs: np.ndarray | None = None
+    interface: object = None
 
     @property
     def linear(self) -> np.ndarray:
@@ -204,14 +209,47 @@ def _scipy_eigenpairs(K, M, n_modes: int) -> tuple[np.ndarray, np.ndarray]:
     return np.sqrt(lam[order]), V[:, order]
 
 
-def craig_bampton(K, M, boundary: np.ndarray, n_interface: int,
+def interface_transform(C) -> tuple[object, np.ndarray]:
+    """Coordinates x = (u with one DOF per row of C replaced by that row's value C_i u): u = T x. Each row's master
+    is its entry of largest |C_ij| among the columns that no other row touches; x_master = C_i u, and
+    u_master = (x_master - sum_(j != master) C_ij x_j) / C_(i, master). So C T x = x[masters] exactly and
+    T = I outside the master rows. Returns (T (n, n) CSR, masters (n_b,)). ValueError for a row without such a
+    column (rows that share all their columns: patches that overlap entirely) or a zero row."""
+    import scipy.sparse
+
+    C = scipy.sparse.csr_matrix(C)
+    C.eliminate_zeros()
+    n_b, n = C.shape
+    touched = np.bincount(C.indices, minlength=n)
+    masters = np.empty(n_b, dtype=np.int64)
+    for i in range(n_b):
+        cols, vals = C.indices[C.indptr[i]:C.indptr[i + 1]], C.data[C.indptr[i]:C.indptr[i + 1]]
+        own = touched[cols] == 1
+        if not own.any():
+            raise ValueError(f"interface row {i} has no column of its own (its patch lies inside the others'): "
+                             f"the boundary coordinates are not independent functionals of the field")
+        masters[i] = cols[own][np.argmax(np.abs(vals[own]))]
+    T = scipy.sparse.lil_matrix((n, n))
+    T.setdiag(1.0)
+    for i, m in enumerate(masters):
+        cols, vals = C.indices[C.indptr[i]:C.indptr[i + 1]], C.data[C.indptr[i]:C.indptr[i + 1]]
+        pivot = vals[cols == m][0]
+        T[m, cols] = -vals / pivot
+        T[m, m] = 1.0 / pivot
+    return T.tocsr(), masters
+
+
+def craig_bampton(K, M, boundary, n_interface: int,
                   solve: Callable | None = None, eigensolve: Callable | None = None
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Craig-Bampton modes (eqs. 8-11) of a structure: the one reduction that blade, disk sector and disk share.
 
     Args:
         K, M: (n, n) stiffness and mass (SciPy sparse or dense) on the DOFs that are not clamped.
-        boundary: (n_b,) indices in [0, n) of the boundary DOFs kept physical (tip nodes, cyclic faces).
+        boundary: (n_b,) indices in [0, n) of the boundary DOFs kept physical (tip nodes, cyclic faces); or an
+            (n_b, n) SciPy sparse C whose rows define the boundary coordinates C u (contact patches, RBE3-like
+            means): the same modes in the coordinates of ``interface_transform``, so that C Psi = I (Psi: the
+            field of least strain energy with C u = e_j), C Theta = 0 (Theta: the modes with C u held at 0).
         n_interface: r_c, the number of fixed-interface modes, 1 <= r_c < n - n_b.
         solve: factorize(A) -> (B -> A^-1 B), e.g. ``fem.mumps_solver``; default SciPy's SuperLU.
         eigensolve: (K, M, m) -> (omega (m,), V (., m)) lowest modes, e.g. ``fem.slepc_eigenpairs``; default SciPy's
@@ -226,6 +264,14 @@ def craig_bampton(K, M, boundary: np.ndarray, n_interface: int,
 
     K, M = scipy.sparse.csr_matrix(K), scipy.sparse.csr_matrix(M)
     n = K.shape[0]
+    if scipy.sparse.issparse(boundary):
+        if boundary.shape[1] != n:
+            raise ValueError(f"the interface matrix must have n = {n} columns, got {boundary.shape}")
+        T, masters = interface_transform(boundary)
+        K_t, M_t = T.T @ (K @ T), T.T @ (M @ T)
+        Psi, Theta, omega = craig_bampton(0.5 * (K_t + K_t.T), 0.5 * (M_t + M_t.T), masters, n_interface, solve,
+                                          eigensolve)
+        return T @ Psi, T @ Theta, omega
     boundary = np.asarray(boundary, dtype=np.int64).ravel()
     if boundary.size == 0 or boundary.min() < 0 or boundary.max() >= n:
         raise ValueError(f"boundary DOFs must be indices in [0, {n}) of DOFs that are not clamped")
@@ -257,8 +303,12 @@ def modal_derivative_pairs(n_linear: int) -> np.ndarray:
     return np.column_stack([j, k])
 
 
-def fixed_interface_correction(xi: np.ndarray, Psi: np.ndarray, boundary_dofs: np.ndarray) -> np.ndarray:
-    """Eq. (20): zeta = xi - Psi xi_b, which vanishes on the boundary. xi: (n, m) -> (n, m)."""
+def fixed_interface_correction(xi: np.ndarray, Psi: np.ndarray, boundary_dofs: np.ndarray, interface=None
+                               ) -> np.ndarray:
+    """Eq. (20): zeta = xi - Psi xi_b, which vanishes on the boundary. xi: (n, m) -> (n, m). With an ``interface``
+    C (``CraigBamptonBasis.interface``) the boundary values are C xi: zeta = xi - Psi C xi, C zeta = 0."""
+    if interface is not None:
+        return xi - Psi @ np.asarray(interface @ xi)
     zeta = xi - Psi @ xi[boundary_dofs]
     zeta[boundary_dofs] = 0.0
     return zeta

@@ -19,8 +19,9 @@ from rotor37_rom.builder import (ReductionConfig, build_reduced_model, cached_mo
 from rotor37_rom.ecsw import state_errors, train_ecsw
 from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces
 from rotor37_rom.npz import load_npz, save_npz
-from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, craig_bampton, load_reduced_model,
-                                   save_reduced_model, select_pairs, selection_weights)
+from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, craig_bampton, fixed_interface_correction,
+                                   interface_transform, load_reduced_model, save_reduced_model, select_pairs,
+                                   selection_weights)
 from rotor37_rom.step import identify_step
 
 U = np.finfo(float).eps / 2  # unit round-off of float64
@@ -51,6 +52,54 @@ def cb_parts(ci_blade, free_operators):
     Psi, Theta = np.zeros((n, Psi_f.shape[1])), np.zeros((n, Theta_f.shape[1]))
     Psi[free], Theta[free] = Psi_f, Theta_f
     return Psi, Theta, omega
+
+
+def test_craig_bampton_on_patch_means_is_the_constrained_reduction():
+    """Boundary coordinates that are patch means (rows of C) instead of DOFs, on a spring chain clamped at one end
+    (80 DOFs, random stiffnesses and masses, two tent-weighted patches of 5 and 7 DOFs), against dense algebra:
+    C Psi = I and C Theta = 0; Psi = K^-1 C^T (C K^-1 C^T)^-1 (the field of least strain energy with C u = e_j);
+    omega_c^2 are the eigenvalues of K, M on the null space of C, and interlace the unconstrained ones
+    (lambda_i <= lambda_i^C <= lambda_(i + 2): Courant-Fischer for a rank-2 constraint); the fixed-interface
+    correction leaves C zeta = 0. With unit rows C = the DOF selection it is the index path. Tolerances: a backward
+    stable solve gives a relative error <= c n u cond(K) (cond(K) ~ 7e3 here), c = 10."""
+    import scipy.sparse as sp
+
+    rng = np.random.default_rng(0)
+    n = 80
+    k, m = 1 + rng.random(n + 1), 1 + rng.random(n)
+    K = sp.diags([k[:-1] + k[1:], -k[1:-1], -k[1:-1]], [0, 1, -1]).tocsr()
+    M = sp.diags(m).tocsr()
+    rows = []
+    for center, width in ((20, 5), (60, 7)):
+        idx = np.arange(center - width // 2, center + width // 2 + 1)
+        weights = 1 - np.abs(idx - center) / (width / 2 + 1)
+        row = np.zeros(n)
+        row[idx] = weights / weights.sum()
+        rows.append(row)
+    Cd = np.array(rows)
+    C = sp.csr_matrix(Cd)
+    Kd, Md = K.toarray(), M.toarray()
+    tol = 10 * n * U * np.linalg.cond(Kd)
+    Psi, Theta, omega = craig_bampton(K, M, C, 6)
+    assert np.abs(Cd @ Psi - np.eye(2)).max() <= tol and np.abs(Cd @ Theta).max() <= tol
+    KinvCt = np.linalg.solve(Kd, Cd.T)
+    reference = KinvCt @ np.linalg.inv(Cd @ KinvCt)
+    assert np.abs(Psi - reference).max() <= tol * np.abs(reference).max()
+    Z = scipy.linalg.null_space(Cd)
+    lam_c = scipy.linalg.eigh(Z.T @ Kd @ Z, Z.T @ Md @ Z, eigvals_only=True)[:6]
+    lam = scipy.linalg.eigh(Kd, Md, eigvals_only=True)
+    assert omega ** 2 == pytest.approx(lam_c, rel=tol)
+    assert np.all(lam[:6] <= lam_c * (1 + tol)) and np.all(lam_c <= lam[2:8] * (1 + tol))
+    assert np.abs(Theta.T @ Md @ Theta - np.eye(6)).max() <= tol
+    zeta = fixed_interface_correction(rng.standard_normal((n, 3)), Psi, np.zeros(0, dtype=int), C)
+    assert np.abs(Cd @ zeta).max() <= tol * np.abs(zeta).max()
+    T, masters = interface_transform(C)
+    assert np.abs(Cd @ T.toarray() - np.eye(n)[masters]).max() <= 4 * U * np.abs(T.toarray()).max()
+    selection = sp.csr_matrix(np.eye(n)[[20, 60]])
+    for a, b in zip(craig_bampton(K, M, selection, 6), craig_bampton(K, M, np.array([20, 60]), 6)):
+        assert np.abs(a - b).max() <= tol * np.abs(b).max()
+    with pytest.raises(ValueError, match="no column of its own"):
+        interface_transform(sp.csr_matrix(np.vstack([Cd[0], 2 * Cd[0]])))
 
 
 def test_rayleigh_ritz_bounds_and_convergence(ci_blade, ci_ops, cb_parts, free_operators):
@@ -112,6 +161,46 @@ def test_constraint_modes_are_static_responses(ci_blade, ci_ops, cb_parts, free_
         print(f"constraint mode {j}: |du| / |u| = {diff / np.linalg.norm(u):.1e}, bound "
               f"{sum(residuals) / lam_min / np.linalg.norm(u):.1e}")
         assert diff <= sum(residuals) / lam_min
+
+
+def test_contact_patches_make_the_boundary_coordinates_patch_means(ci_blade, ci_ops, free_operators, rom):
+    """ReductionConfig.contact_patch (issue #23: the contact force spread over the tip, RBE3-like), ci blade, 3 mm
+    patches, r_c = 4, r_MD = 6:
+    - q's boundary entries are the patches' mean displacements: C Phi = [I 0] (C = fem.tip_patch_interface). C Psi
+      and C Theta only carry the transform's round-off (C T = the master rows exactly but for a few u |C| |T| per
+      entry); the modal derivatives zeta = xi - Psi C xi also that of the cancellation, bounded by |Psi| |C xi|,
+      i.e. the boundary part a point-contact derivative would have (< 1e3 |zeta| on this mesh).
+    - A static load spread as patch tractions, f = C^T g, is reproduced exactly (K^-1 C^T lies in span Psi): the
+      two solves differ by round-off, <= 10 u |K| / lambda_min(K) relatively.
+    - The frequencies are Rayleigh-Ritz upper bounds of the clamped blade's.
+    - The point-contact model's cache key is unchanged (contact_patch absent from its metadata)."""
+    K, M, free, lam_min = free_operators
+    model, _ = build_reduced_model(ci_blade, ReductionConfig(r_c=4, r_md=6, forces="none", contact_patch=3e-3),
+                                   ops=ci_ops)
+    C = fem.tip_patch_interface(ci_blade, 3e-3)
+    Phi = model.Phi
+    CPhi = np.asarray(C @ Phi)
+    scale = np.abs(C).sum(axis=1).max() * np.abs(Phi).max(axis=0)       # |C| |Phi_j| per column
+    assert np.abs(CPhi[:, :24] - np.eye(24)).max() <= 100 * U * scale[:24].max()
+    assert np.all(np.abs(CPhi[:, 24:28]).max(axis=0) <= 100 * U * scale[24:28])
+    assert np.all(np.abs(CPhi[:, 28:]).max(axis=0) <= 1e3 * 100 * U * scale[28:])
+    assert model.nodes.names == ci_blade.tip_names and model.sizes == {"r_b": 24, "r_c": 4, "r_md": 6}
+    g = np.zeros(24)
+    g[2], g[10], g[21] = 400.0, -150.0, 80.0                         # N on LE (z), tip3 (x), TE (x)
+    f = np.asarray(C.T @ g).ravel()
+    u = np.zeros(Phi.shape[0])
+    u[free] = scipy.sparse.linalg.spsolve(K.tocsc(), f[free])
+    u_rom = Phi @ np.linalg.solve(model.K, Phi.T @ f)
+    bound = 10 * U * scipy.sparse.linalg.norm(K, 1) / lam_min
+    print(f"patch load: |u_rom - u| / |u| = {np.linalg.norm(u_rom - u) / np.linalg.norm(u):.1e}, bound {bound:.1e}")
+    assert np.linalg.norm(u_rom - u) <= bound * np.linalg.norm(u)
+    exact = fem.compute_clamped_modes(ci_blade, 3, ci_ops).omega
+    d = 1.0 / np.sqrt(np.diag(model.M))                  # the slack of the Rayleigh-Ritz test above
+    Kr, Mr = [A * d[:, None] * d[None, :] for A in (model.K, model.M)]
+    lam = scipy.linalg.eigh(Kr, Mr, eigvals_only=True)[:3]
+    slack = 0.5 * U * np.linalg.norm(Kr, 2) / np.linalg.eigvalsh(Mr)[0] / lam + 1e-12
+    assert np.all(np.sqrt(lam) >= exact * (1 - slack)), (np.sqrt(lam) / exact - 1, slack)
+    assert "contact_patch" in model.metadata["config"] and "contact_patch" not in rom[0].metadata["config"]
 
 
 def test_intrusive_forces_equal_projection(ci_blade, ci_ops, rom):
@@ -418,6 +507,13 @@ def test_bad_reduction_input(ci_blade, ci_ops, free_operators):
         build_reduced_model(ci_blade, ReductionConfig(r_c=2, r_md=10**4, forces="none"), ops=ci_ops)
     with pytest.raises(ValueError, match="criterion"):
         ReductionConfig(criterion="best")
+    with pytest.raises(ValueError, match="contact_patch must be in"):
+        ReductionConfig(contact_patch=-1e-3)
+    with pytest.raises(ValueError, match="radius must reach a tip facet"):
+        fem.tip_patch_interface(ci_blade, 1e-6)
+    with pytest.raises(ValueError, match="contact_patch: the patches replace"):
+        build_reduced_model(ci_blade, ReductionConfig(r_c=2, r_md=0, forces="none", contact_patch=3e-3), ops=ci_ops,
+                            boundary_dofs=ci_blade.tip_dofs.ravel()[:6])
     from rotor37_rom.builder import _check_operators
 
     with pytest.raises(ValueError, match="not symmetric"):

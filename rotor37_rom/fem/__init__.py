@@ -25,7 +25,7 @@ from .operators import (JIT_PARAMS, MASS_DIAGONAL, SvkOperators, assemble_free_o
                         assemble_tangent_scipy, assemble_vector,
                         create_svk_operators, evaluate_forces, evaluate_second_derivative, facet_centroid,
                         free_dofs, gather_dof_values, patch_load, petsc_to_scipy, quadrature_gradients,
-                        scipy_to_petsc)
+                        scipy_to_petsc, tip_patch_interface)
 from .periodic import RepeatingSectors, sector_harmonic_load, solve_repeating_newmark
 from .sector import (Sector, build_on_rank0, clamp_cell_group, create_blade_sector, create_sector_from_file,
                      create_sector_from_gmsh, create_sector_from_mesh, locate_cyclic_pairs, tip_node_names,
@@ -47,5 +47,5 @@ __all__ = [
     "create_disk_sector", "create_annular_sector", "locate_cyclic_pairs", "assemble_cyclic_operators", "CyclicModes",
     "solve_cyclic_modes", "sector_fields", "clamp_cell_group", "build_on_rank0", "CyclicOperators",
     "RepeatingSectors", "solve_repeating_newmark", "sector_harmonic_load", "write_sector_mesh", "facet_centroid",
-    "patch_load", "static_compliance",
+    "patch_load", "static_compliance", "tip_patch_interface",
 ]

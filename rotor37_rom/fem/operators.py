@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from .sector import Sector
 
 __all__ = ["SvkOperators", "create_svk_operators", "assemble_stiffness", "assemble_mass", "assemble_vector",
-           "assemble_scalar", "facet_centroid", "patch_load", "gather_dof_values", "free_dofs", "petsc_to_scipy",
+           "assemble_scalar", "facet_centroid", "patch_load", "tip_patch_interface", "gather_dof_values", "free_dofs", "petsc_to_scipy",
            "scipy_to_petsc", "assemble_free_operators", "evaluate_forces", "evaluate_second_derivative",
            "assemble_tangent_scipy", "assemble_tangent", "assemble_spin_softening", "quadrature_gradients",
            "MASS_DIAGONAL", "JIT_PARAMS"]
@@ -173,12 +173,59 @@ def patch_load(sector: Sector, center: np.ndarray, radius: float, component: int
     near = facets[np.linalg.norm(dmesh.compute_midpoints(msh, fdim, facets) - np.asarray(center), axis=1) < radius]
     if near.size == 0:
         raise ValueError(f"radius must reach a boundary facet: none has its midpoint within {radius} m of {center}")
-    tags = dmesh.meshtags(msh, fdim, np.sort(near).astype(np.int32), np.ones(near.size, dtype=np.int32))
+    return _facet_traction(sector, near, component)
+
+
+def _facet_traction(sector: Sector, facets: np.ndarray, component: int) -> np.ndarray:
+    """Consistent nodal forces (n_dofs,) of a uniform traction along e_component of unit resultant over ``facets``."""
+    from dolfinx import mesh as dmesh
+
+    msh = sector.mesh
+    fdim = msh.topology.dim - 1
+    tags = dmesh.meshtags(msh, fdim, np.sort(facets).astype(np.int32), np.ones(facets.size, dtype=np.int32))
     ds = ufl.Measure("ds", domain=msh, subdomain_data=tags)(1)
     area = assemble_scalar(ufl.as_ufl(1.0) * ds, sector.comm)
     b = assemble_vector(fem.form(ufl.TestFunction(sector.V)[component] * ds, jit_params=JIT_PARAMS))
     n = sector.V.dofmap.index_map.size_local * sector.V.dofmap.index_map_bs
     return b.array[:n].copy() / area
+
+
+def tip_patch_interface(sector: Sector, radius: float, max_tilt_deg: float = 45.0):
+    """The contact patches' interface C (3 n_tip, n_dofs), SciPy CSR, rows in the order of ``tip_dofs.ravel()``
+    (node-major, x y z): row (k, c) is the consistent nodal load of a unit traction along e_c spread uniformly over
+    the tip facets within ``radius`` (m) of contact node k, i.e. C u is each patch's area-mean displacement and
+    C^T lambda the patch tractions of resultant lambda (RBE3-like: the reference point keeps the node's position).
+    Tip facets: exterior facets whose midpoint lies within ``radius`` of the node and whose normal is within
+    ``max_tilt_deg`` of the radial direction there (the tip face, not the pressure or suction side). Serial."""
+    import scipy.sparse as sp
+    from dolfinx import cpp as _cpp
+    from dolfinx import mesh as dmesh
+
+    _require_serial(sector, "tip_patch_interface")
+    if not (np.isfinite(radius) and radius > 0):
+        raise ValueError(f"radius must be > 0 m, got {radius}")
+    if not 0 < max_tilt_deg < 90:
+        raise ValueError(f"max_tilt_deg must be in (0, 90), got {max_tilt_deg}")
+    if len(sector.tip_nodes) == 0:
+        raise ValueError("the sector has no contact nodes (tip_nodes is empty)")
+    msh = sector.mesh
+    fdim = msh.topology.dim - 1
+    msh.topology.create_connectivity(fdim, msh.topology.dim)
+    facets = dmesh.exterior_facet_indices(msh.topology)
+    mid = dmesh.compute_midpoints(msh, fdim, facets)
+    normal = _cpp.mesh.cell_normals(getattr(msh, "_mesh", msh), fdim,   # the C++ mesh (a wrapper here)
+                                     facets.astype(np.int32))
+    rows = []
+    for k, node in enumerate(np.asarray(sector.tip_nodes)):
+        radial = np.array([node[0], node[1], 0.0]) / np.hypot(node[0], node[1])
+        near = facets[(np.linalg.norm(mid - node, axis=1) < radius)
+                      & (np.abs(normal @ radial) >= np.cos(np.radians(max_tilt_deg)))]
+        if near.size == 0:
+            raise ValueError(f"radius must reach a tip facet of node {sector.tip_names[k]}: none within {radius} m")
+        rows += [_facet_traction(sector, near, c) for c in range(3)]
+    C = sp.csr_matrix(np.array(rows))
+    C.eliminate_zeros()
+    return C
 
 
 def gather_dof_values(sector: Sector, values: np.ndarray, dofs: np.ndarray) -> np.ndarray:
