@@ -24,7 +24,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import write_results  # noqa: E402
 
-from rotor37_rom.sweep import engine_order_content, load_sweep, record_row, sector_maxima  # noqa: E402
+from rotor37_rom.sweep import (engine_order_content, engine_order_resonance, interaction_map, load_sweep,  # noqa: E402
+                               record_row, sector_maxima)
 
 
 def critical_speeds(model_path: Path, lo: float, hi: float, families: int = 3) -> tuple[float, list[dict]]:
@@ -77,6 +78,12 @@ def main(argv=None) -> int:
             print(f"{omega:8.1f} diverged at step {int(rec['diverged_step'])}")
         rows.append(row)
     extra = {"folder": str(args.folder), "window_revolutions": args.revolutions}
+    # the 1B/EO4 resonance as the single blade's maps define it (the largest EO4-dominated response, sweep.py)
+    imap = interaction_map(records)
+    revolutions = float(records[0]["revolutions"])
+    extra["eo_resonances"] = {k: engine_order_resonance(imap, k, revolutions) for k in (4, 5, 6)}
+    print("largest response dominated by engine order 4 / 5 / 6 at "
+          + " / ".join(f"{w:.1f}" for w in extra["eo_resonances"].values()) + " rad/s")
     if args.model is not None:
         speeds = [r["omega"] for r in rows]
         eo4, found = critical_speeds(args.model, min(speeds), max(speeds))
