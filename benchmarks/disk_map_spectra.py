@@ -4,9 +4,10 @@ casing forces (engine-order lines), next to the disk's critical speeds (paper §
 Reads a finished (or partly finished) sweep folder of ``demos/contact_map.py --disk`` (``<out>/sweeps/<key>``); per
 speed: node LE of sector 0 and the largest over the blades (max over the last revolution), the dominant frequency of
 node LE of sector 0 over the last ``--revolutions`` revolutions and the share of its power within 0.4 % of k Omega
-(k = 1..29; ``sweep.engine_order_content``). With ``--model`` (the map's rom.npz) also the critical speeds
-omega_{f,k} / k of the model's lowest families inside the map's range, where a wave of k nodal diameters stands still
-under the stationary casing, and the 1B/EO4 point omega_{1,4} / 4.
+(k = 1..29; ``sweep.engine_order_content``). With ``--model`` (the map's rom.npz) also the share of that window in
+contact (a positive normal multiplier on any tip node of sector 0, and the mean over the sectors), the critical
+speeds omega_{f,k} / k of the model's lowest families inside the map's range, where a wave of k nodal diameters
+stands still under the stationary casing, and the 1B/EO4 point omega_{1,4} / 4.
 
     python benchmarks/disk_map_spectra.py results/disk_map200/sweeps/<key> --model results/disk_map200/rom.npz
 
@@ -28,16 +29,29 @@ from rotor37_rom.sweep import (engine_order_content, engine_order_resonance, int
                                record_row, sector_maxima)
 
 
-def critical_speeds(model_path: Path, lo: float, hi: float, families: int = 3) -> tuple[float, list[dict]]:
+def critical_speeds(model, lo: float, hi: float, families: int = 3) -> tuple[float, list[dict]]:
     """The model's 1B/EO4 point omega_{1,4} / 4 and its critical speeds omega_{f,k} / k in [lo, hi] (rad/s)."""
     from rotor37_rom.disk import harmonic_frequencies
-    from rotor37_rom.reduction import load_reduced_model
 
-    freqs = harmonic_frequencies(load_reduced_model(model_path), families)
+    freqs = harmonic_frequencies(model, families)
     found = [{"family": f + 1, "k": k, "frequency": float(freqs[k, f]), "speed": float(freqs[k, f] / k)}
              for k in range(1, freqs.shape[0]) for f in range(families)
              if np.isfinite(freqs[k, f]) and lo <= freqs[k, f] / k <= hi]
     return float(freqs[4, 0] / 4), sorted(found, key=lambda c: c["speed"])
+
+
+def contact_share(record, sectors: np.ndarray, revolutions: float) -> tuple[float, float]:
+    """(sector 0's, the mean over the sectors') share of the recorded samples in the last ``revolutions`` with a
+    positive normal multiplier on any of the sector's contact nodes; ``sectors`` (n_nodes,) is the model's node map
+    sector of each multiplier row."""
+    t = np.asarray(record["t"])
+    lam = np.asarray(record["lam"])
+    if lam.shape[0] != sectors.size:
+        raise ValueError(f"the record has {lam.shape[0]} multiplier rows, the model {sectors.size} contact nodes")
+    sel = t >= t[-1] - revolutions * 2 * np.pi / float(record["omega"])
+    touching = lam[:, sel] > 0
+    share = np.array([touching[sectors == s].any(axis=0).mean() for s in range(int(sectors.max()) + 1)])
+    return float(share[0]), float(share.mean())
 
 
 def main(argv=None) -> int:
@@ -57,8 +71,14 @@ def main(argv=None) -> int:
     if not records:
         print(f"error: folder {args.folder} holds no finished speed", file=sys.stderr)
         return 2
+    model = None
+    if args.model is not None:
+        from rotor37_rom.reduction import load_reduced_model
+
+        model = load_reduced_model(args.model)
     rows = []
-    print(f"{'rad/s':>8} {'LE0 mm':>7} {'max mm':>7} {'blade':>5} {'dominant':>9} {'/Omega':>7} {'EO share':>8}")
+    print(f"{'rad/s':>8} {'LE0 mm':>7} {'max mm':>7} {'blade':>5} {'dominant':>9} {'/Omega':>7} {'EO share':>8}"
+          + (f" {'contact 0':>9} {'contact':>7}" if model is not None else ""))
     for rec in records:
         omega = float(rec["omega"])
         per_blade = sector_maxima(rec)
@@ -72,8 +92,17 @@ def main(argv=None) -> int:
                 return 2
             row.update(le0_m=float(per_blade[0]), largest_m=float(per_blade.max()),
                        largest_blade=int(np.argmax(per_blade)), dominant=dominant, eo_share=share)
-            print(f"{omega:8.1f} {1e3 * per_blade[0]:7.3f} {1e3 * per_blade.max():7.3f} {np.argmax(per_blade):5d} "
-                  f"{dominant:9.0f} {dominant / omega:7.2f} {share:8.2f}")
+            line = (f"{omega:8.1f} {1e3 * per_blade[0]:7.3f} {1e3 * per_blade.max():7.3f} {np.argmax(per_blade):5d} "
+                    f"{dominant:9.0f} {dominant / omega:7.2f} {share:8.2f}")
+            if model is not None:
+                try:
+                    row["contact_share_0"], row["contact_share_mean"] = contact_share(rec, model.nodes.sector,
+                                                                                      args.revolutions)
+                except ValueError as exc:                               # the model is not the map's
+                    print(f"error: --model {args.model}: {exc}", file=sys.stderr)
+                    return 2
+                line += f" {row['contact_share_0']:9.2f} {row['contact_share_mean']:7.2f}"
+            print(line)
         else:
             print(f"{omega:8.1f} diverged at step {int(rec['diverged_step'])}")
         rows.append(row)
@@ -84,9 +113,9 @@ def main(argv=None) -> int:
     extra["eo_resonances"] = {k: engine_order_resonance(imap, k, revolutions) for k in (4, 5, 6)}
     print("largest response dominated by engine order 4 / 5 / 6 at "
           + " / ".join(f"{w:.1f}" for w in extra["eo_resonances"].values()) + " rad/s")
-    if args.model is not None:
+    if model is not None:
         speeds = [r["omega"] for r in rows]
-        eo4, found = critical_speeds(args.model, min(speeds), max(speeds))
+        eo4, found = critical_speeds(model, min(speeds), max(speeds))
         extra.update(one_b_eo4_point=eo4, critical_speeds=found)
         print(f"1B/EO4 point omega_(1,4) / 4 = {eo4:.1f} rad/s; critical speeds in the range: "
               + "; ".join(f"family {c['family']} k = {c['k']}: {c['speed']:.1f}" for c in found))

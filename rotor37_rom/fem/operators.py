@@ -23,10 +23,10 @@ if TYPE_CHECKING:
     from .sector import Sector
 
 __all__ = ["SvkOperators", "create_svk_operators", "assemble_stiffness", "assemble_mass", "assemble_vector",
-           "assemble_scalar", "facet_centroid", "patch_load", "tip_patch_interface", "gather_dof_values", "free_dofs", "petsc_to_scipy",
-           "scipy_to_petsc", "assemble_free_operators", "evaluate_forces", "evaluate_second_derivative",
-           "assemble_tangent_scipy", "assemble_tangent", "assemble_spin_softening", "quadrature_gradients",
-           "MASS_DIAGONAL", "JIT_PARAMS"]
+           "assemble_scalar", "facet_centroid", "patch_load", "tip_patch_interface", "gather_dof_values", "free_dofs",
+           "petsc_to_scipy", "scipy_to_petsc", "assemble_free_operators", "evaluate_forces",
+           "evaluate_second_derivative", "assemble_tangent_scipy", "assemble_tangent", "assemble_spin_softening",
+           "quadrature_gradients", "MASS_DIAGONAL", "JIT_PARAMS"]
 
 MASS_DIAGONAL = 1.0e-14
 JIT_PARAMS = {"cffi_extra_compile_args": ["-O2", "-march=native"], "cffi_libraries": ["m"]}
@@ -215,6 +215,9 @@ def tip_patch_interface(sector: Sector, radius: float, max_tilt_deg: float = 45.
     mid = dmesh.compute_midpoints(msh, fdim, facets)
     normal = _cpp.mesh.cell_normals(getattr(msh, "_mesh", msh), fdim,   # the C++ mesh (a wrapper here)
                                      facets.astype(np.int32))
+    bs = sector.V.dofmap.index_map_bs
+    if bs != 3:
+        raise ValueError(f"tip_patch_interface needs a 3-component displacement space, got block size {bs}")
     rows = []
     for k, node in enumerate(np.asarray(sector.tip_nodes)):
         radial = np.array([node[0], node[1], 0.0]) / np.hypot(node[0], node[1])
@@ -222,7 +225,12 @@ def tip_patch_interface(sector: Sector, radius: float, max_tilt_deg: float = 45.
                       & (np.abs(normal @ radial) >= np.cos(np.radians(max_tilt_deg)))]
         if near.size == 0:
             raise ValueError(f"radius must reach a tip facet of node {sector.tip_names[k]}: none within {radius} m")
-        rows += [_facet_traction(sector, near, c) for c in range(3)]
+        # the three components carry the same scalar weights: assemble e_x's once, copy it to the y and z slots
+        weights = _facet_traction(sector, near, 0)[0::bs]
+        for c in range(3):
+            row = np.zeros(weights.size * bs)
+            row[c::bs] = weights
+            rows.append(row)
     C = sp.csr_matrix(np.array(rows))
     C.eliminate_zeros()
     return C
