@@ -25,6 +25,8 @@ several steps give the step's own error, and the reference is the largest model 
         --rom-cap 120 --rom-step 4e-7     # r_MD = 100 (r = 155) too: + ~50 min (exact tensors, 9 min offline)
     python benchmarks/bench_contact_reference.py --gnl --speeds 1280 --h-full 2e-6 1e-6 --rho-inf 0.8 --r-md 0 20 50 \
         --rom-cap 120 --rom-step 4e-7     # GNL full order (generalised alpha) against the r_MD series: hours
+    python benchmarks/bench_contact_reference.py --gnl --speeds 1280 --h-full 2e-6 --rho-inf 0.8 --r-md 0 20 50 100 \
+        --rom-cap 120 --rom-step 4e-7 --contact-patch 3   # the same with 3 mm contact patches on both sides
 With GNL the full order needs --rho-inf: average acceleration leaves the tip nodes ringing after each impact at
 frequencies the step does not resolve, and its Newton stalls in the first bump passage (docs/results.md).
 Unscaled (no --rom-cap) the modal derivatives of the constraint modes shrink the explicit step 67 times from r_MD = 0
@@ -44,9 +46,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import machine_description  # noqa: E402
 
 
-def reference_run(sector, ops, casing, omega, duration, h, gnl, checkpoint, rho_inf=None):
+def reference_run(sector, ops, casing, omega, duration, h, gnl, checkpoint, rho_inf=None, interface=None):
     """LE normal displacement of the full-order model every step, with the contact checks and the wall time;
-    ``rho_inf``: generalised-alpha instead of average acceleration."""
+    ``rho_inf``: generalised-alpha instead of average acceleration; ``interface``: the contact patches' C (the LE
+    displacement is then its patch mean, as in the reduced models with the same patches)."""
     from rotor37_rom.casing import contact_frames
     from rotor37_rom.fem.periodic import solve_repeating_newmark
 
@@ -54,7 +57,7 @@ def reference_run(sector, ops, casing, omega, duration, h, gnl, checkpoint, rho_
     t0 = time.perf_counter()
     res = solve_repeating_newmark(sector, 1, None, None, h, n_steps, nonlinear=gnl, ops=ops, casing=casing,
                                   omega=omega, duration=duration, snapshot_every=n_steps, rtol=1e-6,
-                                  checkpoint=checkpoint, rho_inf=rho_inf)
+                                  checkpoint=checkpoint, rho_inf=rho_inf, contact_interface=interface)
     normal = contact_frames(sector.tip_nodes[:1], casing.direction, casing.rotation_sense, casing.cone_slope)[0][0]
     le = res.tip[:, 0, 0, :] @ normal
     on = res.lam > 0
@@ -131,8 +134,8 @@ def main(argv=None) -> int:
                              "one's run of the largest model the reference; without a cap: 0.5 x the stability "
                              "limit)")
     parser.add_argument("--contact-patch", type=float, default=0.0, metavar="MM",
-                        help="the ROMs' contact force spread over the tip facets within MM of each node (issue #23; "
-                             "default 0: point contact, as the full order)")
+                        help="the contact force spread over the tip facets within MM of each node, in the ROMs "
+                             "and the full order alike (issue #23; default 0: point contact)")
     parser.add_argument("--plot", default=None, metavar="PNG",
                         help="draw the LE histories of the reference and the compared models, one file per speed "
                              "(the speed appended to the name)")
@@ -182,7 +185,10 @@ def main(argv=None) -> int:
     save()              # the case on disk before any run: a restart must find it, or it would drop the checkpoints
 
     def ref_key(w, h):                             # average-acceleration runs keep their keys of before
-        return f"{w:g} h {h:.3g}" + ("" if args.rho_inf is None else f" rho {args.rho_inf:g}")
+        return f"{w:g} h {h:.3g}" + ("" if args.rho_inf is None else f" rho {args.rho_inf:g}") \
+            + (f" patch {args.contact_patch:g} mm" if args.contact_patch else "")
+
+    interface = fem.tip_patch_interface(sector, 1e-3 * args.contact_patch) if args.contact_patch else None
 
     for w in [] if args.no_full_order else speeds:
         for h in sorted(args.h_full, reverse=True):
@@ -190,11 +196,11 @@ def main(argv=None) -> int:
             if key not in store["reference"]:
                 ckpt = results.with_name(f"{results.stem}_{key.replace(' ', '_')}.ckpt.npz")
                 store["reference"][key] = reference_run(sector, ops, casing, w, durations[float(w)], h, args.gnl,
-                                                        ckpt, args.rho_inf)
+                                                        ckpt, args.rho_inf, interface)
                 save()
                 ckpt.unlink(missing_ok=True)
             ref = store["reference"][key]
-            print(f"full order {w:g} rad/s, h = {h:.3g} s: {ref['wall_s']:.0f} s, {ref['factorisations']} "
+            print(f"full order {key}: {ref['wall_s']:.0f} s, {ref['factorisations']} "
                   f"factorisations, {ref['contact_steps']} steps in contact, largest multiplier "
                   f"{ref['max_multiplier']:.0f} N, penetration left {ref['max_penetration']:.1e} m", flush=True)
     steps = [None] if args.rom_step is None else sorted(args.rom_step, reverse=True)

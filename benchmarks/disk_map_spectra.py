@@ -4,10 +4,12 @@ casing forces (engine-order lines), next to the disk's critical speeds (paper §
 Reads a finished (or partly finished) sweep folder of ``demos/contact_map.py --disk`` (``<out>/sweeps/<key>``); per
 speed: node LE of sector 0 and the largest over the blades (max over the last revolution), the dominant frequency of
 node LE of sector 0 over the last ``--revolutions`` revolutions and the share of its power within 0.4 % of k Omega
-(k = 1..29; ``sweep.engine_order_content``). With ``--model`` (the map's rom.npz) also the share of that window in
-contact (a positive normal multiplier on any tip node of sector 0, and the mean over the sectors), the critical
-speeds omega_{f,k} / k of the model's lowest families inside the map's range, where a wave of k nodal diameters
-stands still under the stationary casing, and the 1B/EO4 point omega_{1,4} / 4.
+(k = 1..29; ``sweep.engine_order_content``), and where that frequency is an engine order n Omega, the nodal
+diameters of the wave that carries it over the 36 blades (k, and its share of that order's power). With ``--model``
+(the map's rom.npz) also the share of that window in contact (a positive normal multiplier on any tip node of
+sector 0, and the mean over the sectors), the critical speeds omega_{f,k} / k of the model's lowest families inside
+the map's range, where a wave of k nodal diameters stands still under the stationary casing, and the 1B/EO4 point
+omega_{1,4} / 4.
 
     python benchmarks/disk_map_spectra.py results/disk_map200/sweeps/<key> --model results/disk_map200/rom.npz
 
@@ -38,6 +40,24 @@ def critical_speeds(model, lo: float, hi: float, families: int = 3) -> tuple[flo
              for k in range(1, freqs.shape[0]) for f in range(families)
              if np.isfinite(freqs[k, f]) and lo <= freqs[k, f] / k <= hi]
     return float(freqs[4, 0] / 4), sorted(found, key=lambda c: c["speed"])
+
+
+def engine_order_wave(record, order: int, revolutions: float) -> tuple[int, float]:
+    """(nodal diameters k, its share) of engine order ``order`` over the blades: each blade's node LE coefficient of
+    e^{i order Omega t} over the last ``revolutions``, transformed over the sector index (a tuned disk under a fixed
+    casing answers EO n with the wave of k = n mod N nodal diameters); k in 0..N/2 (the direction folded), the share
+    that wave's power over all of them."""
+    omega = float(record["omega"])
+    t = np.asarray(record["t"])
+    sel = t >= t[-1] - revolutions * 2 * np.pi / omega
+    labels = [str(x) for x in record["labels"]]
+    rows = [i for _, i in sorted((int(lab.partition(":")[0]), i) for i, lab in enumerate(labels)
+                                 if lab.partition(":")[2] == "LE")]
+    phasor = np.exp(-1j * order * omega * t[sel])
+    coeff = np.array([np.mean(np.asarray(record["u_r"][i])[sel] * phasor) for i in rows])
+    power = np.abs(np.fft.fft(coeff)) ** 2
+    index = int(np.argmax(power))
+    return min(index, len(rows) - index), float(power[index] / power.sum())
 
 
 def contact_share(record, sectors: np.ndarray, revolutions: float) -> tuple[float, float]:
@@ -78,7 +98,7 @@ def main(argv=None) -> int:
         model = load_reduced_model(args.model)
     rows = []
     print(f"{'rad/s':>8} {'LE0 mm':>7} {'max mm':>7} {'blade':>5} {'dominant':>9} {'/Omega':>7} {'EO share':>8}"
-          + (f" {'contact 0':>9} {'contact':>7}" if model is not None else ""))
+          f" {'k':>4} {'share':>5}" + (f" {'contact 0':>9} {'contact':>7}" if model is not None else ""))
     for rec in records:
         omega = float(rec["omega"])
         per_blade = sector_maxima(rec)
@@ -92,8 +112,14 @@ def main(argv=None) -> int:
                 return 2
             row.update(le0_m=float(per_blade[0]), largest_m=float(per_blade.max()),
                        largest_blade=int(np.argmax(per_blade)), dominant=dominant, eo_share=share)
+            order = int(round(dominant / omega))
             line = (f"{omega:8.1f} {1e3 * per_blade[0]:7.3f} {1e3 * per_blade.max():7.3f} {np.argmax(per_blade):5d} "
                     f"{dominant:9.0f} {dominant / omega:7.2f} {share:8.2f}")
+            if order >= 1 and abs(dominant / omega - order) < 0.01:    # on an engine-order line: which wave
+                row["wave_k"], row["wave_share"] = engine_order_wave(rec, order, args.revolutions)
+                line += f" {row['wave_k']:4d} {row['wave_share']:5.2f}"
+            else:
+                line += f" {'-':>4} {'-':>5}"
             if model is not None:
                 try:
                     row["contact_share_0"], row["contact_share_mean"] = contact_share(rec, model.nodes.sector,

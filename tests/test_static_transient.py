@@ -10,6 +10,7 @@ another order (ratio 1 or 4) fails. The amplitudes must keep the difference >= 1
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 import ufl
 from dolfinx import fem as dfem
 
@@ -133,6 +134,30 @@ def test_full_order_newmark_with_casing_contact(ci_blade, ci_ops):
     assert res.friction_power <= 0.0
     with pytest.raises(ValueError, match="omega"):
         fem.solve_repeating_newmark(ci_blade, 1, None, None, h, 2, ops=ci_ops, casing=casing, omega=-1.0)
+
+    # the same casing on the contact patches' means C u (issue #23; fem.tip_patch_interface, 3 mm), pushed with
+    # C^T lambda: the same admissibility and complementarity on C u, to round-off
+    C = fem.tip_patch_interface(ci_blade, 3e-3)
+    patch = fem.solve_repeating_newmark(ci_blade, 1, None, None, h, n, nonlinear=False, ops=ci_ops, casing=casing,
+                                        omega=omega, duration=duration, snapshot_every=n, contact_interface=C)
+    means = (C @ patch.fields[-1, 0]).reshape(-1, 3)            # the recorded tip is C u
+    assert np.abs(patch.tip[-1, 0] - means).max() <= 1e-12 * np.abs(means).max()
+    gap = clearance - np.einsum("tkc,kc->tk", patch.tip[:, 0], normals)
+    on = patch.lam > 0
+    assert on.any(axis=1).sum() > 20
+    assert patch.lam.min() >= 0.0 and gap.min() >= -1e-15 and np.abs(gap[on]).max() <= 1e-15
+    assert patch.friction_power <= 0.0
+    # unit rows at the tip DOFs are the node contact itself: C N^T and the records are the same numbers
+    tip = np.asarray(ci_blade.tip_dofs).ravel()
+    unit = sp.csr_matrix((np.ones(tip.size), (np.arange(tip.size), tip)), shape=(tip.size, ci_blade.n_dofs))
+    same = fem.solve_repeating_newmark(ci_blade, 1, None, None, h, n, nonlinear=False, ops=ci_ops, casing=casing,
+                                       omega=omega, duration=duration, snapshot_every=n, contact_interface=unit)
+    scale = np.abs(res.tip).max()
+    assert np.abs(same.tip - res.tip).max() <= 1e-12 * scale
+    assert np.abs(same.lam - res.lam).max() <= 1e-9 * np.abs(res.lam).max()
+    with pytest.raises(ValueError, match="contact interface must be"):
+        fem.solve_repeating_newmark(ci_blade, 1, None, None, h, 2, ops=ci_ops, casing=casing, omega=omega,
+                                    contact_interface=C[:3])
 
 
 def test_rotating_blade_prestress(ci_blade, ci_ops):

@@ -41,7 +41,8 @@ LOG = logging.getLogger(__name__)
 
 @dataclasses.dataclass(frozen=True)
 class RepeatingSectorResult:
-    """t (n + 1,) s; tip (n + 1, n_repeat, n_tip, 3) tip-node displacements of each sector in its frame (m);
+    """t (n + 1,) s; tip (n + 1, n_repeat, n_tip, 3) tip-node displacements of each sector in its frame (m; with a
+    contact interface C, the patch means C u);
     fields: (n_snap, n_repeat, n_dofs) sector fields every ``snapshot_every`` steps, at t[snapshots]; iterations
     (n,) Newton iterations per step; refreshes: factorisations; wall: s. With a casing: lam (n + 1, n_c) normal
     multipliers (N) of the contact nodes (``ContactOperators.labels``), max_penetration (m) left after the steps'
@@ -106,20 +107,25 @@ class RepeatingSectors:
     def _sum(self, A_sector):
         return sum(P.T @ self._restrict @ A_sector @ self._restrict @ P for P in self.maps).tocsr()
 
-    def contact_operators(self, casing: Casing) -> ContactOperators:
+    def contact_operators(self, casing: Casing, interface=None) -> ContactOperators:
         """The rows of the casing's contact nodes (``casing.contact_nodes`` among the sector's tip nodes, all by
-        default) in every sector carried, with the casing's normal and sliding directions (``casing.contact_frames``)."""
+        default) in every sector carried, with the casing's normal and sliding directions (``casing.contact_frames``).
+        ``interface``: None, each node's own displacement; or a (3 n_tip, n_dofs) matrix C whose rows 3k..3k+2 give
+        node k's contact displacement as C u (``fem.tip_patch_interface``: the mean over a patch of the tip, whose
+        force is then C^T lambda, the reduced models' ``ReductionConfig.contact_patch``)."""
         sector = self.sector
         tip, rows = np.asarray(sector.tip_dofs), casing.node_indices(len(sector.tip_names))
         if (tip < 0).any():
             raise ValueError("the tip nodes' DOFs must all be on this rank (a serial sector)")
+        C = _contact_interface(sector, interface)
         normals, slide, theta_local = contact_frames(sector.tip_nodes[rows], casing.direction, casing.rotation_sense,
                                                      casing.cone_slope)
         pitch = 0.0 if sector.cyclic is None else 2.0 * np.pi / sector.cyclic.n_sectors
         N, S, theta0, labels = [], [], [], []
         for s, P in enumerate(self.maps):
             for k, node in enumerate(rows):
-                block = P[tip[node]]                          # (3, n_x): the node's three DOFs in sector s's frame
+                # (3, n_x): the node's three DOFs (or its patch means) in sector s's frame
+                block = P[tip[node]] if C is None else C[3 * node:3 * node + 3] @ P
                 N.append(sp.csr_matrix(block.T @ normals[k]))
                 S.append(sp.csr_matrix(block.T @ slide[k]))
                 theta0.append(theta_local[k] + s * pitch)
@@ -143,6 +149,17 @@ class RepeatingSectors:
                    for P, u in zip(self.maps, self.fields(x))).tocsr()
 
 
+def _contact_interface(sector: Sector, interface):
+    """``interface`` as CSR (3 n_tip, n_dofs), checked; None stays None."""
+    if interface is None:
+        return None
+    C = sp.csr_matrix(interface)
+    if C.shape != (3 * len(sector.tip_names), sector.n_dofs):
+        raise ValueError(f"the contact interface must be (3 x {len(sector.tip_names)} tip nodes, {sector.n_dofs} "
+                         f"DOFs), got {C.shape}")
+    return C
+
+
 def sector_harmonic_load(n_repeat: int, n_sectors: int, n_diameters: int, amplitude: float, omega: float,
                          ramp: float = 0.0) -> Callable[[float], np.ndarray]:
     """The amplitude (N) on each of the n_repeat sectors at time t: A e(t) sin(omega t - s N_d 2 pi / N) (a load of
@@ -162,7 +179,8 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
                             max_iterations: int = 30, atol: float = 1e-6, ops: SvkOperators | None = None,
                             checkpoint: str | Path | None = None, checkpoint_seconds: float = 60.0,
                             casing: Casing | None = None, omega: float | None = None,
-                            duration: float | None = None, rho_inf: float | None = None) -> RepeatingSectorResult:
+                            duration: float | None = None, rho_inf: float | None = None,
+                            contact_interface=None) -> RepeatingSectorResult:
     """Implicit Newmark (beta = 1/4, gamma = 1/2, undamped) of n_repeat sectors closed on themselves (or of one
     blade), from rest; with ``rho_inf`` the generalised-alpha scheme (Chung & Hulbert 1993) instead.
 
@@ -187,6 +205,9 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
             there, and the result's ``lam`` and friction power are alpha-point quantities); the constraint stays
             on x_n+1.
             For a contact run whose tip nodes ring at frequencies the step does not resolve.
+        contact_interface: None, the casing touches the tip nodes; or a (3 n_tip, n_dofs) matrix C, the casing
+            touches the patch means C u (``fem.tip_patch_interface``) and pushes with C^T lambda; the result's
+            ``tip`` then records C u.
     """
     if not (dt > 0 and n_steps >= 1):
         raise ValueError(f"dt must be > 0 s and n_steps >= 1, got {dt}, {n_steps}")
@@ -222,7 +243,8 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
         def force(t):
             return sum(a * f for a, f in zip(load(t), f_unit))
 
-    contact = None if casing is None else system.contact_operators(casing)
+    interface = _contact_interface(sector, contact_interface)
+    contact = None if casing is None else system.contact_operators(casing, interface)
     if contact is not None:
         duration = n_steps * dt if duration is None else float(duration)
         if not duration > 0:
@@ -241,15 +263,24 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
     a = mumps_solver(M)(force(0.0))
     refreshes = 0
     tip = np.asarray(sector.tip_dofs)
+
+    def tip_values(per_sector):                                        # (n_repeat, n_tip, 3)
+        if interface is None:
+            return per_sector[:, tip]
+        return (interface @ per_sector.T).T.reshape((n_repeat,) + tip.shape)
+
     tips, fields, snaps, its = [np.zeros((n_repeat,) + tip.shape)], [], [], []
     lams = [] if contact is None else [np.zeros(n_c)]
     checks = np.array([0.0, -np.inf])                                  # max penetration, friction power
+    fingerprint = [] if interface is None else [float(np.linspace(1.0, 2.0, interface.shape[0])
+                                                      @ (interface @ np.linspace(1.0, 2.0, sector.n_dofs)))]
     signature = np.array([n_repeat, load_key, dt, n_steps, float(nonlinear),
                           snapshot_every, x.size, sector.n_dofs] + ([] if rho_inf is None else [rho_inf])
                          + ([] if casing is None else [omega, duration, casing.c0, casing.h_b, casing.mu,
                                                        "xrc".index(casing.direction[0]), casing.rotation_sense,
                                                        casing.ramp_fraction, casing.ramp_level, casing.width,
-                                                       casing.cone_slope, n_c, float(contact.theta0.sum())]))
+                                                       casing.cone_slope, n_c, float(contact.theta0.sum())])
+                         + fingerprint)
     start, saved = 1, time.perf_counter()
     if checkpoint is not None and Path(checkpoint).is_file():
         with np.load(checkpoint) as data:
@@ -381,7 +412,7 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
         x, v, a, it, lam = advance_adaptive(x, v, a, k * dt, dt, contact is not None and lams[-1].any())
         its.append(it)
         per_sector = system.fields(x)
-        tips.append(per_sector[:, tip])
+        tips.append(tip_values(per_sector))
         if contact is not None:
             lams.append(lam)
             checks[0] = max(checks[0], -(clearance(k * dt) - contact.N @ x).min())
