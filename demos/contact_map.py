@@ -817,7 +817,8 @@ def summary_entry(config: ContactMapConfig, scheme: CentralDifference, result: M
     works = np.array([np.asarray(r.get("work", np.full(4, np.nan)), float)[:2] for r in records])
     entry = {"h": scheme.h, "h_crit": scheme.h_crit, "frequency_cap_khz": config.frequency_cap,
              "cubature": scheme.model.metadata.get("hyper_reduction"),
-             "force_precision": getattr(scheme.model.forces, "precision", "double"), "peak_speed": result.peak_speed,
+             # from the metadata: a disk's sector forces wrap the quadrature forces that carry the precision
+             "force_precision": scheme.model.metadata.get("force_precision", "double"), "peak_speed": result.peak_speed,
              "peak_amplitude": float(np.nanmax(imap.nfrc)),
              "diverged": imap.speeds[imap.diverged].tolist(), "wall_s": wall,
              "retried": {f"{w:g}": hk for w, hk in result.retried.items()},
