@@ -46,26 +46,41 @@ def engine_order_wave(record, order: int, revolutions: float) -> tuple[int, floa
     """(nodal diameters k, its share) of engine order ``order`` over the blades: each blade's node LE coefficient of
     e^{i order Omega t} over the last ``revolutions``, transformed over the sector index (a tuned disk under a fixed
     casing answers EO n with the wave of k = n mod N nodal diameters); k in 0..N/2 (the direction folded), the share
-    that wave's power over all of them."""
+    that wave's power, both directions, over all of them. Needs node LE of every sector 0..N-1 recorded."""
     omega = float(record["omega"])
     t = np.asarray(record["t"])
     sel = t >= t[-1] - revolutions * 2 * np.pi / omega
     labels = [str(x) for x in record["labels"]]
-    rows = [i for _, i in sorted((int(lab.partition(":")[0]), i) for i, lab in enumerate(labels)
-                                 if lab.partition(":")[2] == "LE")]
+    found = sorted((int(lab.partition(":")[0]), i) for i, lab in enumerate(labels) if lab.partition(":")[2] == "LE")
+    if [sector for sector, _ in found] != list(range(len(found))):
+        raise ValueError(f"node LE must be recorded on every sector 0..N-1; recorded on {[s for s, _ in found]}")
+    rows = [i for _, i in found]
     phasor = np.exp(-1j * order * omega * t[sel])
     coeff = np.array([np.mean(np.asarray(record["u_r"][i])[sel] * phasor) for i in rows])
     power = np.abs(np.fft.fft(coeff)) ** 2
+    n = len(rows)
     index = int(np.argmax(power))
-    return min(index, len(rows) - index), float(power[index] / power.sum())
+    k = min(index, n - index)
+    wave = power[k] + (power[n - k] if 0 < k < n - k else 0.0)      # a standing wave is +k and -k
+    return k, float(wave / power.sum())
+
+
+def unkept(record, key: str) -> np.ndarray:
+    """record[key] read without keeping it in the record (``sweep.SavedRecord`` keeps what it reads: the 90
+    multiplier histories of a 200-revolution disk map would take 18 GB)."""
+    path = getattr(record, "path", None)
+    if path is None:
+        return np.asarray(record[key])
+    with np.load(path, allow_pickle=False) as data:
+        return data[key]
 
 
 def contact_share(record, sectors: np.ndarray, revolutions: float) -> tuple[float, float]:
-    """(sector 0's, the mean over the sectors') share of the recorded samples in the last ``revolutions`` with a
-    positive normal multiplier on any of the sector's contact nodes; ``sectors`` (n_nodes,) is the model's node map
-    sector of each multiplier row."""
+    """(sector 0's, the mean over the sectors') share of the recorded samples (at the record's interval, not every
+    step) in the last ``revolutions`` with a positive normal multiplier on any of the sector's contact nodes;
+    ``sectors`` (n_nodes,) is the model's node map sector of each multiplier row."""
     t = np.asarray(record["t"])
-    lam = np.asarray(record["lam"])
+    lam = unkept(record, "lam")
     if lam.shape[0] != sectors.size:
         raise ValueError(f"the record has {lam.shape[0]} multiplier rows, the model {sectors.size} contact nodes")
     sel = t >= t[-1] - revolutions * 2 * np.pi / float(record["omega"])
@@ -115,10 +130,14 @@ def main(argv=None) -> int:
             order = int(round(dominant / omega))
             line = (f"{omega:8.1f} {1e3 * per_blade[0]:7.3f} {1e3 * per_blade.max():7.3f} {np.argmax(per_blade):5d} "
                     f"{dominant:9.0f} {dominant / omega:7.2f} {share:8.2f}")
-            if order >= 1 and abs(dominant / omega - order) < 0.01:    # on an engine-order line: which wave
+            # on an engine-order line (engine_order_content's band: 0.4 %, at least half a bin): which wave
+            band = max(0.004 * order * omega, omega / (2 * args.revolutions))
+            try:
+                if order < 1 or abs(dominant - order * omega) > band:
+                    raise ValueError("not on an engine-order line")
                 row["wave_k"], row["wave_share"] = engine_order_wave(rec, order, args.revolutions)
                 line += f" {row['wave_k']:4d} {row['wave_share']:5.2f}"
-            else:
+            except ValueError:                                          # off the lines, or not every blade recorded
                 line += f" {'-':>4} {'-':>5}"
             if model is not None:
                 try:

@@ -511,3 +511,33 @@ def test_disk_stress_of_the_1b_mode_peaks_at_the_blade_root(ci_disk, disk_model)
     x = fem.cell_midpoints(ci_disk)[cell]
     assert np.isclose(where["r_mm"], 1e3 * np.hypot(x[0], x[1]), rtol=1e-12)
     assert np.isclose(where["height_mm"], 1e3 * (np.hypot(x[0], x[1]) - hub_radius(x[2])), rtol=1e-12)
+
+
+def test_repeating_sectors_contact_rows_through_an_interface(ci_disk, ci_disk_ops):
+    """``RepeatingSectors.contact_operators`` with a contact interface C (the full order's contact patches, issue
+    #23), two sectors carried (the second turned by 2 pi / 36) and two of the 8 contact nodes (rows 1 and 6, so a
+    node's row in C differs from its place among the contact rows):
+    - unit rows of C at the tip DOFs give the node rows to the last bit (each entry of C P is one product by 1.0);
+    - with 3 mm patches, row (s, k) of N applied to x is n_k . (C_k u_s), u_s = sector s's field, to round-off."""
+    import scipy.sparse as sp
+
+    from rotor37_rom.casing import Casing, contact_frames
+
+    system = fem.RepeatingSectors(ci_disk, 2, ci_disk_ops)
+    casing = Casing(direction="cone", contact_nodes=(1, 6))
+    tip = np.asarray(ci_disk.tip_dofs).ravel()
+    unit = sp.csr_matrix((np.ones(tip.size), (np.arange(tip.size), tip)), shape=(tip.size, ci_disk.n_dofs))
+    node, via = system.contact_operators(casing), system.contact_operators(casing, unit)
+    assert node.labels == via.labels == ("0:tip1", "0:tip6", "1:tip1", "1:tip6")
+    assert abs(node.N - via.N).max() == 0.0 and abs(node.S - via.S).max() == 0.0
+    C = fem.tip_patch_interface(ci_disk, 3e-3)
+    patch = system.contact_operators(casing, C)
+    x = np.random.default_rng(7).standard_normal(system.keep.size)
+    fields = system.fields(x)
+    normals = contact_frames(ci_disk.tip_nodes[[1, 6]], casing.direction, casing.rotation_sense, casing.cone_slope)[0]
+    expected = np.array([normals[j] @ (C[3 * k:3 * k + 3] @ fields[s]) for s in range(2) for j, k in enumerate((1, 6))])
+    scale = np.abs(C).sum(axis=1).max() * np.abs(x).max()      # |C_k u| <= max row sum x max |u|
+    assert np.abs(patch.N @ x - expected).max() <= 1e-13 * scale
+    assert np.abs(patch.N @ x - node.N @ x).max() > 1e-3 * scale    # the patch is not the node
+    with pytest.raises(ValueError, match="contact interface must be"):
+        system.contact_operators(casing, C[:6])
