@@ -22,7 +22,13 @@ runs over several sittings. The wall time is accounted by a heartbeat (every 30 
     OPENBLAS_NUM_THREADS=1 mpirun -n 2 python benchmarks/bench_disk_map.py --revolutions 0.5 --out results/smoke
 
 Results: results/bench_disk_map.json (machine stated; written once the map and the reference are complete; with
-fewer --revolutions results/bench_disk_map_<N>rev.json).
+fewer --revolutions results/bench_disk_map_<N>rev.json). The reference alone, without the whole map (the map's model
+runs at the reference speeds only; each sitting's report shows the floor's runs already made at its speeds):
+
+    OPENBLAS_NUM_THREADS=1 mpirun -n 2 python benchmarks/bench_disk_map.py --part reference --reference 30 70
+    OPENBLAS_NUM_THREADS=1 mpirun -n 2 python benchmarks/bench_disk_map.py --part reference --no-floor
+
+writes results/bench_disk_map_reference.json.
 """
 from __future__ import annotations
 
@@ -94,11 +100,17 @@ class Sittings:
         return out
 
 
-def responses(folder: Path, speeds) -> dict:
-    """Node LE of sector 0 and the largest over the blades (max over the last revolution, m) of a sweep's speeds."""
+def responses(folder: Path, speeds, missing_ok: bool = False) -> dict:
+    """Node LE of sector 0 and the largest over the blades (max over the last revolution, m) of a sweep's speeds;
+    with ``missing_ok`` NaN where the sweep has not run a speed."""
     le0, largest, blade = [], [], []
     for w in speeds:
         rec = load_speed(folder, float(w))
+        if rec is None and missing_ok:
+            le0.append(float("nan"))
+            largest.append(float("nan"))
+            blade.append(None)
+            continue
         if rec is None:
             raise FileNotFoundError(f"{folder}: no run at {w:g} rad/s")
         per_blade = sector_maxima(rec)
@@ -113,7 +125,12 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, default=Path("results/disk_map200"), help="the map's folder")
     parser.add_argument("--reference", type=int, nargs="+", default=[10, 30, 50, 70],
                         help="indices (0..89) of the map's speeds run with the exact sector tensors")
-    parser.add_argument("--part", choices=["all", "map", "reference"], default="all")
+    parser.add_argument("--part", choices=["all", "map", "reference"], default="all",
+                        help="reference: the map's model at the --reference speeds only (what the map has not run "
+                             "yet), the exact tensors and the floor there")
+    parser.add_argument("--no-floor", action="store_true",
+                        help="skip the floor run (exact forces x (1 + 1e-4)); the report still shows the floor's runs "
+                             "an earlier sitting made at these speeds")
     parser.add_argument("--revolutions", type=float, default=REVOLUTIONS,
                         help="per speed (default 200; fewer: a smoke run of the whole chain)")
     args = parser.parse_args(argv)
@@ -162,21 +179,20 @@ def run(args, config: ContactMapConfig, grid: np.ndarray, comm, sittings: Sittin
                                                                    scales=model.forces.scales * (1 + FLOOR)),
                                  metadata=dict(model.metadata, force_scale=1 + FLOOR))
     floor = CentralDifference(scaled, nonlinear=True, h=scheme.h, frequency_cap=scheme.frequency_cap)
+    sittings.enter("map's model at the reference speeds")
+    map_folder = run_sweep(scheme, speeds, spec, args.out / "sweeps", comm=comm)    # nothing to do after the map
     sittings.enter("reference (exact tensors)")
     ref_folder = run_sweep(exact, speeds, spec, args.out / "reference", comm=comm)
-    sittings.enter("floor (exact x (1 + 1e-4))")
-    floor_folder = run_sweep(floor, speeds, spec, args.out / "reference", comm=comm)
+    if not args.no_floor:
+        sittings.enter("floor (exact x (1 + 1e-4))")
+        run_sweep(floor, speeds, spec, args.out / "reference", comm=comm)
     sittings.enter("report")
-    map_folder = sweep_folder(scheme, spec, args.out / "sweeps")
     if rank != 0:
         return 0
-    try:
-        runs = {"map (cubature 3e-3 float32)": responses(map_folder, speeds)}
-    except FileNotFoundError:
-        print("the map's runs at the reference speeds are not there yet (--part map or all); the reference is")
-        return 0
-    runs["exact"] = responses(ref_folder, speeds)
-    runs["exact x (1 + 1e-4) (floor)"] = responses(floor_folder, speeds)
+    runs = {"map (cubature 3e-3 float32)": responses(map_folder, speeds), "exact": responses(ref_folder, speeds)}
+    floor_folder = sweep_folder(floor, spec, args.out / "reference")
+    if floor_folder.is_dir():                        # where the floor has run (--no-floor: an earlier sitting's)
+        runs["exact x (1 + 1e-4) (floor)"] = responses(floor_folder, speeds, missing_ok=True)
     ref = runs["exact"]
     for name, resp in runs.items():
         resp["le0_error"] = [abs(a - b) / b for a, b in zip(resp["le0_m"], ref["le0_m"])]
@@ -185,8 +201,9 @@ def run(args, config: ContactMapConfig, grid: np.ndarray, comm, sittings: Sittin
               + " ".join(f"{x:.1%}" for x in resp["le0_error"]) + "; largest over the blades: "
               + " ".join(f"{1e3 * a:.3f}" for a in resp["largest_m"]) + " mm, errors "
               + " ".join(f"{x:.1%}" for x in resp["largest_error"]))
-    summary = json.loads((args.out / "summary.json").read_text())
-    gnl = next(entry for label, entry in summary["runs"].items() if label.startswith("GNL"))
+    summary_file = args.out / "summary.json"         # the whole map's (absent after --part reference alone)
+    summary = json.loads(summary_file.read_text()) if summary_file.is_file() else {"runs": {}}
+    gnl = next((entry for label, entry in summary["runs"].items() if label.startswith("GNL")), {})
     sittings.close()
     totals = sittings.totals()
     row = {"speeds": SPEEDS, "revolutions": config.revolutions, "r": model.r, "h": scheme.h, "cap_khz": CAP_KHZ,
@@ -200,7 +217,8 @@ def run(args, config: ContactMapConfig, grid: np.ndarray, comm, sittings: Sittin
           f"{totals.get('model, probe and cubature', 0) / 60:.0f} min; reference "
           f"{totals.get('reference (exact tensors)', 0) / 60:.0f} min, floor "
           f"{totals.get('floor (exact x (1 + 1e-4))', 0) / 60:.0f} min)")
-    name = "bench_disk_map" if config.revolutions == REVOLUTIONS else f"bench_disk_map_{config.revolutions:g}rev"
+    name = "bench_disk_map" + ("" if gnl else "_reference")
+    name += "" if config.revolutions == REVOLUTIONS else f"_{config.revolutions:g}rev"
     machine = write_results(name, [row])
     print(f"results/{name}.json ({machine})")
     return 0

@@ -28,7 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import write_results  # noqa: E402
 
 from rotor37_rom.sweep import (engine_order_content, engine_order_resonance, interaction_map, load_sweep,  # noqa: E402
-                               record_row, sector_maxima)
+                               record_row, sector_maxima, sector_rows)
 
 
 def critical_speeds(model, lo: float, hi: float, families: int = 3) -> tuple[float, list[dict]]:
@@ -50,11 +50,7 @@ def engine_order_wave(record, order: int, revolutions: float) -> tuple[int, floa
     omega = float(record["omega"])
     t = np.asarray(record["t"])
     sel = t >= t[-1] - revolutions * 2 * np.pi / omega
-    labels = [str(x) for x in record["labels"]]
-    found = sorted((int(lab.partition(":")[0]), i) for i, lab in enumerate(labels) if lab.partition(":")[2] == "LE")
-    if [sector for sector, _ in found] != list(range(len(found))):
-        raise ValueError(f"node LE must be recorded on every sector 0..N-1; recorded on {[s for s, _ in found]}")
-    rows = [i for _, i in found]
+    rows = sector_rows(record, "LE", every=True)
     phasor = np.exp(-1j * order * omega * t[sel])
     coeff = np.array([np.mean(np.asarray(record["u_r"][i])[sel] * phasor) for i in rows])
     power = np.abs(np.fft.fft(coeff)) ** 2
@@ -65,22 +61,12 @@ def engine_order_wave(record, order: int, revolutions: float) -> tuple[int, floa
     return k, float(wave / power.sum())
 
 
-def unkept(record, key: str) -> np.ndarray:
-    """record[key] read without keeping it in the record (``sweep.SavedRecord`` keeps what it reads: the 90
-    multiplier histories of a 200-revolution disk map would take 18 GB)."""
-    path = getattr(record, "path", None)
-    if path is None:
-        return np.asarray(record[key])
-    with np.load(path, allow_pickle=False) as data:
-        return data[key]
-
-
 def contact_share(record, sectors: np.ndarray, revolutions: float) -> tuple[float, float]:
     """(sector 0's, the mean over the sectors') share of the recorded samples (at the record's interval, not every
     step) in the last ``revolutions`` with a positive normal multiplier on any of the sector's contact nodes;
     ``sectors`` (n_nodes,) is the model's node map sector of each multiplier row."""
     t = np.asarray(record["t"])
-    lam = unkept(record, "lam")
+    lam = record.read("lam") if hasattr(record, "read") else np.asarray(record["lam"])   # not kept: 196 MB each
     if lam.shape[0] != sectors.size:
         raise ValueError(f"the record has {lam.shape[0]} multiplier rows, the model {sectors.size} contact nodes")
     sel = t >= t[-1] - revolutions * 2 * np.pi / float(record["omega"])

@@ -32,7 +32,8 @@ __all__ = ["SectorForces", "SectorMatrices", "DiskBasis", "HarmonicBlocks", "int
            "disk_node_map", "sector_harmonics", "harmonic_node_load", "harmonic_field_load", "repeat_count",
            "performance_indicator", "travelling_wave_departure", "INDICATOR_CRITERIA", "mistuning_factors",
            "best_approximation", "face_shapes", "travelling_load", "sector_force_basis",
-           "indicator_histories", "harmonic_frequencies"]
+           "indicator_histories", "harmonic_frequencies", "harmonic_coordinates", "wave_harmonic_order",
+           "travelling_wave_backbone", "wave_history"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -271,17 +272,23 @@ def disk_node_map(sector_nodes, n_sectors: int, r_s: int):
                    2 * np.pi / n_sectors)
 
 
-def _harmonic_transform(n_sectors: int, r_s: int, r: int):
-    """(F, transform): the real DFT F over the sector index (``real_dft``) and A -> T A T^T, T = (F (x) I_{r_s}) (+) I
-    on q = [q^0 .. q^{N-1} (r_s each), the r - N r_s interface coordinates]: a tuned disk's operator in harmonic
-    coordinates, where it is block-diagonal by harmonic index."""
-    F = real_dft(n_sectors)
-    T = scipy.sparse.block_diag([scipy.sparse.kron(F, np.eye(r_s)), scipy.sparse.identity(r - n_sectors * r_s)]
-                                ).tocsr()
+def _harmonic_matrix(n_sectors: int, r_s: int, r: int) -> scipy.sparse.csr_matrix:
+    """T = (F (x) I_{r_s}) (+) I on q = [q^0 .. q^{N-1} (r_s each), the r - N r_s interface coordinates], F the real
+    DFT over the sector index (``real_dft``): orthogonal."""
+    return scipy.sparse.block_diag([scipy.sparse.kron(real_dft(n_sectors), np.eye(r_s)),
+                                    scipy.sparse.identity(r - n_sectors * r_s)]).tocsr()
 
-    def transform(A: np.ndarray) -> np.ndarray:
-        return np.asarray(T @ np.asarray(T @ np.asarray(A, float)).T).T
-    return F, transform
+
+def _transformed(T: scipy.sparse.csr_matrix, A: np.ndarray) -> np.ndarray:
+    """T A T^T."""
+    return np.asarray(T @ np.asarray(T @ np.asarray(A, float)).T).T
+
+
+def _harmonic_transform(n_sectors: int, r_s: int, r: int):
+    """(F, transform): the real DFT F over the sector index (``real_dft``) and A -> T A T^T (``_harmonic_matrix``): a
+    tuned disk's operator in harmonic coordinates, where it is block-diagonal by harmonic index."""
+    T = _harmonic_matrix(n_sectors, r_s, r)
+    return real_dft(n_sectors), lambda A: _transformed(T, A)
 
 
 def _dominant_harmonic(X: np.ndarray) -> np.ndarray:
@@ -455,35 +462,45 @@ def sector_harmonics(V: np.ndarray, blocks: np.ndarray) -> np.ndarray:
     return _dominant_harmonic(V[blocks.ravel()].reshape(blocks.shape[0], blocks.shape[1], -1))
 
 
+def harmonic_coordinates(model, tol: float = 1e-8) -> tuple[scipy.sparse.csr_matrix, np.ndarray]:
+    """(T (r, r), k (r,)): a tuned disk model's harmonic coordinates q~ = T q and the harmonic index 0 ... N/2 of
+    each. T is orthogonal: the real DFT over the sector index (``real_dft``) of the sector blocks, the interface
+    coordinates unchanged (each column of Pi is one harmonic exactly: its DFT over the sectors). K and M are
+    block-diagonal by k in them. ValueError for a blade's model, for sector blocks not first in q, and for a
+    mistuned disk (its K or M couple the harmonics by more than ``tol`` of their norm)."""
+    basis = getattr(model, "sectors", None)
+    if basis is None:
+        raise ValueError("harmonic coordinates need a disk model (model.sectors is None: a single blade's model)")
+    N, rs = basis.blocks.shape
+    if not np.array_equal(basis.blocks.ravel(), np.arange(N * rs)):
+        raise ValueError("harmonic coordinates need the sector blocks first in q, in order")
+    nL = basis.Psi_L.shape[1]
+    k_pi = _dominant_harmonic(basis.Pi.reshape(N, nL, -1))
+    dft_k = np.array([0] + [k for k in range(1, (N + 1) // 2) for _ in (0, 1)] + ([N // 2] if N % 2 == 0 else []))
+    T = _harmonic_matrix(N, rs, model.K.shape[0])
+    k_of = np.concatenate([np.repeat(dft_k, rs), k_pi])
+    outside = k_of[:, None] != k_of[None, :]
+    for name, A in (("K", model.K), ("M", model.M)):
+        At = _transformed(T, A)
+        if np.linalg.norm(At[outside]) > tol * np.linalg.norm(At):
+            raise ValueError(f"the model's {name} couples the harmonic indices (a mistuned disk): no frequencies "
+                             f"per nodal diameter")
+    return T, k_of
+
+
 def harmonic_frequencies(model, n_families: int, tol: float = 1e-8) -> np.ndarray:
     """(N // 2 + 1, n_families) rad/s: a tuned disk model's lowest ``n_families`` frequencies at each harmonic index
     k = 0 ... N/2 (each cos/sin pair of 0 < k < N/2 counted once); NaN where the model has fewer modes of that k.
 
-    Each k is solved on its own subspace: the real DFT over the sector index of the sector blocks (``real_dft``) and
-    the interface modes of index k (each column of Pi is one harmonic exactly: its DFT over the sectors). So a model
-    whose families of different k coincide (e.g. nodal diameters left without interface modes, all with the faces
-    held) still gives each k its own values; sorting the disk's eigenvectors by their dominant harmonic
-    (``sector_harmonics``) would mix such degenerate modes as the eigensolver's round-off falls. ValueError for a
-    mistuned disk (its K or M couple the harmonics by more than ``tol`` of their norm)."""
-    basis = getattr(model, "sectors", None)
-    if basis is None:
-        raise ValueError("harmonic_frequencies needs a disk model (model.sectors is None: a single blade's model)")
+    Each k is solved on its own subspace of ``harmonic_coordinates``. So a model whose families of different k
+    coincide (e.g. nodal diameters left without interface modes, all with the faces held) still gives each k its own
+    values; sorting the disk's eigenvectors by their dominant harmonic (``sector_harmonics``) would mix such
+    degenerate modes as the eigensolver's round-off falls. ValueError for a mistuned disk."""
     if n_families < 1:
         raise ValueError(f"n_families must be >= 1, got {n_families}")
-    N, rs = basis.blocks.shape
-    if not np.array_equal(basis.blocks.ravel(), np.arange(N * rs)):
-        raise ValueError("harmonic_frequencies needs the sector blocks first in q, in order")
-    nL = basis.Psi_L.shape[1]
-    k_pi = _dominant_harmonic(basis.Pi.reshape(N, nL, -1))                             # exact: one harmonic each
-    dft_k = np.array([0] + [k for k in range(1, (N + 1) // 2) for _ in (0, 1)] + ([N // 2] if N % 2 == 0 else []))
-    _, harmonic = _harmonic_transform(N, rs, model.K.shape[0])
-    Kt, Mt = harmonic(model.K), harmonic(model.M)
-    k_of = np.concatenate([np.repeat(dft_k, rs), k_pi])
-    outside = k_of[:, None] != k_of[None, :]
-    for name, A in (("K", Kt), ("M", Mt)):
-        if np.linalg.norm(A[outside]) > tol * np.linalg.norm(A):
-            raise ValueError(f"the model's {name} couples the harmonic indices (a mistuned disk): no frequencies "
-                             f"per nodal diameter")
+    T, k_of = harmonic_coordinates(model, tol)
+    N = model.sectors.blocks.shape[0]
+    Kt, Mt = _transformed(T, model.K), _transformed(T, model.M)
     out = np.full((N // 2 + 1, n_families), np.nan)
     for k in range(N // 2 + 1):
         idx = np.flatnonzero(k_of == k)
@@ -492,6 +509,137 @@ def harmonic_frequencies(model, n_families: int, tol: float = 1e-8) -> np.ndarra
         values = np.sqrt(np.maximum(lam, 0.0))[::m][:n_families]
         out[k, :values.size] = values
     return out
+
+
+def wave_harmonic_order(n_sectors: int, n_diameters: int) -> np.ndarray:
+    """(N // 2 + 1,): for each harmonic index h, the time harmonic n >= 0 of a travelling wave of k = ``n_diameters``
+    that lands on it: the smallest n with n k = +-h (mod N) (its n-th harmonic turns the pattern n times as fast, so
+    it shows h nodal diameters, folded); 0 where no n does (the wave puts nothing there)."""
+    N, k = n_sectors, n_diameters
+    if not 0 < k < N / 2:
+        raise ValueError(f"n_diameters must be in 1..{(N - 1) // 2} (a travelling wave of {N} sectors), got {k}")
+    order = np.zeros(N // 2 + 1, dtype=np.int64)
+    for n in range(N, 0, -1):                    # the smallest n wins
+        h = (n * k) % N
+        order[min(h, N - h)] = n
+    order[0] = 0
+    return order
+
+
+def travelling_wave_backbone(model, n_diameters: int, amplitudes, family: int = 0, tol: float = 1e-10,
+                             max_iter: int = 25, start: dict | None = None) -> list[dict]:
+    """The free travelling wave of ``n_diameters`` = k nodal diameters of a tuned disk with its nonlinear forces:
+    for each modal amplitude a (increasing from small), its frequency omega(a) and its state q at t = 0 (the
+    backbone curve of the ``family``-th family's wave: 0 the 1B family).
+
+    A travelling wave is a turning pattern: its component of harmonic index h turns at n omega, n the time harmonic
+    of ``wave_harmonic_order`` (0: steady; 2, 3: the second and third harmonics the quadratic and cubic forces make).
+    So M q'' = -omega^2 D M q, D the n^2 on each harmonic block (M is block-diagonal by h), and the state solves
+
+        K q + g(q) = omega^2 D M q,   q = a phi + w,   phi^T M w = 0,   psi^T M w = 0
+
+    with phi, psi the linear pair of index k and that family (mass-normalised): the first condition sets the
+    amplitude, the second the phase. Each index keeps one time harmonic, its smallest n: the others that fold onto it
+    (on a 36-sector disk's k = 6 wave the 5th harmonic lands on index 6 and the 4th on 12) are left out, so the state
+    is balanced by a small force sigma M psi along the pair's other member, an unfolding parameter that would be 0
+    for an exact wave: |sigma| / (omega^2 a) measures the ansatz's defect. Newton on (w, omega^2, sigma), continued
+    in a from the linear mode, or from ``start`` (a point this function returned for the same wave: amplitudes
+    above its a), with a secant predictor and the step halved where Newton fails.
+
+    Returns per amplitude {'a', 'omega' (rad/s), 'q' (r,), 'phi' (r,), 'iterations', 'residual' (|R| / |K q|), 'omega_linear',
+    'sigma', 'defect' (|sigma| / (omega^2 a)), 'steps'}; ValueError where the continuation cannot go on (a fold in
+    a, or an internal resonance: some n omega meets a frequency of index h)."""
+    T, k_of = harmonic_coordinates(model)
+    N = model.sectors.blocks.shape[0]
+    k = int(n_diameters)
+    order = wave_harmonic_order(N, k)
+    amplitudes = np.asarray(amplitudes, float).ravel()
+    if amplitudes.size == 0 or amplitudes.min() <= 0:
+        raise ValueError("amplitudes: give modal amplitudes > 0")
+    Mt = _transformed(T, model.M)
+    idx = np.flatnonzero(k_of == k)
+    lam, V = scipy.linalg.eigh(_transformed(T, model.K)[np.ix_(idx, idx)], Mt[np.ix_(idx, idx)])
+    if 2 * family + 1 >= lam.size:
+        raise ValueError(f"family must be in 0..{lam.size // 2 - 1} for k = {k}, got {family}")
+    pair = np.zeros((model.r, 2))
+    pair[idx] = V[:, 2 * family:2 * family + 2]
+    pair = np.asarray(T.T @ pair)                                   # q-space, M-orthonormal
+    phi, psi = pair[:, 0], pair[:, 1]
+    omega0 = float(np.sqrt(lam[2 * family]))
+    n2 = order[k_of].astype(float) ** 2
+    DM = np.asarray(T.T @ np.asarray(T.T @ (n2[:, None] * Mt)).T).T    # T^T D M~ T, symmetric
+    Mphi, Mpsi = model.M @ phi, model.M @ psi
+    r = model.r
+
+    def newton(a, w, omega2, sigma):
+        """(w, omega^2, sigma, iterations, residual) at amplitude a from the guess; None if Newton fails."""
+        for it in range(max_iter + 1):
+            q = a * phi + w
+            Kq = model.K @ q
+            R = Kq + model.nonlinear_force(q)[:, 0] - omega2 * (DM @ q) + sigma * Mpsi
+            res = float(np.linalg.norm(R) / np.linalg.norm(Kq))
+            if res <= tol:
+                return w, omega2, sigma, it, res
+            if it == max_iter or not np.isfinite(res) or res > 1e3:
+                return None
+            J = model.K - omega2 * DM
+            if model.forces is not None:
+                J = J + model.forces.jacobian(q)
+            A = np.zeros((r + 2, r + 2))           # unknowns w, omega^2 / omega0^2, sigma / omega0^2; the two
+            A[:r, :r], A[:r, r], A[:r, r + 1] = J, -omega0 ** 2 * (DM @ q), omega0 ** 2 * Mpsi    # constraint
+            A[r, :r], A[r + 1, :r] = omega0 ** 2 * Mphi, omega0 ** 2 * Mpsi       # rows x omega0^2: one scale
+            rhs = -np.concatenate([R, omega0 ** 2 * np.array([Mphi @ w, Mpsi @ w])])
+            dx = scipy.linalg.solve(A, rhs, check_finite=False)
+            w, omega2, sigma = w + dx[:r], omega2 + omega0 ** 2 * dx[r], sigma + omega0 ** 2 * dx[r + 1]
+
+    # continuation in a: secant predictor from the last two points, the step halved where Newton fails
+    path = [(0.0, np.zeros(r), omega0 ** 2, 0.0)]
+    if start is not None:
+        if not np.array_equal(start["phi"], phi) or amplitudes.min() <= start["a"]:
+            raise ValueError("start: a point of this wave (same model, k and family) below every amplitude")
+        path = [(start["a"], start["q"] - start["a"] * phi, start["omega"] ** 2, start["sigma"])]
+    out = []
+    for target in np.sort(amplitudes):
+        step = target - path[-1][0]
+        while path[-1][0] < target:
+            a = min(path[-1][0] + step, target)
+            w, omega2, sigma = path[-1][1:]
+            if len(path) > 1:                                   # secant predictor
+                (a0, w0, o0, s0), (a1, w1, o1, s1) = path[-2], path[-1]
+                f = (a - a1) / (a1 - a0)
+                w, omega2, sigma = w1 + f * (w1 - w0), o1 + f * (o1 - o0), s1 + f * (s1 - s0)
+            found = newton(a, w, omega2, sigma)
+            if found is None:
+                step /= 2
+                if step < target * 2.0 ** -12:
+                    raise ValueError(f"travelling_wave_backbone: no converged state beyond amplitude "
+                                     f"{path[-1][0]:.4g} (k = {k}, omega = {np.sqrt(path[-1][2]):.1f} rad/s)")
+                continue
+            path.append((a,) + found[:3])
+            iterations, res = found[3:]
+            step *= 1.5
+        a, w, omega2, sigma = path[-1]
+        out.append({"a": float(a), "omega": float(np.sqrt(omega2)), "q": a * phi + w, "phi": phi,
+                    "iterations": iterations, "residual": res, "omega_linear": omega0, "sigma": float(sigma),
+                    "defect": float(abs(sigma) / (omega2 * a)), "steps": len(path) - 1})
+    return out
+
+
+def wave_history(values: np.ndarray, n_diameters: int, omega: float, samples: int = 720) -> np.ndarray:
+    """(samples,) one period (2 pi / omega) of sector 0's history of a travelling wave of ``n_diameters`` whose
+    snapshot over the N sectors at t = 0 is ``values`` (N,) (e.g. node LE's normal displacement in each sector): each
+    harmonic of the snapshot turns at its time harmonic (``wave_harmonic_order``; the sign of n is the side of the
+    fold its index lies on). The wave travels towards increasing sector index (u_j(t) = f(omega t - k theta_j)); the
+    other way round the history is the same reversed in time (so are its extremes)."""
+    values = np.asarray(values, float).ravel()
+    N = values.size
+    order = wave_harmonic_order(N, n_diameters)
+    U = np.fft.fft(values) / N
+    m = np.arange(N)
+    h = np.minimum(m, N - m)
+    sign = np.where(((order[h] * n_diameters) % N) == m, 1.0, -1.0)        # +n k = m or -n k = m (mod N)
+    t = np.arange(samples) / samples * 2 * np.pi / omega
+    return np.real(np.exp(-1j * np.outer(omega * t, sign * order[h])) @ U)
 
 
 def travelling_wave_departure(u: np.ndarray, window: np.ndarray, shift: int) -> tuple[float, float]:

@@ -23,7 +23,7 @@ from rotor37_rom.npz import save_npz
 
 __all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "load_speed", "sweep_folder", "interaction_map",
            "InteractionMap", "engine_order_resonance", "record_row", "last_revolution_max", "sector_maxima",
-           "continuation", "ContinuationPoint", "is_steady", "response_period", "engine_order_content"]
+           "sector_rows", "continuation", "ContinuationPoint", "is_steady", "response_period", "engine_order_content"]
 
 LOG = logging.getLogger(__name__)
 LE = "0:LE"     # the node whose response makes the maps and NFRC: node LE of sector 0 (a NodeMap label)
@@ -104,6 +104,15 @@ class SavedRecord(Mapping):
             sizes = {k: data.zip.getinfo(k + ".npy").file_size for k in data.files}
             self._keys = tuple(data.files)
             self._cache = {k: data[k] for k in self._keys if sizes[k] < self.SMALL}
+
+    def read(self, key: str) -> np.ndarray:
+        """record[key] read from the file without keeping it (a map's 90 multiplier histories would take 18 GB)."""
+        if key in self._cache:
+            return self._cache[key]
+        if key not in self._keys:
+            raise KeyError(key)
+        with np.load(self.path, allow_pickle=False) as data:
+            return data[key]
 
     def __getitem__(self, key: str) -> np.ndarray:
         if key not in self._cache:
@@ -283,14 +292,24 @@ def last_revolution_max(t: np.ndarray, u: np.ndarray, omega: float, revolutions:
     return float(np.nanmax(np.abs(u[sel])))
 
 
+def sector_rows(record: dict, node: str = "LE", every: bool = False) -> list[int]:
+    """Rows of ``record['u_r']`` holding ``node`` (monitored labels '<sector>:<node>'), in sector order; with
+    ``every``, the node must be recorded on every sector 0..N-1."""
+    found = sorted((int(label.partition(":")[0]), i) for i, label in enumerate(map(str, record["labels"]))
+                   if label.partition(":")[2] == node)
+    if every and [sector for sector, _ in found] != list(range(len(found))):
+        raise ValueError(f"node {node} must be recorded on every sector 0..N-1; recorded on "
+                         f"{[sector for sector, _ in found]}")
+    return [i for _, i in found]
+
+
 def sector_maxima(record: dict, node: str = "LE") -> np.ndarray:
     """Every sector's max |u| of ``node`` over the last revolution in a disk's sweep record (its monitored labels
     '<sector>:<node>'), in sector order; NaN where the run blew up."""
-    rows = sorted((int(label.partition(":")[0]), i) for i, label in enumerate(map(str, record["labels"]))
-                  if label.partition(":")[2] == node)
+    rows = sector_rows(record, node)
     if int(record["diverged_step"]) >= 0:
         return np.full(len(rows), np.nan)
-    return np.array([last_revolution_max(record["t"], record["u_r"][i], float(record["omega"])) for _, i in rows])
+    return np.array([last_revolution_max(record["t"], record["u_r"][i], float(record["omega"])) for i in rows])
 
 
 @dataclasses.dataclass

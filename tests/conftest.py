@@ -132,3 +132,18 @@ def load_demo(name: str):
     sys.modules[spec.name] = module
     spec.loader.exec_module(module)
     return module
+
+
+def random_sector(rng, r_s: int, n_l: int):
+    """A random sector's reduced matrices (``disk.SectorMatrices``: r_s interior coordinates, n_l DOFs per cyclic
+    face, symmetric positive definite K and M) for the disk's algebra tests; tests import it with
+    ``from conftest import random_sector``."""
+    import numpy as np
+
+    from rotor37_rom.disk import SectorMatrices
+
+    n = r_s + 2 * n_l
+    A, B = rng.standard_normal((n, n)), rng.standard_normal((n, n))
+    K, M = A @ A.T + np.eye(n), B @ B.T + np.eye(n)
+    omega_c = np.sqrt(np.linalg.eigvals(np.linalg.solve(M[:r_s, :r_s], K[:r_s, :r_s])).real)
+    return SectorMatrices(K=K, M=M, r_s=r_s, n_L=n_l, omega_c=np.sort(omega_c))

@@ -20,12 +20,13 @@ import scipy.sparse.linalg as spla
 from rotor37_rom import fem
 from rotor37_rom.analysis import cyclic_harmonic_frequencies
 from rotor37_rom.cyclic import assemble_full_structure, to_global_frame
-from rotor37_rom.disk import (DiskBasis, SectorMatrices, assemble_disk_matrices, best_approximation, face_shapes,
+from rotor37_rom.disk import (DiskBasis, assemble_disk_matrices, best_approximation, face_shapes,
                               harmonic_field_load, harmonic_frequencies, harmonic_node_load, indicator_histories,
                               interface_modes, performance_indicator, repeat_count, sector_force_basis,
                               sector_harmonics)
 from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
 from rotor37_rom.reduction import load_reduced_model, save_reduced_model, simulate_newmark
+from conftest import random_sector  # noqa: E402
 
 pytestmark = pytest.mark.slow
 
@@ -183,11 +184,7 @@ def test_harmonic_frequencies_split_the_disk_by_nodal_diameter():
 
     rng = np.random.default_rng(21)
     N, rs, nL = 6, 4, 3
-    A = rng.standard_normal((rs + 2 * nL, rs + 2 * nL))
-    B = rng.standard_normal((rs + 2 * nL, rs + 2 * nL))
-    K, M = A @ A.T + np.eye(rs + 2 * nL), B @ B.T + np.eye(rs + 2 * nL)
-    omega_c = np.sqrt(np.linalg.eigvals(np.linalg.solve(M[:rs, :rs], K[:rs, :rs])).real)
-    s = SectorMatrices(K=K, M=M, r_s=rs, n_L=nL, omega_c=np.sort(omega_c))
+    s = random_sector(rng, rs, nL)
     Pi, _, k_pi = interface_modes(s, N, N * nL, per_k=nL)
     blocks = np.arange(N * rs).reshape(N, rs)
 

@@ -342,6 +342,10 @@ def test_saved_record_reads_large_arrays_on_demand(tmp_path):
     np.savez(path, **arrays)
     rec = sweep_mod.load_speed(tmp_path, 1400.0)
     assert set(rec) == set(arrays) and "lam" not in rec._cache and "u_r" in rec._cache
+    np.testing.assert_array_equal(rec.read("lam"), arrays["lam"])
+    assert "lam" not in rec._cache                             # read, not kept
+    with pytest.raises(KeyError):
+        rec.read("q_final")
     for key, value in arrays.items():
         np.testing.assert_array_equal(rec[key], value)
     assert "lam" in rec._cache
@@ -349,6 +353,23 @@ def test_saved_record_reads_large_arrays_on_demand(tmp_path):
         rec["q_final"]
     path.write_bytes(path.read_bytes()[:1000])                 # truncated
     assert sweep_mod.load_speed(tmp_path, 1400.0) is None
+
+
+def test_sector_rows_and_maxima_follow_the_sector_index():
+    """A disk record's rows of one node come back in sector order whatever the recording order; the maxima over the
+    last revolution are each row's; a blown-up run gives NaN; ``every`` refuses a node missing on a sector."""
+    omega = 1500.0
+    t = np.linspace(0.0, 3 * 2 * np.pi / omega, 601)
+    amps = {2: 3.0, 0: 1.0, 1: 2.0}
+    labels = [f"{k}:LE" for k in amps] + ["0:TE"]
+    u_r = np.array([a * np.sin(omega * t) for a in amps.values()] + [9.0 * np.sin(omega * t)])
+    record = {"labels": np.array(labels), "t": t, "u_r": u_r, "omega": omega, "diverged_step": -1}
+    assert sweep_mod.sector_rows(record, "LE", every=True) == [1, 2, 0]
+    np.testing.assert_allclose(sweep_mod.sector_maxima(record), [1.0, 2.0, 3.0], rtol=1e-12)   # a peak is a sample
+    assert np.isnan(sweep_mod.sector_maxima(dict(record, diverged_step=10))).all()
+    assert sweep_mod.sector_rows(record, "TE") == [3]
+    with pytest.raises(ValueError, match="node LE must be recorded on every sector"):
+        sweep_mod.sector_rows(dict(record, labels=np.array(["0:LE", "2:LE", "3:LE", "0:TE"])), "LE", every=True)
 
 
 def test_killed_continuation_resumes_where_it_stopped(ci_rom, tmp_path, monkeypatch):

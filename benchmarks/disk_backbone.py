@@ -1,0 +1,172 @@
+"""The backbone of the disk's travelling waves with GNL: how the frequency of the 1B family's wave of k nodal
+diameters rises with its amplitude, and at which speed each engine-order line k Omega meets it (docs/results.md, the
+full map with GNL: why its response rides EO6 from 1,200 to 1,520 rad/s).
+
+For each k (``--diameters``), ``disk.travelling_wave_backbone`` on the map's disk model (its exact sector tensors,
+no casing, no damping) from the linear wave up to node LE of sector 0 at ``--le-max`` mm: per point the modal
+amplitude, the frequency and its rise over the linear one, node LE's amplitude (max over a period of its normal
+displacement along the casing's normal, ``--direction``), the speed Omega = omega / k where EO k meets the wave, and
+the ansatz's defect (``travelling_wave_backbone``).
+
+    python benchmarks/disk_backbone.py --model results/disk_map200/rom.npz [--diameters 4 6] [--le-max 0.8]
+    python benchmarks/disk_backbone.py --replot --overlay results/bench_disk_map_reference.json
+
+Results: results/disk_backbone.json and results/disk_backbone.png (node LE's amplitude against the speed where EO k
+meets the wave, the points whose ansatz defect exceeds 1e-2 marked x; --overlay: the forced runs of
+bench_disk_map.py). About 3 min for the two default waves on this machine.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import write_results  # noqa: E402
+
+DIRECTIONS = ("ex", "radial", "cone")
+DEFECT = 1e-2          # points whose ansatz defect is larger are marked (x), not joined
+
+
+def le_amplitude(Nm: np.ndarray, q: np.ndarray, k: int, omega: float) -> float:
+    """Node LE of sector 0: max over a period of |its normal displacement| (m) for the wave whose snapshot is q."""
+    from rotor37_rom.disk import wave_history
+
+    return float(np.abs(wave_history(Nm @ q, k, omega)).max())
+
+
+def backbone(model, Nm: np.ndarray, k: int, le_max: float, points: int) -> tuple[list[dict], str]:
+    """The wave of k nodal diameters from small amplitude to node LE at le_max (m), ``points`` steps at least (at
+    most 4 x ``points``), and why it stopped."""
+    from rotor37_rom.disk import travelling_wave_backbone
+
+    probe = travelling_wave_backbone(model, k, [1e-6])[0]
+    per_a = le_amplitude(Nm, probe["q"], k, probe["omega"]) / probe["a"]      # linear: node LE per modal amplitude
+    step = le_max / per_a / points
+    rows, last = [], probe
+    while not rows or rows[-1]["le0_m"] < le_max:
+        if len(rows) >= 4 * points:
+            return rows, f"{4 * points} points"
+        try:
+            p = last = travelling_wave_backbone(model, k, [last["a"] + step], start=last)[0]
+        except ValueError as exc:                     # the continuation stopped (a fold, an internal resonance)
+            print(f"k = {k}: {exc}")
+            return rows, str(exc)
+        rows.append({"k": k, "a": p["a"], "omega": p["omega"], "omega_linear": p["omega_linear"],
+                     "rise": p["omega"] / p["omega_linear"] - 1, "le0_m": le_amplitude(Nm, p["q"], k, p["omega"]),
+                     "speed": p["omega"] / k, "defect": p["defect"], "steps": p["steps"]})
+        print(f"k = {k}: a = {p['a']:.3g}, node LE {1e3 * rows[-1]['le0_m']:.3f} mm, omega {p['omega']:,.0f} rad/s "
+              f"({rows[-1]['rise']:+.1%}), EO{k} at {p['omega'] / k:,.1f} rad/s, defect {p['defect']:.1e}",
+              flush=True)
+    return rows, f"node LE reached {1e3 * le_max:g} mm"
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--model", type=Path, default=Path("results/disk_map200/rom.npz"),
+                        help="a disk map's reduced model (rom.npz, with its GNL tensors)")
+    parser.add_argument("--diameters", type=int, nargs="+", default=[4, 6], help="nodal diameters k of the waves")
+    parser.add_argument("--le-max", type=float, default=0.8, help="node LE's largest amplitude (mm), in (0, 5]")
+    parser.add_argument("--points", type=int, default=16, help="points per backbone, 4..200")
+    parser.add_argument("--direction", choices=DIRECTIONS, default="cone", help="the contact normal node LE is along")
+    parser.add_argument("--overlay", type=Path,
+                        help="results of bench_disk_map.py (bench_disk_map[_reference].json): its forced runs' node LE "
+                             "drawn at their speeds")
+    parser.add_argument("--replot", action="store_true",
+                        help="draw the chart again from results/disk_backbone.json (with --overlay) without computing")
+    args = parser.parse_args(argv)
+    if not 0 < args.le_max <= 5:
+        print(f"error: --le-max must be in (0, 5] mm, got {args.le_max:g}", file=sys.stderr)
+        return 2
+    if not 4 <= args.points <= 200:
+        print(f"error: --points must be in 4..200, got {args.points}", file=sys.stderr)
+        return 2
+    if args.overlay is not None and not args.overlay.is_file():
+        print(f"error: --overlay {args.overlay} is not a file", file=sys.stderr)
+        return 2
+    if args.replot:
+        saved = Path("results/disk_backbone.json")
+        if not saved.is_file():
+            print("error: --replot needs results/disk_backbone.json (run without --replot first)", file=sys.stderr)
+            return 2
+        overlay = json.loads(args.overlay.read_text())["rows"][0] if args.overlay else None
+        chart(json.loads(saved.read_text())["rows"], Path("results/disk_backbone.png"), overlay)
+        print("results/disk_backbone.png")
+        return 0
+    if not args.model.is_file():
+        print(f"error: --model {args.model} is not a file (a disk map's rom.npz: demos/contact_map.py --disk writes "
+              f"it in --out)", file=sys.stderr)
+        return 2
+    from rotor37_rom.casing import Casing, contact_matrices
+    from rotor37_rom.reduction import load_reduced_model
+
+    try:
+        model = load_reduced_model(args.model)
+    except ValueError as exc:
+        print(f"error: --model: {exc}", file=sys.stderr)
+        return 2
+    N = model.nodes.n_sectors
+    if model.sectors is None or model.forces is None:
+        print(f"error: --model must be a disk model with its nonlinear forces (GNL): {args.model}", file=sys.stderr)
+        return 2
+    bad = [k for k in args.diameters if not 0 < k < N / 2]
+    if bad:
+        print(f"error: --diameters must be in 1..{(N - 1) // 2} (travelling waves of {N} sectors), got {bad}",
+              file=sys.stderr)
+        return 2
+    Nm = contact_matrices(model.nodes, model.r, Casing(direction=args.direction),
+                          rows=[model.nodes.row("LE", s) for s in range(N)])[0]
+    Nm = Nm.toarray() if hasattr(Nm, "toarray") else np.asarray(Nm)
+    rows, stops, t0 = [], {}, time.perf_counter()
+    for k in args.diameters:
+        found, stops[k] = backbone(model, Nm, k, 1e-3 * args.le_max, args.points)
+        rows += found
+    wall = time.perf_counter() - t0
+    machine = write_results("disk_backbone", rows, model=str(args.model), model_key=model.key, r=model.r,
+                            direction=args.direction, wall_s=wall, stopped=stops)
+    overlay = json.loads(args.overlay.read_text())["rows"][0] if args.overlay else None
+    chart(rows, Path("results/disk_backbone.png"), overlay)
+    print(f"results/disk_backbone.json, results/disk_backbone.png ({wall:.0f} s; {machine})")
+    return 0
+
+
+def chart(rows: list[dict], path: Path, overlay: dict | None = None) -> None:
+    """Node LE's amplitude against the speed Omega = omega / k where EO k meets each wave (the backbone drawn
+    where a forced response's NFRC would run), the map's speed range shaded; ``overlay``: a bench_disk_map results
+    row, its runs' node LE of sector 0 at its reference speeds."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.8, 4.2))
+    ax.axvspan(1200, 1650, color="0.92", label="the map's speeds")
+    for k in sorted({r["k"] for r in rows}):
+        sel = [r for r in rows if r["k"] == k]
+        good = [r for r in sel if r["defect"] <= DEFECT]
+        line, = ax.plot([r["speed"] for r in good], [1e3 * r["le0_m"] for r in good], "o-", ms=3,
+                        label=f"k = {k}: EO{k} meets the free wave")
+        bad = [r for r in sel if r["defect"] > DEFECT]
+        if bad:
+            ax.plot([r["speed"] for r in bad], [1e3 * r["le0_m"] for r in bad], "x", color=line.get_color(),
+                    label=f"k = {k}, ansatz defect > {DEFECT:g}")
+    for (name, resp), marker in zip((overlay or {}).get("responses", {}).items(), "sD^v"):
+        ax.plot(overlay["reference_speeds"], [1e3 * x for x in resp["le0_m"]], marker, mfc="none", ms=7,
+                label=f"forced, {name}")
+    ax.set_xlim(900, 2000)                           # the map's neighbourhood (the JSON holds the whole backbones)
+    ax.set_ylim(0, None)
+    ax.set_xlabel("Omega = omega / k (rad/s)")
+    ax.set_ylabel("node LE of sector 0, amplitude (mm)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title("Backbones of the 1B family's travelling waves with GNL", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
