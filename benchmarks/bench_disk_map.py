@@ -217,7 +217,7 @@ def run(args, config: ContactMapConfig, grid: np.ndarray, comm, sittings: Sittin
           f"{totals.get('model, probe and cubature', 0) / 60:.0f} min; reference "
           f"{totals.get('reference (exact tensors)', 0) / 60:.0f} min, floor "
           f"{totals.get('floor (exact x (1 + 1e-4))', 0) / 60:.0f} min)")
-    name = "bench_disk_map" + ("" if gnl else "_reference")
+    name = "bench_disk_map" + ("" if args.part == "all" else "_reference")
     name += "" if config.revolutions == REVOLUTIONS else f"_{config.revolutions:g}rev"
     machine = write_results(name, [row])
     print(f"results/{name}.json ({machine})")

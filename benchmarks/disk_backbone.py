@@ -13,7 +13,7 @@ the ansatz's defect (``travelling_wave_backbone``).
 
 Results: results/disk_backbone.json and results/disk_backbone.png (node LE's amplitude against the speed where EO k
 meets the wave, the points whose ansatz defect exceeds 1e-2 marked x; --overlay: the forced runs of
-bench_disk_map.py). About 3 min for the two default waves on this machine.
+bench_disk_map.py). 3-6 min for the two default waves on this machine.
 """
 from __future__ import annotations
 
@@ -47,15 +47,16 @@ def backbone(model, Nm: np.ndarray, k: int, le_max: float, points: int) -> tuple
     probe = travelling_wave_backbone(model, k, [1e-6])[0]
     per_a = le_amplitude(Nm, probe["q"], k, probe["omega"]) / probe["a"]      # linear: node LE per modal amplitude
     step = le_max / per_a / points
-    rows, last = [], probe
+    rows, last = [], [probe]
     while not rows or rows[-1]["le0_m"] < le_max:
         if len(rows) >= 4 * points:
             return rows, f"{4 * points} points"
-        try:
-            p = last = travelling_wave_backbone(model, k, [last["a"] + step], start=last)[0]
+        try:                                          # from the last two points: the secant predictor
+            p = travelling_wave_backbone(model, k, [last[-1]["a"] + step], start=last)[0]
         except ValueError as exc:                     # the continuation stopped (a fold, an internal resonance)
             print(f"k = {k}: {exc}")
             return rows, str(exc)
+        last = [last[-1], p]
         rows.append({"k": k, "a": p["a"], "omega": p["omega"], "omega_linear": p["omega_linear"],
                      "rise": p["omega"] / p["omega_linear"] - 1, "le0_m": le_amplitude(Nm, p["q"], k, p["omega"]),
                      "speed": p["omega"] / k, "defect": p["defect"], "steps": p["steps"]})

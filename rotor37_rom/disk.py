@@ -527,7 +527,7 @@ def wave_harmonic_order(n_sectors: int, n_diameters: int) -> np.ndarray:
 
 
 def travelling_wave_backbone(model, n_diameters: int, amplitudes, family: int = 0, tol: float = 1e-10,
-                             max_iter: int = 25, start: dict | None = None) -> list[dict]:
+                             max_iter: int = 25, start=None) -> list[dict]:
     """The free travelling wave of ``n_diameters`` = k nodal diameters of a tuned disk with its nonlinear forces:
     for each modal amplitude a (increasing from small), its frequency omega(a) and its state q at t = 0 (the
     backbone curve of the ``family``-th family's wave: 0 the 1B family).
@@ -542,25 +542,31 @@ def travelling_wave_backbone(model, n_diameters: int, amplitudes, family: int = 
     amplitude, the second the phase. Each index keeps one time harmonic, its smallest n: the others that fold onto it
     (on a 36-sector disk's k = 6 wave the 5th harmonic lands on index 6 and the 4th on 12) are left out, so the state
     is balanced by a small force sigma M psi along the pair's other member, an unfolding parameter that would be 0
-    for an exact wave: |sigma| / (omega^2 a) measures the ansatz's defect. Newton on (w, omega^2, sigma), continued
-    in a from the linear mode, or from ``start`` (a point this function returned for the same wave: amplitudes
-    above its a), with a secant predictor and the step halved where Newton fails.
+    for an exact wave: |sigma| / (omega^2 a) is the part of the ansatz's defect that w cannot absorb (necessary, not
+    sufficient, for the wave to be exact). Newton on (w, omega^2, sigma), continued in a from the linear mode, or
+    from ``start`` (points this function returned for the same wave, below every amplitude: the last two seed the
+    secant predictor), the step halved where Newton fails. Where several states share an amplitude, the step decides
+    which one the path follows: take steps small enough that halving them does not change it.
 
-    Returns per amplitude {'a', 'omega' (rad/s), 'q' (r,), 'phi' (r,), 'iterations', 'residual' (|R| / |K q|), 'omega_linear',
-    'sigma', 'defect' (|sigma| / (omega^2 a)), 'steps'}; ValueError where the continuation cannot go on (a fold in
-    a, or an internal resonance: some n omega meets a frequency of index h)."""
+    Returns per amplitude {'a', 'omega' (rad/s), 'q' (r,), 'phi' (r,), 'iterations', 'residual' (|R| / |K q|),
+    'omega_linear', 'sigma', 'defect' (|sigma| / (omega^2 a)), 'steps' (Newton solves since the linear mode or
+    ``start``)}; ValueError for bad input and where the continuation cannot go on (a fold in a, or an internal
+    resonance: some n omega meets a frequency of index h)."""
     T, k_of = harmonic_coordinates(model)
     N = model.sectors.blocks.shape[0]
     k = int(n_diameters)
     order = wave_harmonic_order(N, k)
     amplitudes = np.asarray(amplitudes, float).ravel()
-    if amplitudes.size == 0 or amplitudes.min() <= 0:
-        raise ValueError("amplitudes: give modal amplitudes > 0")
+    if amplitudes.size == 0 or not np.all(np.isfinite(amplitudes)) or amplitudes.min() <= 0:
+        raise ValueError(f"amplitudes must be finite modal amplitudes > 0, got {amplitudes.tolist()[:5]}")
     Mt = _transformed(T, model.M)
     idx = np.flatnonzero(k_of == k)
     lam, V = scipy.linalg.eigh(_transformed(T, model.K)[np.ix_(idx, idx)], Mt[np.ix_(idx, idx)])
-    if 2 * family + 1 >= lam.size:
+    if not 0 <= family < lam.size // 2:
         raise ValueError(f"family must be in 0..{lam.size // 2 - 1} for k = {k}, got {family}")
+    if abs(lam[2 * family + 1] - lam[2 * family]) > 1e-8 * abs(lam[2 * family]):
+        raise ValueError(f"family {family} of k = {k} is not a degenerate pair (a mistuned disk, or families that "
+                         f"cross): no travelling wave")
     pair = np.zeros((model.r, 2))
     pair[idx] = V[:, 2 * family:2 * family + 2]
     pair = np.asarray(T.T @ pair)                                   # q-space, M-orthonormal
@@ -595,9 +601,13 @@ def travelling_wave_backbone(model, n_diameters: int, amplitudes, family: int = 
     # continuation in a: secant predictor from the last two points, the step halved where Newton fails
     path = [(0.0, np.zeros(r), omega0 ** 2, 0.0)]
     if start is not None:
-        if not np.array_equal(start["phi"], phi) or amplitudes.min() <= start["a"]:
-            raise ValueError("start: a point of this wave (same model, k and family) below every amplitude")
-        path = [(start["a"], start["q"] - start["a"] * phi, start["omega"] ** 2, start["sigma"])]
+        start = [start] if isinstance(start, dict) else list(start)[-2:]
+        if not start or any(not np.array_equal(p["phi"], phi) for p in start) or \
+                amplitudes.min() <= start[-1]["a"] or (len(start) == 2 and start[0]["a"] >= start[1]["a"]):
+            raise ValueError("start: points of this wave (same model, k and family), increasing, below every "
+                             "amplitude")
+        path = [(p["a"], p["q"] - p["a"] * phi, p["omega"] ** 2, p["sigma"]) for p in start]
+    n_start = len(path)
     out = []
     for target in np.sort(amplitudes):
         step = target - path[-1][0]
@@ -621,7 +631,7 @@ def travelling_wave_backbone(model, n_diameters: int, amplitudes, family: int = 
         a, w, omega2, sigma = path[-1]
         out.append({"a": float(a), "omega": float(np.sqrt(omega2)), "q": a * phi + w, "phi": phi,
                     "iterations": iterations, "residual": res, "omega_linear": omega0, "sigma": float(sigma),
-                    "defect": float(abs(sigma) / (omega2 * a)), "steps": len(path) - 1})
+                    "defect": float(abs(sigma) / (omega2 * a)), "steps": len(path) - n_start})
     return out
 
 
@@ -630,7 +640,11 @@ def wave_history(values: np.ndarray, n_diameters: int, omega: float, samples: in
     snapshot over the N sectors at t = 0 is ``values`` (N,) (e.g. node LE's normal displacement in each sector): each
     harmonic of the snapshot turns at its time harmonic (``wave_harmonic_order``; the sign of n is the side of the
     fold its index lies on). The wave travels towards increasing sector index (u_j(t) = f(omega t - k theta_j)); the
-    other way round the history is the same reversed in time (so are its extremes)."""
+    other way round the history is the same reversed in time (so are its extremes). The standing indices 0 and N/2
+    have no sine partner in a snapshot: they are taken at their extreme at t = 0 (cos n omega t), as the backbone's
+    ansatz takes them."""
+    if not omega > 0 or samples < 1:
+        raise ValueError(f"omega must be > 0 and samples >= 1, got {omega} and {samples}")
     values = np.asarray(values, float).ravel()
     N = values.size
     order = wave_harmonic_order(N, n_diameters)
