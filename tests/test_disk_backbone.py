@@ -91,22 +91,25 @@ def test_a_force_on_the_pair_alone_gives_the_exact_wave():
         np.testing.assert_allclose(p["q"], p["a"] * p["phi"], atol=1e-9 * p["a"] * np.abs(p["phi"]).max())
 
 
-def _sector_cubic(gamma):
-    """The gradient of gamma / 4 |q^n|^4 summed over the sectors' coordinates, and its Jacobian."""
+def _sectorwise(g, dg):
+    """(force, jacobian) of a force acting on each sector's coordinates alone: g(x) (RS,) and dg(x) (RS, RS) of one
+    sector's x; the interface coordinates carry none."""
     def force(model, q):
-        X = q[: N * RS].reshape(N, RS)
-        g = np.zeros(model.r)
-        g[: N * RS] = (gamma * (X * X).sum(axis=1)[:, None] * X).ravel()
-        return g
+        out = np.zeros(model.r)
+        out[: N * RS] = np.concatenate([g(x) for x in q[: N * RS].reshape(N, RS)])
+        return out
 
     def jacobian(model, q):
-        X = q[: N * RS].reshape(N, RS)
         J = np.zeros((model.r, model.r))
-        for n, x in enumerate(X):
-            b = slice(n * RS, (n + 1) * RS)
-            J[b, b] = gamma * ((x @ x) * np.eye(RS) + 2 * np.outer(x, x))
+        for n, x in enumerate(q[: N * RS].reshape(N, RS)):
+            J[n * RS:(n + 1) * RS, n * RS:(n + 1) * RS] = dg(x)
         return J
     return force, jacobian
+
+
+def _sector_cubic(gamma):
+    """The gradient of gamma / 4 |q^n|^4 summed over the sectors' coordinates, and its Jacobian."""
+    return _sectorwise(lambda x: gamma * (x @ x) * x, lambda x: gamma * ((x @ x) * np.eye(RS) + 2 * np.outer(x, x)))
 
 
 def _second_order_state(model, phi, psi, rhs):
@@ -154,19 +157,8 @@ def test_small_amplitude_frequency_follows_the_quadratic_term():
     beta = 30.0
     e = np.array([1.0, -0.5, 0.25, 2.0]) / np.sqrt(5.3125)
 
-    def force(model, q):
-        X = q[: N * RS].reshape(N, RS)
-        g = np.zeros(model.r)
-        g[: N * RS] = (beta * ((X * X).sum(axis=1)[:, None] * e + 2 * (X @ e)[:, None] * X)).ravel()
-        return g
-
-    def jacobian(model, q):
-        X = q[: N * RS].reshape(N, RS)
-        J = np.zeros((model.r, model.r))
-        for n, x in enumerate(X):
-            b = slice(n * RS, (n + 1) * RS)
-            J[b, b] = beta * (2 * np.outer(e, x) + 2 * np.outer(x, e) + 2 * (x @ e) * np.eye(RS))
-        return J
+    force, jacobian = _sectorwise(lambda x: beta * ((x @ x) * e + 2 * (x @ e) * x),
+                                  lambda x: beta * (2 * np.outer(e, x) + 2 * np.outer(x, e) + 2 * (x @ e) * np.eye(RS)))
 
     model = _disk(force, jacobian)
     pts = travelling_wave_backbone(model, K_WAVE, [0.04, 0.02, 0.01], tol=1e-14)
