@@ -462,11 +462,12 @@ def sector_harmonics(V: np.ndarray, blocks: np.ndarray) -> np.ndarray:
     return _dominant_harmonic(V[blocks.ravel()].reshape(blocks.shape[0], blocks.shape[1], -1))
 
 
-def harmonic_coordinates(model, tol: float = 1e-8) -> tuple[scipy.sparse.csr_matrix, np.ndarray]:
-    """(T (r, r), k (r,)): a tuned disk model's harmonic coordinates q~ = T q and the harmonic index 0 ... N/2 of
-    each. T is orthogonal: the real DFT over the sector index (``real_dft``) of the sector blocks, the interface
-    coordinates unchanged (each column of Pi is one harmonic exactly: its DFT over the sectors). K and M are
-    block-diagonal by k in them. ValueError for a blade's model, for sector blocks not first in q, and for a
+def harmonic_coordinates(model, tol: float = 1e-8) -> tuple[scipy.sparse.csr_matrix, np.ndarray, np.ndarray,
+                                                          np.ndarray]:
+    """(T (r, r), k (r,), K~, M~): a tuned disk model's harmonic coordinates q~ = T q, the harmonic index 0 ... N/2 of
+    each, and K~ = T K T^T, M~ = T M T^T, block-diagonal by k. T is orthogonal: the real DFT over the sector index
+    (``real_dft``) of the sector blocks, the interface coordinates unchanged (each column of Pi is one harmonic
+    exactly: its DFT over the sectors). ValueError for a blade's model, for sector blocks not first in q, and for a
     mistuned disk (its K or M couple the harmonics by more than ``tol`` of their norm)."""
     basis = getattr(model, "sectors", None)
     if basis is None:
@@ -480,12 +481,12 @@ def harmonic_coordinates(model, tol: float = 1e-8) -> tuple[scipy.sparse.csr_mat
     T = _harmonic_matrix(N, rs, model.K.shape[0])
     k_of = np.concatenate([np.repeat(dft_k, rs), k_pi])
     outside = k_of[:, None] != k_of[None, :]
-    for name, A in (("K", model.K), ("M", model.M)):
-        At = _transformed(T, A)
+    Kt, Mt = _transformed(T, model.K), _transformed(T, model.M)
+    for name, At in (("K", Kt), ("M", Mt)):
         if np.linalg.norm(At[outside]) > tol * np.linalg.norm(At):
             raise ValueError(f"the model's {name} couples the harmonic indices (a mistuned disk): no frequencies "
                              f"per nodal diameter")
-    return T, k_of
+    return T, k_of, Kt, Mt
 
 
 def harmonic_frequencies(model, n_families: int, tol: float = 1e-8) -> np.ndarray:
@@ -498,9 +499,8 @@ def harmonic_frequencies(model, n_families: int, tol: float = 1e-8) -> np.ndarra
     degenerate modes as the eigensolver's round-off falls. ValueError for a mistuned disk."""
     if n_families < 1:
         raise ValueError(f"n_families must be >= 1, got {n_families}")
-    T, k_of = harmonic_coordinates(model, tol)
+    _, k_of, Kt, Mt = harmonic_coordinates(model, tol)
     N = model.sectors.blocks.shape[0]
-    Kt, Mt = _transformed(T, model.K), _transformed(T, model.M)
     out = np.full((N // 2 + 1, n_families), np.nan)
     for k in range(N // 2 + 1):
         idx = np.flatnonzero(k_of == k)
@@ -552,16 +552,15 @@ def travelling_wave_backbone(model, n_diameters: int, amplitudes, family: int = 
     'omega_linear', 'sigma', 'defect' (|sigma| / (omega^2 a)), 'steps' (Newton solves since the linear mode or
     ``start``)}; ValueError for bad input and where the continuation cannot go on (a fold in a, or an internal
     resonance: some n omega meets a frequency of index h)."""
-    T, k_of = harmonic_coordinates(model)
+    T, k_of, Kt, Mt = harmonic_coordinates(model)
     N = model.sectors.blocks.shape[0]
     k = int(n_diameters)
     order = wave_harmonic_order(N, k)
     amplitudes = np.asarray(amplitudes, float).ravel()
     if amplitudes.size == 0 or not np.all(np.isfinite(amplitudes)) or amplitudes.min() <= 0:
         raise ValueError(f"amplitudes must be finite modal amplitudes > 0, got {amplitudes.tolist()[:5]}")
-    Mt = _transformed(T, model.M)
     idx = np.flatnonzero(k_of == k)
-    lam, V = scipy.linalg.eigh(_transformed(T, model.K)[np.ix_(idx, idx)], Mt[np.ix_(idx, idx)])
+    lam, V = scipy.linalg.eigh(Kt[np.ix_(idx, idx)], Mt[np.ix_(idx, idx)])
     if not 0 <= family < lam.size // 2:
         raise ValueError(f"family must be in 0..{lam.size // 2 - 1} for k = {k}, got {family}")
     if abs(lam[2 * family + 1] - lam[2 * family]) > 1e-8 * abs(lam[2 * family]):

@@ -56,9 +56,8 @@ def test_linear_disk_backbone_is_the_linear_wave():
 
 def _pair(model):
     """The linear pair of index K_WAVE, family 0 (M-orthonormal), as the backbone takes it."""
-    T, k_of = harmonic_coordinates(model)
+    T, k_of, Kt, Mt = harmonic_coordinates(model)
     idx = np.flatnonzero(k_of == K_WAVE)
-    Kt, Mt = (np.asarray(T @ np.asarray(T @ A).T).T for A in (model.K, model.M))
     _, V = scipy.linalg.eigh(Kt[np.ix_(idx, idx)], Mt[np.ix_(idx, idx)])
     pair = np.zeros((model.r, 2))
     pair[idx] = V[:, :2]
@@ -115,7 +114,7 @@ def _sector_cubic(gamma):
 def _second_order_state(model, phi, psi, rhs):
     """w solving (K - omega_0^2 D M) w + s M psi + t M phi = rhs, phi^T M w = psi^T M w = 0: the ansatz's expansion
     term, with D M = T^T D T M built here from the harmonic coordinates and the wave's time harmonics."""
-    T, k_of = harmonic_coordinates(model)
+    T, k_of, _, _ = harmonic_coordinates(model)
     n2 = wave_harmonic_order(N, K_WAVE)[k_of].astype(float) ** 2
     DM = np.asarray(T.T @ (n2[:, None] * np.asarray(T @ model.M)))        # T^T D T M
     w02 = (phi @ model.K @ phi) / (phi @ model.M @ phi)
