@@ -47,22 +47,28 @@ def backbone(model, Nm: np.ndarray, k: int, le_max: float, points: int) -> tuple
     probe = travelling_wave_backbone(model, k, [1e-6])[0]
     per_a = le_amplitude(Nm, probe["q"], k, probe["omega"]) / probe["a"]      # linear: node LE per modal amplitude
     step = le_max / per_a / points
-    rows, last = [], [probe]
-    while not rows or rows[-1]["le0_m"] < le_max:
-        if len(rows) >= 4 * points:
-            return rows, f"{4 * points} points"
-        try:                                          # from the last two points: the secant predictor
-            p = travelling_wave_backbone(model, k, [last[-1]["a"] + step], start=last)[0]
-        except ValueError as exc:                     # the continuation stopped (a fold, an internal resonance)
-            print(f"k = {k}: {exc}")
-            return rows, str(exc)
-        last = [last[-1], p]
+    rows = []
+
+    def record(p: dict) -> bool:
+        """One point found: its row, printed; True (stop) once node LE reaches le_max."""
         rows.append({"k": k, "a": p["a"], "omega": p["omega"], "omega_linear": p["omega_linear"],
                      "rise": p["omega"] / p["omega_linear"] - 1, "le0_m": le_amplitude(Nm, p["q"], k, p["omega"]),
                      "speed": p["omega"] / k, "defect": p["defect"], "steps": p["steps"]})
         print(f"k = {k}: a = {p['a']:.3g}, node LE {1e3 * rows[-1]['le0_m']:.3f} mm, omega {p['omega']:,.0f} rad/s "
               f"({rows[-1]['rise']:+.1%}), EO{k} at {p['omega'] / k:,.1f} rad/s, defect {p['defect']:.1e}",
               flush=True)
+        return rows[-1]["le0_m"] >= le_max
+
+    # one continuation from the probe (the secant predictor from its last two states), every step's amplitude a
+    # target; it ends at le_max or after 4 x points
+    try:
+        travelling_wave_backbone(model, k, probe["a"] + step * np.arange(1, 4 * points + 1), start=[probe],
+                                 callback=record)
+    except ValueError as exc:                         # the continuation stopped (a fold, an internal resonance)
+        print(f"k = {k}: {exc}")
+        return rows, str(exc)
+    if rows[-1]["le0_m"] < le_max:
+        return rows, f"{4 * points} points"
     return rows, f"node LE reached {1e3 * le_max:g} mm"
 
 

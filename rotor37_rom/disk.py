@@ -527,7 +527,7 @@ def wave_harmonic_order(n_sectors: int, n_diameters: int) -> np.ndarray:
 
 
 def travelling_wave_backbone(model, n_diameters: int, amplitudes, family: int = 0, tol: float = 1e-10,
-                             max_iter: int = 25, start=None) -> list[dict]:
+                             max_iter: int = 25, start=None, callback=None) -> list[dict]:
     """The free travelling wave of ``n_diameters`` = k nodal diameters of a tuned disk with its nonlinear forces:
     for each modal amplitude a (increasing from small), its frequency omega(a) and its state q at t = 0 (the
     backbone curve of the ``family``-th family's wave: 0 the 1B family).
@@ -551,7 +551,9 @@ def travelling_wave_backbone(model, n_diameters: int, amplitudes, family: int = 
     Returns per amplitude {'a', 'omega' (rad/s), 'q' (r,), 'phi' (r,), 'iterations', 'residual' (|R| / |K q|),
     'omega_linear', 'sigma', 'defect' (|sigma| / (omega^2 a)), 'steps' (Newton solves since the linear mode or
     ``start``)}; ValueError for bad input and where the continuation cannot go on (a fold in a, or an internal
-    resonance: some n omega meets a frequency of index h)."""
+    resonance: some n omega meets a frequency of index h). ``callback(point)``, if given, sees each point as it is
+    found (so a caller keeps the points found before such an error); a true return ends the continuation there,
+    that point the last returned (a path run until some response of the state reaches a level)."""
     T, k_of, Kt, Mt = harmonic_coordinates(model)
     N = model.sectors.blocks.shape[0]
     k = int(n_diameters)
@@ -631,6 +633,8 @@ def travelling_wave_backbone(model, n_diameters: int, amplitudes, family: int = 
         out.append({"a": float(a), "omega": float(np.sqrt(omega2)), "q": a * phi + w, "phi": phi,
                     "iterations": iterations, "residual": res, "omega_linear": omega0, "sigma": float(sigma),
                     "defect": float(abs(sigma) / (omega2 * a)), "steps": len(path) - n_start})
+        if callback is not None and callback(out[-1]):
+            break
     return out
 
 

@@ -9,7 +9,8 @@ On a random tuned disk (N = 12 sectors, r_s = 4, 3 face DOFs, interface modes of
   error of the a^4 coefficient falls 4x when a halves (Taylor), and the unbalanced force enters at a^5;
 - a quadratic force on each sector's coordinates: omega^2 = omega_0^2 + c2 a^2 + O(a^4), c2 through the steady index
   0 and index 2k turning at 2 omega: the error of c2 falls 4x when a halves;
-- continuing from returned points gives the points of one call (Newton's tolerance);
+- continuing from returned points gives the points of one call (Newton's tolerance); a callback sees each point
+  and ends the continuation where it returns True;
 - wave_history gives sector 0's history of an analytic forward wave with a second harmonic (round-off);
 - bad input.
 """
@@ -184,6 +185,19 @@ def test_backbone_continues_from_returned_points():
     assert more[0]["steps"] == 1
     with pytest.raises(ValueError, match="start: points of this wave"):
         travelling_wave_backbone(model, K_WAVE, [0.15], start=pts[1])
+
+
+def test_backbone_callback_sees_each_point_and_stops_the_path():
+    """The callback sees the points one call returns, in order, and a True return ends the path there: the points
+    so far are those of the full call (the same arithmetic), the rest not computed."""
+    model = _disk(*_sector_cubic(50.0))
+    full = travelling_wave_backbone(model, K_WAVE, [0.1, 0.2, 0.3, 0.4])
+    seen = []
+    part = travelling_wave_backbone(model, K_WAVE, [0.1, 0.2, 0.3, 0.4],
+                                    callback=lambda p: seen.append(p["a"]) or p["a"] >= 0.2)
+    assert seen == [0.1, 0.2] and [p["a"] for p in part] == seen
+    for p, f in zip(part, full):
+        assert p["omega"] == f["omega"] and np.array_equal(p["q"], f["q"])
 
 
 def test_wave_history_of_an_analytic_forward_wave():
