@@ -103,6 +103,9 @@ def per_revolution(run, omega):
     return [(float(u[rev == k].min()), float(u[rev == k].mean()), float(u[rev == k].max())) for k in range(n)]
 
 
+BANDS_HZ = (0.0, 2e3, 5e3, 10e3, 20e3, 50e3, np.inf)
+
+
 def last_peak(run, omega):
     """The last revolution's max |u| of a run (m)."""
     t, u = np.asarray(run["t"]), np.asarray(run["u_le"])
@@ -155,6 +158,7 @@ def main(argv=None) -> int:
     from rotor37_rom import fem
     from rotor37_rom.builder import ReductionConfig, build_reduced_model
     from rotor37_rom.casing import Casing
+    from rotor37_rom.sweep import band_rms
 
     sector = fem.create_blade_sector(preset="ci")
     ops = fem.create_svk_operators(sector)
@@ -264,6 +268,13 @@ def main(argv=None) -> int:
             u = np.interp(t_ref[one], np.asarray(run["t"]), np.asarray(run["u_le"]))
             e1 = np.linalg.norm(u - np.asarray(ref["u_le"])[one]) / np.linalg.norm(np.asarray(ref["u_le"])[one])
             print(f"  {label}: {rows}  ({e1:.0%})")
+        print("last revolution, RMS of the LE normal displacement by band " +
+              " / ".join(f"{lo / 1e3:g}-{hi / 1e3:g}" for lo, hi in zip(BANDS_HZ[:-2], BANDS_HZ[1:-1]))
+              + f" / > {BANDS_HZ[-2] / 1e3:g} kHz (mm): the first modes, or ringing at the tip's local frequencies")
+        for label, run in ([("reference", ref)] + coarser
+                           + [(f"{k} (r = {r})", run) for k, (r, run) in runs.items() if not run["diverged"]]):
+            rms = band_rms(np.asarray(run["t"]), np.asarray(run["u_le"]), w, BANDS_HZ)
+            print(f"  {label}: " + " / ".join(f"{1e3 * x:.3f}" for x in rms))
         if args.plot:
             from rotor37_rom.charts import plot_time_history
             t = np.asarray(ref["t"])

@@ -381,6 +381,17 @@ def engine_order_resonance(imap: InteractionMap, order: int, revolutions: float)
     return speed
 
 
+def _last_revolutions(t: np.ndarray, u: np.ndarray, omega: float, revolutions: float) -> tuple[np.ndarray, float]:
+    """(the samples of u's last ``revolutions`` revolutions, the sample interval) of a uniform record."""
+    t, u = np.asarray(t, float), np.asarray(u, float)
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    n = int(round(revolutions * 2 * np.pi / omega / dt))
+    if n < 4 or n > u.size:
+        raise ValueError(f"the record spans {(t[-1] - t[0]) * omega / (2 * np.pi):.3g} revolutions at "
+                         f"{t.size} samples; {revolutions:g} revolutions asked")
+    return u[-n:], dt
+
+
 def engine_order_content(t: np.ndarray, u: np.ndarray, omega: float, revolutions: float = 40.0,
                          max_order: int = 29, band: float = 0.004) -> tuple[float, float]:
     """(dominant frequency in rad/s, share of the power on engine-order lines) of u over its last ``revolutions``
@@ -393,13 +404,8 @@ def engine_order_content(t: np.ndarray, u: np.ndarray, omega: float, revolutions
     if not omega > 0 or not revolutions > 0 or max_order < 1 or not band >= 0:
         raise ValueError(f"need omega > 0, revolutions > 0, max_order >= 1 and band >= 0; got {omega}, "
                          f"{revolutions}, {max_order}, {band}")
-    t, u = np.asarray(t, float), np.asarray(u, float)
-    dt = (t[-1] - t[0]) / (t.size - 1)
-    n = int(round(revolutions * 2 * np.pi / omega / dt))
-    if n < 4 or n > u.size:
-        raise ValueError(f"the record spans {(t[-1] - t[0]) * omega / (2 * np.pi):.3g} revolutions at "
-                         f"{t.size} samples; {revolutions:g} revolutions asked")
-    seg = u[-n:]
+    seg, dt = _last_revolutions(t, u, omega, revolutions)
+    n = seg.size
     if not np.all(np.isfinite(seg)):
         return float("nan"), float("nan")
     power = np.abs(np.fft.rfft(seg - seg.mean())) ** 2
@@ -412,6 +418,25 @@ def engine_order_content(t: np.ndarray, u: np.ndarray, omega: float, revolutions
     width = np.maximum(band * lines, 0.5 * (w[1] - w[0]) if w.size > 1 else 0.0)
     on_line = (np.abs(w[:, None] - lines[None, :]) <= width[None, :] * (1 + 1e-12)).any(axis=1)
     return float(w[np.argmax(power)]), float(power[on_line].sum() / total)
+
+
+def band_rms(t: np.ndarray, u: np.ndarray, omega: float, edges_hz: Sequence[float], revolutions: float = 1.0
+             ) -> np.ndarray:
+    """RMS of u (mean removed) over its last ``revolutions`` revolutions within each frequency band
+    [edges_hz[i], edges_hz[i + 1]) (Hz; uniform samples), by Parseval on the one-sided spectrum: the squares of the
+    bands add up to the variance when the edges span 0 to above the Nyquist frequency. Where a response's motion
+    lies: the first modes, or ringing at a contact's local frequencies."""
+    edges = np.asarray(edges_hz, float)
+    if not omega > 0 or not revolutions > 0 or edges.size < 2 or np.any(np.diff(edges) <= 0) or edges[0] < 0:
+        raise ValueError(f"need omega > 0, revolutions > 0 and increasing edges_hz >= 0 (two at least); got {omega}, "
+                         f"{revolutions}, {edges.tolist()}")
+    seg, dt = _last_revolutions(t, u, omega, revolutions)
+    n = seg.size
+    seg = seg - seg.mean()
+    power = np.abs(np.fft.rfft(seg)) ** 2 / n ** 2
+    power[1:(n + 1) // 2] *= 2                        # the negative frequencies (not the Nyquist bin of an even n)
+    f = np.fft.rfftfreq(n, dt)
+    return np.array([np.sqrt(power[(f >= lo) & (f < hi)].sum()) for lo, hi in zip(edges[:-1], edges[1:])])
 
 
 def is_steady(t: np.ndarray, u: np.ndarray, omega: float, tol: float = 0.02, window: int = 1) -> bool:

@@ -240,6 +240,29 @@ def test_engine_order_content_splits_forced_from_sustained_power():
         sweep_mod.engine_order_content(t, u, -1.0)
 
 
+def test_band_rms_splits_the_variance_by_frequency():
+    """On a whole revolution of uniform samples the DFT is exact: tones at 4 Omega, 30 Omega and the Nyquist
+    frequency, of amplitudes a, b, c, give RMS a / sqrt 2, b / sqrt 2 and c (the Nyquist tone is +-c) in their
+    bands, 0 in an empty one, and the squares add up to the variance (round-off); a start-up transient before the
+    last revolution and a mean leave it unchanged."""
+    omega, per_rev = 1280.0, 512
+    T = 2 * np.pi / omega
+    t = np.arange(3 * per_rev) * T / per_rev
+    f0 = omega / (2 * np.pi)
+    a, b, c = 3e-4, 1e-4, 2e-5
+    u = a * np.sin(4 * omega * t + 0.3) + b * np.cos(30 * omega * t) + c * np.cos(np.pi * np.arange(t.size)) + 1e-3
+    u[:per_rev] += 5e-4 * np.exp(-t[:per_rev] / T)
+    edges = [0.0, 10 * f0, 20 * f0, 100 * f0, 1e9]
+    rms = sweep_mod.band_rms(t, u, omega, edges)
+    np.testing.assert_allclose(rms, [a / np.sqrt(2), 0.0, b / np.sqrt(2), c], atol=1e-12 * a)
+    seg = u[-per_rev:]
+    assert np.sum(rms ** 2) == pytest.approx(seg.var(), rel=1e-10)
+    with pytest.raises(ValueError, match="increasing edges_hz"):
+        sweep_mod.band_rms(t, u, omega, [0.0, 5e3, 2e3])
+    with pytest.raises(ValueError, match="revolutions asked"):
+        sweep_mod.band_rms(t, u, omega, edges, revolutions=4)
+
+
 def test_diverged_runs_are_reported_as_results(ci_rom):
     """A run that blows up is a result: on_finish receives it with its step (run_sweep saves it, so a resumed sweep
     does not redo it), and the map draws it as NaN."""
