@@ -6,9 +6,10 @@ The full-order reference is the ci blade's finite-element model (13,836 DOFs) in
 every penetration at t_n+1 (``casing.ContactSolver`` on the iteration matrix's compliance). Both sides run undamped
 from rest over the same ovalization ramp, so what differs is the reduction (and each side's time integration: the
 reference is run at several steps, the finest being the reference). Reduced models: Craig-Bampton with r_b = 24 tip
-DOFs, r_c fixed-interface modes, the 6 global modal derivatives and r_MD MI 2b modal derivatives of the constraint
-modes, explicit central differences (``integrator.simulate``) at half the stability limit, unscaled. Among reduced
-models alone (--no-full-order: convergence in r, the largest the reference) they keep their modal damping.
+DOFs, r_c fixed-interface modes, the global modal derivatives (of the first --global-md clamped modes: 6 for the
+default 3) and r_MD MI 2b modal derivatives of the constraint modes, explicit central differences
+(``integrator.simulate``) at half the stability limit, unscaled. Among reduced models alone (--no-full-order:
+convergence in r, the largest the reference) they keep their modal damping.
 
 Error measures on the LE normal displacement u(t) (m), recorded every --record seconds: the relative RMS error
 |u_rom - u_ref|_2 / |u_ref|_2 over the run, and the error of max |u| over the last revolution (the quantity a map is
@@ -27,6 +28,8 @@ several steps give the step's own error, and the reference is the largest model 
         --rom-cap 120 --rom-step 4e-7     # GNL full order (generalised alpha) against the r_MD series: hours
     python benchmarks/bench_contact_reference.py --gnl --speeds 1280 --h-full 2e-6 --rho-inf 0.8 --r-md 0 20 50 100 \
         --rom-cap 120 --rom-step 4e-7 --contact-patch 3   # the same with 3 mm contact patches on both sides
+    python benchmarks/bench_contact_reference.py --gnl --speeds 1280 --h-full 2e-6 --rho-inf 0.8 --r-md 0 \
+        --global-md 3 6 10 --rom-cap 120 --rom-step 4e-7 --contact-patch 3   # more global modal derivatives
 With GNL the full order needs --rho-inf: average acceleration leaves the tip nodes ringing after each impact at
 frequencies the step does not resolve, and its Newton stalls in the first bump passage (docs/results.md).
 Unscaled (no --rom-cap) the modal derivatives of the constraint modes shrink the explicit step 67 times from r_MD = 0
@@ -119,6 +122,9 @@ def main(argv=None) -> int:
     parser.add_argument("--gnl", action="store_true", help="SVK on both sides (default: linear)")
     parser.add_argument("--r-c", type=int, nargs="+", default=[25], help="fixed-interface modes of the ROMs")
     parser.add_argument("--r-md", type=int, nargs="+", default=[0], help="MI 2b modal derivatives of the ROMs")
+    parser.add_argument("--global-md", type=int, nargs="+", default=[3],
+                        help="the ROMs' modal derivatives of every pair of the first N clamped modes, N in 0..20 "
+                             "(default 3: 1B, 1T, 2B, the 6 of the maps' model)")
     parser.add_argument("--h-full", type=float, nargs="+", default=[2e-6, 1e-6, 5e-7],
                         help="steps of the full-order runs (s); the finest is the reference")
     parser.add_argument("--rho-inf", type=float, default=None,
@@ -146,6 +152,7 @@ def main(argv=None) -> int:
     checks = (("--revolutions", [args.revolutions], 0.5, 50), ("--h-full", args.h_full, 1e-8, 1e-4),
               ("--bump", [args.bump], 0.0, 4.9), ("--mu", [args.mu], 0.0, 2.0), ("--speeds", args.speeds, 1.0, 5000),
               ("--record", [args.record], 1e-8, 1e-3), ("--r-c", args.r_c, 1, 500), ("--r-md", args.r_md, 0, 300),
+              ("--global-md", args.global_md, 0, 20),
               ("--rom-cap", [] if args.rom_cap is None else [args.rom_cap], 1.0, 1e4),
               ("--rom-step", args.rom_step or [], 1e-9, 1e-5),
               ("--rho-inf", [] if args.rho_inf is None else [args.rho_inf], 0.0, 1.0),
@@ -209,15 +216,17 @@ def main(argv=None) -> int:
                   f"{ref['max_multiplier']:.0f} N, penetration left {ref['max_penetration']:.1e} m", flush=True)
     steps = [None] if args.rom_step is None else sorted(args.rom_step, reverse=True)
 
-    def rom_label(r_c, r_md, h):
-        return f"r_c {r_c} r_md {r_md}" + ("" if h is None else f" cap {args.rom_cap:g} h {h:.3g}") \
+    def rom_label(r_c, r_md, g, h):
+        return f"r_c {r_c} r_md {r_md}" + ("" if g == 3 else f" global {g}") \
+            + ("" if h is None else f" cap {args.rom_cap:g} h {h:.3g}") \
             + (f" patch {args.contact_patch:g} mm" if args.contact_patch else "")
 
-    for r_c, r_md, h in ((r_c, r_md, h) for r_c in args.r_c for r_md in args.r_md for h in steps):
-        label = rom_label(r_c, r_md, h)
+    combos = [(r_c, r_md, g, h) for r_c in args.r_c for r_md in args.r_md for g in args.global_md for h in steps]
+    for r_c, r_md, g, h in combos:
+        label = rom_label(r_c, r_md, g, h)
         todo = [w for w in speeds if f"{w:g}" not in store["roms"].get(label, {}).get("runs", {})]
         if todo:
-            config = ReductionConfig(r_c=r_c, r_md=r_md, criterion="MI2b", global_md_modes=3,
+            config = ReductionConfig(r_c=r_c, r_md=r_md, criterion="MI2b", global_md_modes=g,
                                      forces="intrusive" if args.gnl else "none",
                                      contact_patch=1e-3 * args.contact_patch)
             model, _ = build_reduced_model(sector, config, ops=ops, cache_dir="results/cache")
@@ -229,7 +238,7 @@ def main(argv=None) -> int:
                 store["roms"][label]["runs"][f"{w:g}"] = run
                 save()
     kind = "GNL" if args.gnl else "linear"
-    labels = [rom_label(r_c, r_md, h) for r_c in args.r_c for r_md in args.r_md for h in steps]
+    labels = [rom_label(*combo) for combo in combos]
     print(f"\n{kind}, mu = {args.mu:g}, h_b = {args.bump:g} mm, {args.revolutions:g} revolutions from rest; errors "
           f"of the LE normal displacement against "
           + ("the largest reduced model bounded at that speed" if args.no_full_order

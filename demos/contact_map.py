@@ -97,7 +97,7 @@ class ContactMapConfig:
             derivatives by MI 2b, ``r_cyclic`` interface modes) instead of the clamped blade's.
         r_c: fixed-interface modes (per sector) of the model built (>= 1). None: 15 for the blade, 10 for the disk.
         r_md: modal derivatives (per sector) selected by the criterion (>= 0). None: 0 for the blade, 10 for the disk.
-        global_md: also the modal derivatives of the first N clamped modes (0..10; the blade's).
+        global_md: also the modal derivatives of the first N clamped modes (0..20; the blade's).
         contact_patch: 0 (point contact at the tip nodes, the paper's), or a radius (m, at most 0.01) of the tip
             patches over which each node's contact force spreads (``ReductionConfig.contact_patch``; the blade's
             model built here, not a --model or the disk's).
@@ -193,8 +193,8 @@ class ContactMapConfig:
             raise ValueError(f"--r-c must be >= 1, got {self.r_c}")
         if self.r_md is not None and not self.r_md >= 0:
             raise ValueError(f"--r-md must be >= 0, got {self.r_md}")
-        if not 0 <= self.global_md <= 10:
-            raise ValueError(f"--global-md must be in 0..10, got {self.global_md}")
+        if not 0 <= self.global_md <= 20:
+            raise ValueError(f"--global-md must be in 0..20, got {self.global_md}")
         if not self.r_cyclic >= 1:
             raise ValueError(f"--r-cyclic must be >= 1, got {self.r_cyclic}")
         if not (np.isfinite(self.contact_patch) and 0 <= self.contact_patch <= 0.01):

@@ -56,7 +56,7 @@ class ReducedBladeConfig:
         forces: reduced nonlinear forces: intrusive (exact cubic tensors), quadrature (exact, tensor-free), step
             or ecsw.
         levels: load levels on each side of delta = 0 (1..50).
-        global_md: also a model with r_MD = 0 and the modal derivatives of the first N clamped modes (0: none; 0..10).
+        global_md: also a model with r_MD = 0 and the modal derivatives of the first N clamped modes (0: none; 0..20).
         out: output folder (charts; the models are cached in <out>/cache).
         tolerance: build only the cheapest reduced model the speed-accuracy study measured within this relative
             error of the clearance consumption (scene 'clearance', its held-out amplitudes included; docs/choosing-
@@ -93,8 +93,8 @@ class ReducedBladeConfig:
             raise ValueError(f"--forces must be one of {', '.join(FORCES)}, got {self.forces!r}")
         if not 1 <= self.levels <= 50:
             raise ValueError(f"--levels must be in [1, 50], got {self.levels}")
-        if not 0 <= self.global_md <= 10:
-            raise ValueError(f"--global-md must be in [0, 10], got {self.global_md}")
+        if not 0 <= self.global_md <= 20:
+            raise ValueError(f"--global-md must be in [0, 20], got {self.global_md}")
         if not self.r_md and not self.global_md:
             raise ValueError("--r-md and --global-md: no model to build (give an --r-md value or --global-md >= 1)")
         object.__setattr__(self, "table", str(self.table))

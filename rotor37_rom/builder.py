@@ -78,8 +78,8 @@ class ReductionConfig:
             raise ValueError(f"r_c must be >= 1, got {self.r_c}")
         if self.r_md < 0:
             raise ValueError(f"r_md must be >= 0, got {self.r_md}")
-        if not (0 <= self.global_md_modes <= 10):
-            raise ValueError(f"global_md_modes must be in [0, 10], got {self.global_md_modes}")
+        if not (0 <= self.global_md_modes <= 20):
+            raise ValueError(f"global_md_modes must be in [0, 20], got {self.global_md_modes}")
         if self.criterion not in CRITERIA:
             raise ValueError(f"criterion must be one of {CRITERIA}, got {self.criterion!r}")
         if self.md_method not in ("exact", "fd"):
