@@ -109,6 +109,17 @@ def per_revolution(run, omega):
 BANDS_HZ = (0.0, 2e3, 5e3, 10e3, 20e3, 50e3, np.inf)
 
 
+def completed_revolutions(run, omega):
+    """A diverged run cut after the last whole revolution before its first non-finite or blown-up sample (|u| above
+    10 cm); None if it completed none."""
+    t, u = np.asarray(run["t"]), np.asarray(run["u_le"])
+    bad = ~np.isfinite(u) | (np.abs(np.nan_to_num(u, nan=np.inf)) > 0.1)
+    t_end = t[np.argmax(bad)] if bad.any() else t[-1]
+    n = int(np.floor(t_end * omega / (2 * np.pi) + 1e-9))
+    keep = t <= n * 2 * np.pi / omega + 1e-12
+    return None if n < 1 else {**run, "t": t[keep], "u_le": u[keep], "t_blowup": float(t_end)}
+
+
 def last_peak(run, omega):
     """The last revolution's max |u| of a run (m)."""
     t, u = np.asarray(run["t"]), np.asarray(run["u_le"])
@@ -271,8 +282,12 @@ def main(argv=None) -> int:
         one = t_ref <= 2 * np.pi / w
         coarser = [] if args.no_full_order else [(f"full order h {h:.3g}", store["reference"][ref_key(w, h)])
                                                  for h in sorted(args.h_full, reverse=True) if h != min(args.h_full)]
-        for label, run in ([("reference", ref)] + coarser
-                           + [(f"{k} (r = {r})", run) for k, (r, run) in runs.items() if not run["diverged"]]):
+        for label, run in ([("reference", ref)] + coarser + [(f"{k} (r = {r})", run) for k, (r, run) in runs.items()]):
+            if run.get("diverged"):                    # the revolutions it completed before the blow-up
+                run = completed_revolutions(run, w)
+                if run is None:
+                    continue
+                label += f" (diverged at {1e3 * run['t_blowup']:.1f} ms; the revolutions before)"
             rows = "  ".join(f"{-1e3 * a:.3f}/{1e3 * m:+.3f}/{1e3 * b:.3f}" for a, m, b in per_revolution(run, w))
             u = np.interp(t_ref[one], np.asarray(run["t"]), np.asarray(run["u_le"]))
             e1 = np.linalg.norm(u - np.asarray(ref["u_le"])[one]) / np.linalg.norm(np.asarray(ref["u_le"])[one])
