@@ -84,7 +84,8 @@ def rom_runs(model, casing, speeds, duration, gnl, record, cap=None, h=None, dam
                    record_every=every, on_blowup="flag")
     row = res.row("0:LE")
     return [{"t": res.t[p].tolist(), "u_le": res.u_r[p][row].tolist(), "h": scheme.h, "wall_s": res.wall,
-             "diverged": bool(res.diverged_step[p] >= 0), "max_penetration": float(res.max_penetration[p])}
+             "diverged": bool(res.diverged_step[p] >= 0), "max_penetration": float(res.max_penetration[p]),
+             "diverged_t": float(res.diverged_step[p] * scheme.h) if res.diverged_step[p] >= 0 else None}
             for p in range(len(speeds))]
 
 
@@ -110,14 +111,18 @@ BANDS_HZ = (0.0, 2e3, 5e3, 10e3, 20e3, 50e3, np.inf)
 
 
 def completed_revolutions(run, omega):
-    """A diverged run cut after the last whole revolution before its first non-finite or blown-up sample (|u| above
-    10 cm); None if it completed none."""
+    """(a diverged run cut after the last whole revolution before it blew up, or None if it completed none; the time
+    it blew up): the integrator's flagged step where the run has it, else its first non-finite sample or |u| above
+    2 cm (the integrator's limit on the boundary coordinates)."""
     t, u = np.asarray(run["t"]), np.asarray(run["u_le"])
-    bad = ~np.isfinite(u) | (np.abs(np.nan_to_num(u, nan=np.inf)) > 0.1)
-    t_end = t[np.argmax(bad)] if bad.any() else t[-1]
+    if run.get("diverged_t") is not None:
+        t_end = run["diverged_t"]
+    else:
+        bad = ~np.isfinite(u) | (np.abs(np.nan_to_num(u, nan=np.inf)) > 0.02)
+        t_end = float(t[np.argmax(bad)] if bad.any() else t[-1])
     n = int(np.floor(t_end * omega / (2 * np.pi) + 1e-9))
     keep = t <= n * 2 * np.pi / omega + 1e-12
-    return None if n < 1 else {**run, "t": t[keep], "u_le": u[keep], "t_blowup": float(t_end)}
+    return (None if n < 1 else {**run, "t": t[keep], "u_le": u[keep]}), t_end
 
 
 def last_peak(run, omega):
@@ -284,20 +289,22 @@ def main(argv=None) -> int:
                                                  for h in sorted(args.h_full, reverse=True) if h != min(args.h_full)]
         for label, run in ([("reference", ref)] + coarser + [(f"{k} (r = {r})", run) for k, (r, run) in runs.items()]):
             if run.get("diverged"):                    # the revolutions it completed before the blow-up
-                run = completed_revolutions(run, w)
+                run, t_end = completed_revolutions(run, w)
                 if run is None:
+                    print(f"  {label}: diverged at {1e3 * t_end:.1f} ms, no whole revolution")
                     continue
-                label += f" (diverged at {1e3 * run['t_blowup']:.1f} ms; the revolutions before)"
+                label += f" (diverged at {1e3 * t_end:.1f} ms; the revolutions before)"
             rows = "  ".join(f"{-1e3 * a:.3f}/{1e3 * m:+.3f}/{1e3 * b:.3f}" for a, m, b in per_revolution(run, w))
             u = np.interp(t_ref[one], np.asarray(run["t"]), np.asarray(run["u_le"]))
             e1 = np.linalg.norm(u - np.asarray(ref["u_le"])[one]) / np.linalg.norm(np.asarray(ref["u_le"])[one])
             print(f"  {label}: {rows}  ({e1:.0%})")
-        print("last revolution, RMS of the LE normal displacement by band " +
+        print("last revolution, RMS of the LE normal displacement (its mean removed) by band " +
               " / ".join(f"{lo / 1e3:g}-{hi / 1e3:g}" for lo, hi in zip(BANDS_HZ[:-2], BANDS_HZ[1:-1]))
               + f" / > {BANDS_HZ[-2] / 1e3:g} kHz (mm): the first modes, or ringing at the tip's local frequencies")
         for label, run in ([("reference", ref)] + coarser
                            + [(f"{k} (r = {r})", run) for k, (r, run) in runs.items() if not run["diverged"]]):
-            rms = band_rms(np.asarray(run["t"]), np.asarray(run["u_le"]), w, BANDS_HZ)
+            rms = band_rms(np.asarray(run["t"]), np.asarray(run["u_le"]), w, BANDS_HZ,
+                           revolutions=min(1.0, args.revolutions))
             print(f"  {label}: " + " / ".join(f"{1e3 * x:.3f}" for x in rms))
         if args.plot:
             from rotor37_rom.charts import plot_time_history

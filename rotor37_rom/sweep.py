@@ -383,7 +383,10 @@ def engine_order_resonance(imap: InteractionMap, order: int, revolutions: float)
 
 def _last_revolutions(t: np.ndarray, u: np.ndarray, omega: float, revolutions: float) -> tuple[np.ndarray, float]:
     """(the samples of u's last ``revolutions`` revolutions, the sample interval) of a uniform record."""
-    t, u = np.asarray(t, float), np.asarray(u, float)
+    t, u = np.asarray(t, float).ravel(), np.asarray(u, float).ravel()
+    if t.size < 2 or t.size != u.size or not t[-1] > t[0]:
+        raise ValueError(f"need a record of increasing times t and as many samples u, got {t.size} times and "
+                         f"{u.size} samples")
     dt = (t[-1] - t[0]) / (t.size - 1)
     n = int(round(revolutions * 2 * np.pi / omega / dt))
     if n < 4 or n > u.size:
@@ -427,7 +430,8 @@ def band_rms(t: np.ndarray, u: np.ndarray, omega: float, edges_hz: Sequence[floa
     bands add up to the variance when the edges span 0 to above the Nyquist frequency. Where a response's motion
     lies: the first modes, or ringing at a contact's local frequencies."""
     edges = np.asarray(edges_hz, float)
-    if not omega > 0 or not revolutions > 0 or edges.size < 2 or np.any(np.diff(edges) <= 0) or edges[0] < 0:
+    if not omega > 0 or not revolutions > 0 or edges.size < 2 or np.isnan(edges).any() or \
+            not np.all(np.diff(edges) > 0) or edges[0] < 0:
         raise ValueError(f"need omega > 0, revolutions > 0 and increasing edges_hz >= 0 (two at least); got {omega}, "
                          f"{revolutions}, {edges.tolist()}")
     seg, dt = _last_revolutions(t, u, omega, revolutions)

@@ -257,8 +257,15 @@ def test_band_rms_splits_the_variance_by_frequency():
     np.testing.assert_allclose(rms, [a / np.sqrt(2), 0.0, b / np.sqrt(2), c], atol=1e-12 * a)
     seg = u[-per_rev:]
     assert np.sum(rms ** 2) == pytest.approx(seg.var(), rel=1e-10)
-    with pytest.raises(ValueError, match="increasing edges_hz"):
-        sweep_mod.band_rms(t, u, omega, [0.0, 5e3, 2e3])
+    odd = np.random.default_rng(3).standard_normal(3 * 511)               # odd n: no Nyquist bin
+    t_odd = np.arange(odd.size) * T / 511
+    rms_odd = sweep_mod.band_rms(t_odd, odd, omega, [0.0, 50 * f0, np.inf])
+    assert np.sum(rms_odd ** 2) == pytest.approx(odd[-511:].var(), rel=1e-10)
+    for bad in ([0.0, 5e3, 2e3], [0.0, np.nan, 2e3]):
+        with pytest.raises(ValueError, match="increasing edges_hz"):
+            sweep_mod.band_rms(t, u, omega, bad)
+    with pytest.raises(ValueError, match="as many samples"):
+        sweep_mod.band_rms(t, u[:-1], omega, edges)
     with pytest.raises(ValueError, match="revolutions asked"):
         sweep_mod.band_rms(t, u, omega, edges, revolutions=4)
 
