@@ -287,7 +287,8 @@ def main(argv=None) -> int:
         one = t_ref <= 2 * np.pi / w
         coarser = [] if args.no_full_order else [(f"full order h {h:.3g}", store["reference"][ref_key(w, h)])
                                                  for h in sorted(args.h_full, reverse=True) if h != min(args.h_full)]
-        for label, run in ([("reference", ref)] + coarser + [(f"{k} (r = {r})", run) for k, (r, run) in runs.items()]):
+        shown = [("reference", ref)] + coarser + [(f"{k} (r = {r})", run) for k, (r, run) in runs.items()]
+        for label, run in shown:
             if run.get("diverged"):                    # the revolutions it completed before the blow-up
                 run, t_end = completed_revolutions(run, w)
                 if run is None:
@@ -301,8 +302,7 @@ def main(argv=None) -> int:
         print("last revolution, RMS of the LE normal displacement (its mean removed) by band " +
               " / ".join(f"{lo / 1e3:g}-{hi / 1e3:g}" for lo, hi in zip(BANDS_HZ[:-2], BANDS_HZ[1:-1]))
               + f" / > {BANDS_HZ[-2] / 1e3:g} kHz (mm): the first modes, or ringing at the tip's local frequencies")
-        for label, run in ([("reference", ref)] + coarser
-                           + [(f"{k} (r = {r})", run) for k, (r, run) in runs.items() if not run["diverged"]]):
+        for label, run in ((label, run) for label, run in shown if not run.get("diverged")):
             rms = band_rms(np.asarray(run["t"]), np.asarray(run["u_le"]), w, BANDS_HZ,
                            revolutions=min(1.0, args.revolutions))
             print(f"  {label}: " + " / ".join(f"{1e3 * x:.3f}" for x in rms))
