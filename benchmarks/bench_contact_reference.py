@@ -126,9 +126,10 @@ def completed_revolutions(run, omega):
 
 
 def last_peak(run, omega):
-    """The last revolution's max |u| of a run (m)."""
-    t, u = np.asarray(run["t"]), np.asarray(run["u_le"])
-    return float(np.abs(u[t >= t[-1] - 2 * np.pi / omega]).max())
+    """The last revolution's max |u| of a run (m): the NFRC's quantity (``sweep.last_revolution_max``)."""
+    from rotor37_rom.sweep import last_revolution_max
+
+    return last_revolution_max(np.asarray(run["t"]), np.asarray(run["u_le"]), omega)
 
 
 def main(argv=None) -> int:

@@ -23,8 +23,11 @@ output (a rerun that finds every speed done takes seconds).
     python benchmarks/bench_gnl_vs_linear.py                  # mu = 0.15, 1200-2000 rad/s, 200 rev: 1-3 h on 2 cores
     python benchmarks/bench_gnl_vs_linear.py --mu 0 --gnl off    # the linear maps without friction: 4 min
     python benchmarks/bench_gnl_vs_linear.py --mu 0 0.05 0.1 0.15 # every friction value of issue #23 (4-12 h)
+    python benchmarks/bench_gnl_vs_linear.py --global-md 10 --capped-training --speeds 1300 1600 4 --ranks 1
+                                          # r = 104 (modal derivatives of 10 clamped modes) at 4 speeds
 
-The r = 55 ci model is built (20 s) when --model is missing. Each cubature training takes 8-30 min; the maps run on
+The r = 55 ci model is built (20 s) when --model is missing; another --global-md builds its own model and maps into
+folders of their own, and each row says its model's r. Each cubature training takes 8-30 min; the maps run on
 --ranks ranks, the GNL step from each range's probe (1.2e-7 to 6.7e-7 s measured), which sets most of the time.
 """
 from __future__ import annotations
@@ -55,6 +58,8 @@ def map_command(args, mu: float, speeds: tuple, out: Path) -> list[str]:
            "--mu", f"{mu:g}", "--direction", args.direction, "--speeds", f"{start:g}", f"{stop:g}", f"{int(n)}",
            "--revolutions", f"{args.revolutions:g}", "--retry-diverged", "2", "--batch", f"{args.batch}",
            "--out", str(out), "--quiet"]
+    if args.capped_training:
+        cmd.append("--capped-training")
     if args.ranks > 1:
         cmd = ["mpirun", "-n", str(args.ranks)] + cmd
     return cmd
@@ -119,26 +124,35 @@ def map_row(folders: list[Path], mu: float, gnl: bool, revolutions: float, quart
 
 
 def earlier_rows(rows: list[dict]) -> list[dict]:
-    """The rows of results/bench_gnl_vs_linear.json that ``rows`` do not replace (another friction value, setting or
-    normal, e.g. from a run with --gnl off only), so that the file collects every run."""
+    """The rows of results/bench_gnl_vs_linear.json that ``rows`` do not replace (another model size, friction value,
+    setting, normal or training, e.g. from a run with --gnl off only), so that the file collects every run. A row
+    written before rows carried their model's r is the file's model's; one written before --capped-training was
+    trained unscaled."""
     path = Path("results/bench_gnl_vs_linear.json")
     if not path.is_file():
         return []
-    key = ("mu", "gnl", "direction", "speeds")
+    key = ("r", "mu", "gnl", "direction", "speeds", "capped_training")
     new = {tuple(json.dumps(r[k]) for k in key) for r in rows}
-    return [r for r in json.loads(path.read_text())["rows"] if tuple(json.dumps(r.get(k)) for k in key) not in new]
+    stored = json.loads(path.read_text())
+    old = [{"r": stored["model"]["r"], "capped_training": False} | r for r in stored["rows"]]
+    return [r for r in old if tuple(json.dumps(r.get(k)) for k in key) not in new]
+
+
+def gnl_label(row: dict) -> str:
+    """'off', 'on' or 'on, capped training' (the cubature trained on capped runs)."""
+    return ("on, capped training" if row.get("capped_training") else "on") if row["gnl"] else "off"
 
 
 def markdown(rows: list[dict], quarter_omega1: float) -> str:
     def f(x, fmt):
         return "–" if x is None or not np.isfinite(x) else format(x, fmt)
 
-    lines = [f"| μ | GNL | grown (of N) | largest response | 1B/EO4 resonance (stiffening over ω₁/4 = "
+    lines = [f"| r | μ | GNL | grown (of N) | largest response | 1B/EO4 resonance (stiffening over ω₁/4 = "
              f"{quarter_omega1:.0f}) | LE there | time in contact there | normal / friction work there (J/rev) |",
-             "|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(
-            f"| {r['mu']:g} | {'on' if r['gnl'] else 'off'} | {len(r['speeds_grown'])} of {r['n_speeds']} | "
+            f"| {r['r']} | {r['mu']:g} | {gnl_label(r)} | {len(r['speeds_grown'])} of {r['n_speeds']} | "
             f"{f(r['peak_mm'], '.2f')} mm at {f(r['peak_speed'], '.0f')} | {f(r['resonance'], '.0f')} rad/s "
             f"({f(r['stiffening_pct'], '+.1f')} %) | {f(r['resonance_mm'], '.2f')} mm | "
             f"{f(None if r['contact_share'] is None else 100 * r['contact_share'], '.1f')} % | "
@@ -146,9 +160,10 @@ def markdown(rows: list[dict], quarter_omega1: float) -> str:
     return "\n".join(lines)
 
 
-def build_model(path: Path, preset: str, r_c: int) -> None:
+def build_model(path: Path, preset: str, r_c: int, global_md: int) -> None:
     """The reduced model the maps share, built as the map command builds it (24 tip DOFs, r_c fixed-interface modes,
-    the modal derivatives of 1B, 1T, 2B, exact cubic tensors), saved to ``path``."""
+    the modal derivatives of the first ``global_md`` clamped modes (3: 1B, 1T, 2B), exact cubic tensors), saved to
+    ``path``."""
     import importlib.util
 
     from rotor37_rom.reduction import save_reduced_model
@@ -157,7 +172,7 @@ def build_model(path: Path, preset: str, r_c: int) -> None:
     demo = importlib.util.module_from_spec(spec)
     sys.modules["contact_map"] = demo                   # its dataclasses look their module up
     spec.loader.exec_module(demo)
-    model = demo.build_model(demo.ContactMapConfig(preset=preset, r_c=r_c, out=OUT))
+    model = demo.build_model(demo.ContactMapConfig(preset=preset, r_c=r_c, global_md=global_md, out=OUT))
     path.parent.mkdir(parents=True, exist_ok=True)
     save_reduced_model(model, path)
 
@@ -167,18 +182,25 @@ def nfrc_chart(rows: list[dict], direction: str, quarter_omega1: float) -> Path:
     resonances; results/gnl_vs_linear/nfrc_<direction>.png."""
     from rotor37_rom.charts import plot_nfrc
 
-    curves = {f"mu = {r['mu']:g}, GNL {'on' if r['gnl'] else 'off'}":
+    curves = {f"r = {r['r']}, mu = {r['mu']:g}, GNL {gnl_label(r)}":
               (r["speeds"], np.asarray(r["nfrc_mm"], float) * 1e-3, "o-" if r["gnl"] else "s--")
-              for r in sorted(rows, key=lambda r: (r["mu"], r["gnl"])) if r["direction"] == direction}
+              for r in sorted(rows, key=lambda r: (r["r"], r["mu"], r["gnl"])) if r["direction"] == direction}
     return plot_nfrc(curves, OUT / f"nfrc_{direction}.png", linear_resonance=quarter_omega1,
                      paper={"paper zero IC, no GNL": 1446.0, "paper zero IC, GNL": 1535.0})
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--model", type=Path, default=OUT / "rom.npz", help="reduced model; built when missing")
+    parser.add_argument("--model", type=Path, help="reduced model; built when missing (default "
+                        "results/gnl_vs_linear/rom.npz, rom_g<N>.npz with --global-md N other than 3)")
     parser.add_argument("--preset", default="ci", help="mesh preset of the model built (default ci)")
     parser.add_argument("--r-c", type=int, default=25, help="fixed-interface modes of the model built (default 25)")
+    parser.add_argument("--global-md", type=int, default=3,
+                        help="modal derivatives of the first N clamped modes in the model built, 0..20 (default 3: "
+                             "the maps' r = 55; 10: r = 104, the basis nearest the full order in contact)")
+    parser.add_argument("--capped-training", action="store_true",
+                        help="the cubature's training runs at the frequency cap (demos/contact_map.py "
+                             "--capped-training; for --global-md 10, whose unscaled exact runs take hours)")
     parser.add_argument("--mu", type=float, nargs="+", default=[0.15], help="friction coefficients (default 0.15)")
     parser.add_argument("--direction", choices=["x", "radial", "cone"], default="cone")
     parser.add_argument("--gnl", choices=list(SETTINGS), default="both", help="maps with GNL off, on or both")
@@ -194,10 +216,15 @@ def main(argv=None) -> int:
     if len(args.speeds) % 3:
         print(f"error: --speeds takes START STOP N per range, got {len(args.speeds)} numbers", file=sys.stderr)
         return 2
+    if not 0 <= args.global_md <= 20:
+        print(f"error: --global-md must be in 0..20, got {args.global_md}", file=sys.stderr)
+        return 2
+    if args.model is None:
+        args.model = OUT / ("rom.npz" if args.global_md == 3 else f"rom_g{args.global_md}.npz")
     from rotor37_rom.reduction import load_reduced_model
 
     if not args.model.is_file():
-        build_model(args.model, args.preset, args.r_c)
+        build_model(args.model, args.preset, args.r_c, args.global_md)
     model = load_reduced_model(args.model)
     import scipy.linalg
     quarter_omega1 = float(np.sqrt(scipy.linalg.eigh(model.K, model.M, eigvals_only=True)[0])) / 4
@@ -207,7 +234,9 @@ def main(argv=None) -> int:
     for mu in args.mu:
         folders = []
         for speeds in ranges:
-            out = OUT / f"{args.direction}_mu{mu:g}_{speeds[0]:g}-{speeds[1]:g}"
+            # the maps' r = 55 keeps its folders; another model its own
+            tag = "" if args.model == OUT / "rom.npz" else f"{args.model.stem}_"
+            out = OUT / f"{tag}{args.direction}_mu{mu:g}_{speeds[0]:g}-{speeds[1]:g}"
             cmd = map_command(args, mu, speeds, out)
             commands.append(" ".join(str(c) for c in cmd))
             t0 = time.perf_counter()
@@ -217,7 +246,8 @@ def main(argv=None) -> int:
                 return 1
             print(f"mu = {mu:g}, {speeds[0]:g}-{speeds[1]:g} rad/s: {time.perf_counter() - t0:.0f} s")
             folders.append(out)
-        rows += [map_row(folders, mu, gnl, args.revolutions, quarter_omega1) | {"direction": args.direction}
+        rows += [map_row(folders, mu, gnl, args.revolutions, quarter_omega1)
+                 | {"direction": args.direction, "r": model.r, "capped_training": args.capped_training and gnl}
                  for gnl in SETTINGS[args.gnl]]
     rows = earlier_rows(rows) + rows
     machine = write_results("bench_gnl_vs_linear", rows, model={"file": str(args.model), "r": model.r,
@@ -227,7 +257,7 @@ def main(argv=None) -> int:
     chart = nfrc_chart(rows, args.direction, quarter_omega1)
     print(f"{machine}; model r = {model.r} {model.sizes}, {args.direction} normal, {args.revolutions:g} revolutions; "
           f"NFRC chart {chart}")
-    print(markdown(sorted(rows, key=lambda r: (r["direction"], r["mu"], r["gnl"])), quarter_omega1))
+    print(markdown(sorted(rows, key=lambda r: (r["direction"], r["r"], r["mu"], r["gnl"])), quarter_omega1))
     return 0
 
 

@@ -120,6 +120,11 @@ class ContactMapConfig:
         cubature_speeds: the speeds (rad/s) of the exact GNL runs the cubature is trained on (needs ``cubature``).
             None: 6 of the map's speeds, both ends included. A map on other speeds with the same training speeds
             reuses the same cubature (a held-out check runs the model as trained, not one retrained on its speeds).
+        capped_training: the blade's cubature training runs (and the GNL step's probe) run with the frequency cap,
+            at the step of a capped probe (exact forces), as a disk's always do (needs ``cubature`` and
+            ``frequency_cap``). For bases whose unscaled GNL step makes the exact runs hours long (the modal
+            derivatives of 10 clamped modes, r = 104); the cubature is then trained on the capped dynamics the map
+            runs. False: unscaled training runs (the headline maps').
         tolerance: choose r_c, the frequency cap, the step and the force evaluation of each setting (GNL off, on) as
             the cheapest model of the speed-accuracy study within this relative error (``model_choice.choose_model``
             on the scenes 'map-linear' and 'map-gnl', read from rotor37_rom/data/speed_accuracy.json), in (0, 1);
@@ -162,6 +167,7 @@ class ContactMapConfig:
     cubature: float | None = None
     precision: str = "double"
     cubature_speeds: tuple[float, ...] | None = None
+    capped_training: bool = False
     tolerance: float | None = None
     retry_diverged: int = 0
     mu: float = 0.15
@@ -282,6 +288,9 @@ class ContactMapConfig:
                     and all(isinstance(w, numbers.Real) and np.isfinite(w) and w > 0 for w in speeds)):
                 raise ValueError(f"--cubature-speeds must be one or more finite speeds > 0 rad/s, got "
                                  f"{self.cubature_speeds!r}")
+        if self.capped_training and (self.cubature is None or self.frequency_cap is None):
+            raise ValueError("--capped-training needs --cubature and --frequency-cap (it runs the cubature's training "
+                             "runs with the cap)")
         if self.tolerance is not None:
             if not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
                 raise ValueError(f"--tolerance must be in (0, 1) (a relative error: 0.05 = 5 %), got {self.tolerance}")
@@ -587,9 +596,9 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
     train = training_speeds(config.speed_grid) if config.cubature_speeds is None else \
         np.asarray(config.cubature_speeds, float)
     revolutions = min(config.revolutions, 12.0)
-    if model.sectors is not None and config.frequency_cap is not None:
+    if capped_probe(config, model):
         # a disk's unscaled GNL step (~5e-8 s) would make the training runs hours long: they run capped, at the step
-        # of the capped probe (exact forces)
+        # of the capped probe (exact forces); a blade's with --capped-training
         scheme = CentralDifference(model, nonlinear=True, safety=config.safety,
                                    frequency_cap=config.frequency_cap_rad_s,
                                    h=config.h or capped_gnl_step(config, model, model, None,
@@ -653,15 +662,22 @@ def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: Centr
     save_reduced_model(reduced, cache)                  # written last: its presence means both are complete
 
 
+def capped_probe(config: ContactMapConfig, model: ReducedModel) -> bool:
+    """Whether the GNL training runs and step probe run with the frequency cap: a disk's always (its unscaled step
+    is ~5e-8 s), a blade's with --capped-training."""
+    return config.frequency_cap is not None and (model.sectors is not None or config.capped_training)
+
+
 def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: ReducedModel,
                     states: np.ndarray | None, verbose: bool = True) -> float:
     """The GNL step with a frequency cap, from the tangent limit on ``states`` (None: on a short unscaled probe;
-    for a disk, whose unscaled step is ~5e-8 s, a capped GNL probe at 4 of the speeds, its 8 largest states)."""
+    for a disk, whose unscaled step is ~5e-8 s, or with --capped-training, a capped GNL probe at 4 of the speeds,
+    its 8 largest states)."""
     if states is None:
         revolutions = min(4.0, config.revolutions)
-        if model.sectors is not None:
+        if capped_probe(config, model):
             probe = training_speeds(config.speed_grid, 4)
-            states, h_probe = disk_probe_states(config, model, probe, revolutions)
+            states, h_probe = capped_probe_states(config, model, probe, revolutions)
             kind = f"capped (h = {h_probe:.3g} s)"
         else:
             probe = config.speed_grid[:: max(1, config.speeds[2] // 16)]
@@ -677,11 +693,11 @@ def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: Re
     return h
 
 
-def disk_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np.ndarray, revolutions: float
-                      ) -> tuple[np.ndarray, float]:
-    """The 8 largest states of a capped GNL run of the disk (exact forces) at the ``probe`` speeds, its step halved
-    until no speed blows up (the capped modes stiffen with the amplitude), and that step. Cached in <out>/cache (a
-    resumed map does not probe again; every rank computes or reads the same)."""
+def capped_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np.ndarray, revolutions: float
+                        ) -> tuple[np.ndarray, float]:
+    """The 8 largest states of a capped GNL run of the disk or blade (exact forces) at the ``probe`` speeds, its step
+    halved until no speed blows up (the capped modes stiffen with the amplitude), and that step. Cached in
+    <out>/cache (a resumed map does not probe again; every rank computes or reads the same)."""
     scheme = CentralDifference(model, nonlinear=True, safety=config.safety, frequency_cap=config.frequency_cap_rad_s)
     key = json.dumps([model.key, probe.tolist(), revolutions, scheme.h, scheme.frequency_cap, vars(config.casing),
                       "8 largest states"], sort_keys=True, default=str)
@@ -696,7 +712,7 @@ def disk_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np.n
             break
         scheme = scheme.with_step(scheme.h / 2)
     else:
-        raise ValueError(f"--h: the disk's capped GNL probe diverged down to h = {scheme.h:.3g} s; give a smaller "
+        raise ValueError(f"--h: the capped GNL probe diverged down to h = {scheme.h:.3g} s; give a smaller "
                          f"step or a higher --frequency-cap")
     states = largest_states(res, scheme.boundary_rows, 8)
     save_npz(cache, states=states, h=scheme.h)           # ranks may write it side by side
@@ -1071,6 +1087,10 @@ def build_parser() -> ArgumentParser:
     parser.add_argument("--cubature-speeds", type=float, nargs="+", metavar="OMEGA",
                         help="with --cubature: train it on exact GNL runs at these speeds (rad/s) instead of 6 of the "
                              "map's own")
+    parser.add_argument("--capped-training", action="store_true",
+                        help="with --cubature and --frequency-cap: the training runs and the GNL step's probe run "
+                             "capped (a disk's always do), for bases whose unscaled GNL step makes the exact runs "
+                             "hours long (--global-md 10)")
     parser.add_argument("--tolerance", type=float, metavar="TOL",
                         help="choose r_c, the frequency cap, the step and the GNL forces as the cheapest model within "
                              "this relative error in the speed-accuracy study (docs/choosing-a-model.md), in (0, 1)")

@@ -368,6 +368,9 @@ def hyper_reduce(sector, model: ReducedModel, Q_train: np.ndarray, tol: float = 
     Q_train = np.asarray(Q_train, float)
     if Q_train.ndim != 2 or Q_train.shape[0] != model.r or not np.all(np.isfinite(Q_train)):
         raise ValueError(f"Q_train must be finite with shape (r = {model.r}, n), got {Q_train.shape}")
+    if not Q_train.any():
+        raise ValueError("Q_train: every training state is zero (a run that never left rest, e.g. too short to "
+                         "reach the casing); the cubature would have no points")
     t0 = time.perf_counter()
     if disk:
         from rotor37_rom.disk import sector_force_basis

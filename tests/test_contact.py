@@ -493,3 +493,5 @@ def test_point_cubature_trained_on_contact_states(ci_blade, ci_rom, tmp_path):
         with_force_precision(ci_rom, "single")
     with pytest.raises(ValueError, match="Q_train"):
         hyper_reduce(ci_blade, ci_rom, Q_train[:-1])
+    with pytest.raises(ValueError, match="^Q_train: every training state is zero"):
+        hyper_reduce(ci_blade, ci_rom, np.zeros_like(Q_train))

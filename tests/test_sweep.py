@@ -525,6 +525,45 @@ def test_contact_map_cubature_flag(ci_rom, tmp_path):
         "error: --precision single needs --cubature (the exact cubic tensors are evaluated in double)"]
 
 
+@pytest.mark.slow
+def test_capped_training_trains_on_the_capped_probe_step(ci_rom, tmp_path):
+    """--capped-training (for bases whose unscaled GNL step makes the exact training runs hours long): the blade's
+    GNL step comes from a capped probe, as a disk's, and the cubature is trained on exact GNL runs at the cap and at
+    the tangent limit on that probe's states - the training states equal those of that capped run redone here, to
+    round-off (the same scheme, the same speeds, the same records) - and every step is within the capped linear one.
+    Without the option the blade's training runs unscaled and no capped probe is made."""
+    from conftest import load_demo
+    from rotor37_rom.integrator import contact_training_states
+
+    contact_map = load_demo("contact_map")
+    model_path = save_reduced_model(ci_rom, tmp_path / "rom.npz")
+    config = contact_map.ContactMapConfig(model=model_path, speeds=(1400, 1450, 2), revolutions=0.5, gnl="on",
+                                          mu=0.0, frequency_cap=120.0, cubature=1e-3, capped_training=True,
+                                          quiet=True, out=tmp_path / "capped")
+    run = contact_map.run_contact_map(config).runs["GNL, cubature 0.001, cap 120 kHz"]
+    cache = tmp_path / "capped" / "cache"
+    (probe,) = cache.glob("gnl_probe_*.npz")
+    (runs,) = cache.glob("training_runs_*.npz")
+    with np.load(probe) as data:
+        h_probe = float(data["h"])
+    with np.load(runs) as data:
+        trained = data["train"]
+    h_train = contact_map.capped_gnl_step(config, ci_rom, ci_rom, None, verbose=False)   # reads the cached probe
+    linear = CentralDifference(ci_rom, nonlinear=False, safety=0.5, frequency_cap=config.frequency_cap_rad_s)
+    assert max(h_probe, h_train, run.h) <= linear.h
+    scheme = CentralDifference(ci_rom, nonlinear=True, safety=0.5, frequency_cap=config.frequency_cap_rad_s,
+                               h=h_train)
+    again, _ = contact_training_states(scheme, config.speed_grid, config.casing, 0.5)
+    assert trained.shape == again.shape
+    np.testing.assert_allclose(trained, again, rtol=0, atol=1e-9 * np.abs(again).max())
+    assert not run.diverged.any() and (run.imap.nfrc > 1e-5).all()     # in contact (the clearance is 0.5 mm)
+    points = json.loads((tmp_path / "capped" / "summary.json").read_text())["runs"][run.label]["cubature"]["points"]
+    assert 0 < points < 1000
+    unscaled = dataclasses.replace(config, capped_training=False, out=tmp_path / "unscaled")
+    contact_map.run_contact_map(unscaled)
+    assert not list((tmp_path / "unscaled" / "cache").glob("gnl_probe_*.npz"))
+
+
 @pytest.mark.mpi
 def test_blown_up_speeds_run_again_with_half_the_step(ci_rom, tmp_path):
     """rerun_diverged: at 1.05 h_crit (forced) the unstable mode grows ~1.9x per step once the casing excites it, so
