@@ -27,7 +27,8 @@ output (a rerun that finds every speed done takes seconds).
                                           # r = 104 (modal derivatives of 10 clamped modes) at 4 speeds
 
 The r = 55 ci model is built (20 s) when --model is missing; another --global-md builds its own model and maps into
-folders of their own, and each row says its model's r. Each cubature training takes 8-30 min; the maps run on
+folders of their own, and each row says its model's r. Each cubature training takes 8-30 min (r = 55; about 1 h
+with --global-md 10 --capped-training); the maps run on
 --ranks ranks, the GNL step from each range's probe (1.2e-7 to 6.7e-7 s measured), which sets most of the time.
 """
 from __future__ import annotations
@@ -182,7 +183,7 @@ def nfrc_chart(rows: list[dict], direction: str, quarter_omega1: float) -> Path:
     resonances; results/gnl_vs_linear/nfrc_<direction>.png."""
     from rotor37_rom.charts import plot_nfrc
 
-    curves = {f"r = {r['r']}, mu = {r['mu']:g}, GNL {gnl_label(r)}":
+    curves = {f"r = {r['r']}, mu = {r['mu']:g}, GNL {gnl_label(r)}, {r['speeds'][0]:g}-{r['speeds'][-1]:g} rad/s":
               (r["speeds"], np.asarray(r["nfrc_mm"], float) * 1e-3, "o-" if r["gnl"] else "s--")
               for r in sorted(rows, key=lambda r: (r["r"], r["mu"], r["gnl"])) if r["direction"] == direction}
     return plot_nfrc(curves, OUT / f"nfrc_{direction}.png", linear_resonance=quarter_omega1,
@@ -234,8 +235,9 @@ def main(argv=None) -> int:
     for mu in args.mu:
         folders = []
         for speeds in ranges:
-            # the maps' r = 55 keeps its folders; another model its own
-            tag = "" if args.model == OUT / "rom.npz" else f"{args.model.stem}_"
+            # the maps' r = 55 trained unscaled keeps its folders; another model or training its own
+            tag = ("" if args.model == OUT / "rom.npz" else f"{args.model.stem}_") \
+                + ("capped_" if args.capped_training else "")
             out = OUT / f"{tag}{args.direction}_mu{mu:g}_{speeds[0]:g}-{speeds[1]:g}"
             cmd = map_command(args, mu, speeds, out)
             commands.append(" ".join(str(c) for c in cmd))

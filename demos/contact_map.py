@@ -288,6 +288,9 @@ class ContactMapConfig:
                     and all(isinstance(w, numbers.Real) and np.isfinite(w) and w > 0 for w in speeds)):
                 raise ValueError(f"--cubature-speeds must be one or more finite speeds > 0 rad/s, got "
                                  f"{self.cubature_speeds!r}")
+        if self.capped_training and self.tolerance is not None:
+            raise ValueError("--capped-training: not with --tolerance (the study measured the chosen models trained "
+                             "unscaled)")
         if self.capped_training and (self.cubature is None or self.frequency_cap is None):
             raise ValueError("--capped-training needs --cubature and --frequency-cap (it runs the cubature's training "
                              "runs with the cap)")

@@ -76,7 +76,8 @@ def test_contact_map_command_line_is_the_config(contact_map, tmp_path):
     ({"cubature": 1e-4, "cubature_speeds": 1300.0}, "--cubature-speeds"),
     ({"cubature": 1e-4, "cubature_speeds": (1300.0, float("inf"))}, "--cubature-speeds"),
     ({"capped_training": True, "frequency_cap": 120.0}, "--capped-training"),
-    ({"capped_training": True, "cubature": 1e-4}, "--capped-training")])
+    ({"capped_training": True, "cubature": 1e-4}, "--capped-training"),
+    ({"capped_training": True, "tolerance": 0.05}, "--capped-training")])
 def test_contact_map_config_names_the_option(contact_map, fields, flag):
     with pytest.raises(ValueError, match=f"^{flag}[ :]"):
         contact_map.ContactMapConfig(**fields)
