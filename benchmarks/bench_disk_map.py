@@ -212,8 +212,8 @@ def run(args, config: ContactMapConfig, grid: np.ndarray, comm, sittings: Sittin
            "wall_s_by_phase": totals, "sittings": len(sittings.log), "map_wall_s": totals.get("map"),
            "map": {k: gnl.get(k) for k in ("peak_speed", "peak_amplitude", "diverged", "contact_checks",
                                            "stress", "cubature")}}
-    hours = totals.get("map", float("nan")) / 3600
-    print(f"map: {hours:.2f} h over {len(sittings.log)} sittings (model, probe and cubature "
+    map_time = f"{totals['map'] / 3600:.2f} h" if "map" in totals else "not run in this folder's sittings"
+    print(f"map: {map_time} over {len(sittings.log)} sittings (model, probe and cubature "
           f"{totals.get('model, probe and cubature', 0) / 60:.0f} min; reference "
           f"{totals.get('reference (exact tensors)', 0) / 60:.0f} min, floor "
           f"{totals.get('floor (exact x (1 + 1e-4))', 0) / 60:.0f} min)")
