@@ -121,10 +121,10 @@ class ContactMapConfig:
             None: 6 of the map's speeds, both ends included. A map on other speeds with the same training speeds
             reuses the same cubature (a held-out check runs the model as trained, not one retrained on its speeds).
         capped_training: the blade's cubature training runs (and the GNL step's probe) run with the frequency cap,
-            at the step of a capped probe (exact forces), as a disk's always do (needs ``cubature`` and
-            ``frequency_cap``). For bases whose unscaled GNL step makes the exact runs hours long (the modal
-            derivatives of 10 clamped modes, r = 104); the cubature is then trained on the capped dynamics the map
-            runs. False: unscaled training runs (the headline maps').
+            at the tangent limit on a capped probe's states (exact forces), as a disk's always do (needs
+            ``cubature`` and ``frequency_cap``). For bases whose unscaled GNL step makes the exact runs hours long
+            (the modal derivatives of 10 clamped modes, r = 104); the cubature is then trained on the capped
+            dynamics the map runs. False: unscaled training runs (the headline maps').
         tolerance: choose r_c, the frequency cap, the step and the force evaluation of each setting (GNL off, on) as
             the cheapest model of the speed-accuracy study within this relative error (``model_choice.choose_model``
             on the scenes 'map-linear' and 'map-gnl', read from rotor37_rom/data/speed_accuracy.json), in (0, 1);
@@ -600,8 +600,8 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
         np.asarray(config.cubature_speeds, float)
     revolutions = min(config.revolutions, 12.0)
     if capped_probe(config, model):
-        # a disk's unscaled GNL step (~5e-8 s) would make the training runs hours long: they run capped, at the step
-        # of the capped probe (exact forces); a blade's with --capped-training
+        # a disk's unscaled GNL step (~5e-8 s) would make the training runs hours long: they run capped, at the
+        # tangent limit on the capped probe's states (exact forces); a blade's with --capped-training
         scheme = CentralDifference(model, nonlinear=True, safety=config.safety,
                                    frequency_cap=config.frequency_cap_rad_s,
                                    h=config.h or capped_gnl_step(config, model, model, None,
