@@ -166,10 +166,12 @@ def main(argv=None) -> int:
                         help="draw the LE histories of the reference and the compared models, one file per speed "
                              "(the speed appended to the name)")
     args = parser.parse_args(argv)
+    from rotor37_rom.reduction import GLOBAL_MD_MAX
+
     checks = (("--revolutions", [args.revolutions], 0.5, 50), ("--h-full", args.h_full, 1e-8, 1e-4),
               ("--bump", [args.bump], 0.0, 4.9), ("--mu", [args.mu], 0.0, 2.0), ("--speeds", args.speeds, 1.0, 5000),
               ("--record", [args.record], 1e-8, 1e-3), ("--r-c", args.r_c, 1, 500), ("--r-md", args.r_md, 0, 300),
-              ("--global-md", args.global_md, 0, 20),
+              ("--global-md", args.global_md, 0, GLOBAL_MD_MAX),
               ("--rom-cap", [] if args.rom_cap is None else [args.rom_cap], 1.0, 1e4),
               ("--rom-step", args.rom_step or [], 1e-9, 1e-5),
               ("--rho-inf", [] if args.rho_inf is None else [args.rho_inf], 0.0, 1.0),

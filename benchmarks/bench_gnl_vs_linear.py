@@ -217,12 +217,13 @@ def main(argv=None) -> int:
     if len(args.speeds) % 3:
         print(f"error: --speeds takes START STOP N per range, got {len(args.speeds)} numbers", file=sys.stderr)
         return 2
-    if not 0 <= args.global_md <= 20:
-        print(f"error: --global-md must be in 0..20, got {args.global_md}", file=sys.stderr)
+    from rotor37_rom.reduction import GLOBAL_MD_MAX, load_reduced_model
+
+    if not 0 <= args.global_md <= GLOBAL_MD_MAX:
+        print(f"error: --global-md must be in 0..{GLOBAL_MD_MAX}, got {args.global_md}", file=sys.stderr)
         return 2
     if args.model is None:
         args.model = OUT / ("rom.npz" if args.global_md == 3 else f"rom_g{args.global_md}.npz")
-    from rotor37_rom.reduction import load_reduced_model
 
     if not args.model.is_file():
         build_model(args.model, args.preset, args.r_c, args.global_md)
@@ -232,12 +233,11 @@ def main(argv=None) -> int:
     env = mpirun_env(OPENBLAS_NUM_THREADS="1") if args.ranks > 1 else None    # one BLAS thread per rank
     ranges = [tuple(args.speeds[i:i + 3]) for i in range(0, len(args.speeds), 3)]
     rows, commands = [], []
+    # the maps' r = 55 trained unscaled keeps its folders; another model or training its own
+    tag = ("" if args.model == OUT / "rom.npz" else f"{args.model.stem}_") + ("capped_" if args.capped_training else "")
     for mu in args.mu:
         folders = []
         for speeds in ranges:
-            # the maps' r = 55 trained unscaled keeps its folders; another model or training its own
-            tag = ("" if args.model == OUT / "rom.npz" else f"{args.model.stem}_") \
-                + ("capped_" if args.capped_training else "")
             out = OUT / f"{tag}{args.direction}_mu{mu:g}_{speeds[0]:g}-{speeds[1]:g}"
             cmd = map_command(args, mu, speeds, out)
             commands.append(" ".join(str(c) for c in cmd))

@@ -45,7 +45,8 @@ from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.integrator import (CentralDifference, gnl_time_step, largest_states, probe_states, simulate,
                                     training_speeds)
 from rotor37_rom.npz import load_npz, save_npz
-from rotor37_rom.reduction import ReducedModel, load_reduced_model, save_reduced_model, with_force_precision
+from rotor37_rom.reduction import (GLOBAL_MD_MAX, ReducedModel, load_reduced_model, save_reduced_model,
+                                   with_force_precision)
 from rotor37_rom.sweep import (ContinuationPoint, InteractionMap, SweepSpec, continuation, interaction_map,
                                load_speed, load_sweep, record_row, rerun_diverged, run_sweep, sector_maxima,
                                sweep_folder)
@@ -199,8 +200,8 @@ class ContactMapConfig:
             raise ValueError(f"--r-c must be >= 1, got {self.r_c}")
         if self.r_md is not None and not self.r_md >= 0:
             raise ValueError(f"--r-md must be >= 0, got {self.r_md}")
-        if not 0 <= self.global_md <= 20:
-            raise ValueError(f"--global-md must be in 0..20, got {self.global_md}")
+        if not 0 <= self.global_md <= GLOBAL_MD_MAX:
+            raise ValueError(f"--global-md must be in 0..{GLOBAL_MD_MAX}, got {self.global_md}")
         if not self.r_cyclic >= 1:
             raise ValueError(f"--r-cyclic must be >= 1, got {self.r_cyclic}")
         if not (np.isfinite(self.contact_patch) and 0 <= self.contact_patch <= 0.01):

@@ -32,7 +32,7 @@ from rotor37_rom.cli import TABLE_HELP, ArgumentParser, resolve_table, run_main
 from rotor37_rom.clearance import ClearanceCurves, delta_range_within, relative_error
 from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.model_choice import ModelChoice
-from rotor37_rom.reduction import CRITERIA, ReducedModel
+from rotor37_rom.reduction import CRITERIA, GLOBAL_MD_MAX, ReducedModel
 
 PAPER_LINEAR_RANGE = {"1B": (-0.25, 0.2), "1T": (-0.1, 0.1)}   # §2.3.2: linear within 10 % of GNL for delta in
 AMPLITUDES = {"1B": 1e-3, "1T": 0.5e-3}                       # zeta (m): LE displacement of the scaled mode
@@ -93,8 +93,8 @@ class ReducedBladeConfig:
             raise ValueError(f"--forces must be one of {', '.join(FORCES)}, got {self.forces!r}")
         if not 1 <= self.levels <= 50:
             raise ValueError(f"--levels must be in [1, 50], got {self.levels}")
-        if not 0 <= self.global_md <= 20:
-            raise ValueError(f"--global-md must be in [0, 20], got {self.global_md}")
+        if not 0 <= self.global_md <= GLOBAL_MD_MAX:
+            raise ValueError(f"--global-md must be in [0, {GLOBAL_MD_MAX}], got {self.global_md}")
         if not self.r_md and not self.global_md:
             raise ValueError("--r-md and --global-md: no model to build (give an --r-md value or --global-md >= 1)")
         object.__setattr__(self, "table", str(self.table))

@@ -17,7 +17,7 @@ from rotor37_rom import __version__, fem
 from rotor37_rom.ecsw import train_ecsw
 from rotor37_rom.modes import normalise_signs
 from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces
-from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, NodeMap, ReducedModel, craig_bampton,
+from rotor37_rom.reduction import (CRITERIA, GLOBAL_MD_MAX, CraigBamptonBasis, NodeMap, ReducedModel, craig_bampton,
                                    fixed_interface_correction, lift_states, load_reduced_model, modal_damping,
                                    reduced_model_key, save_reduced_model, select_pairs, selection_weights,
                                    simulate_linear_newmark)
@@ -78,8 +78,8 @@ class ReductionConfig:
             raise ValueError(f"r_c must be >= 1, got {self.r_c}")
         if self.r_md < 0:
             raise ValueError(f"r_md must be >= 0, got {self.r_md}")
-        if not (0 <= self.global_md_modes <= 20):
-            raise ValueError(f"global_md_modes must be in [0, 20], got {self.global_md_modes}")
+        if not (0 <= self.global_md_modes <= GLOBAL_MD_MAX):
+            raise ValueError(f"global_md_modes must be in [0, {GLOBAL_MD_MAX}], got {self.global_md_modes}")
         if self.criterion not in CRITERIA:
             raise ValueError(f"criterion must be one of {CRITERIA}, got {self.criterion!r}")
         if self.md_method not in ("exact", "fd"):

@@ -37,9 +37,12 @@ __all__ = [
     "with_force_precision",
     "solve_reduced_static",
     "CRITERIA",
+    "GLOBAL_MD_MAX",
 ]
 
 CRITERIA = ("MMI", "MI2a", "MI2b", "SMVW", "random")
+# the most clamped modes whose pairwise modal derivatives a basis takes (N (N + 1) / 2 vectors: 210 at 20)
+GLOBAL_MD_MAX = 20
 
 
 def _rotation_z(angle: np.ndarray) -> np.ndarray:
