@@ -1,10 +1,15 @@
-"""Shared helpers of the benchmark scripts: machine description and result files."""
+"""Shared helpers of the benchmark scripts: machine description, result files, the demos as modules."""
 from __future__ import annotations
 
+import functools
+import importlib.util
 import json
 import os
 import platform
+import sys
 from pathlib import Path
+
+DEMOS = Path(__file__).resolve().parents[1] / "demos"
 
 
 def machine_description() -> str:
@@ -35,3 +40,14 @@ def write_results(name: str, rows: list, **extra) -> str:
     Path("results").mkdir(exist_ok=True)
     Path(f"results/{name}.json").write_text(json.dumps({"machine": machine, "rows": rows, **extra}, indent=1))
     return machine
+
+
+@functools.lru_cache(maxsize=None)
+def load_demo(name: str):
+    """demos/<name>.py as a module (demos/ is not a package), loaded once per process; registered in sys.modules, as
+    its dataclasses look their module up."""
+    spec = importlib.util.spec_from_file_location(f"demo_{name}", DEMOS / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module

@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import mpirun_env, write_results  # noqa: E402
+from _common import load_demo, mpirun_env, write_results  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 DEMO = ROOT / "demos" / "contact_map.py"
@@ -165,14 +165,9 @@ def build_model(path: Path, preset: str, r_c: int, global_md: int) -> None:
     """The reduced model the maps share, built as the map command builds it (24 tip DOFs, r_c fixed-interface modes,
     the modal derivatives of the first ``global_md`` clamped modes (3: 1B, 1T, 2B), exact cubic tensors), saved to
     ``path``."""
-    import importlib.util
-
     from rotor37_rom.reduction import save_reduced_model
 
-    spec = importlib.util.spec_from_file_location("contact_map", DEMO)
-    demo = importlib.util.module_from_spec(spec)
-    sys.modules["contact_map"] = demo                   # its dataclasses look their module up
-    spec.loader.exec_module(demo)
+    demo = load_demo("contact_map")
     model = demo.build_model(demo.ContactMapConfig(preset=preset, r_c=r_c, global_md=global_md, out=OUT))
     path.parent.mkdir(parents=True, exist_ok=True)
     save_reduced_model(model, path)
@@ -228,8 +223,7 @@ def main(argv=None) -> int:
     if not args.model.is_file():
         build_model(args.model, args.preset, args.r_c, args.global_md)
     model = load_reduced_model(args.model)
-    import scipy.linalg
-    quarter_omega1 = float(np.sqrt(scipy.linalg.eigh(model.K, model.M, eigvals_only=True)[0])) / 4
+    quarter_omega1 = float(load_demo("contact_map").eigenfrequencies(model)[0]) / 4
     env = mpirun_env(OPENBLAS_NUM_THREADS="1") if args.ranks > 1 else None    # one BLAS thread per rank
     ranges = [tuple(args.speeds[i:i + 3]) for i in range(0, len(args.speeds), 3)]
     rows, commands = [], []

@@ -38,7 +38,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import functools
-import importlib.util
 import json
 import math
 import sys
@@ -48,7 +47,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import machine_description  # noqa: E402
+from _common import load_demo, machine_description  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 WORK = ROOT / "results" / "speed_accuracy"
@@ -63,16 +62,6 @@ MAP = dict(preset="ci", speeds=(1200.0, 1600.0, 11), revolutions=8.0, mu=0.0, di
 HELD_OUT_SPEEDS = (1220.0, 1580.0, 10)
 PREFIX = "computed since, on their own: "
 FRESH: list[str] = []    # what this invocation computed rather than read from results/speed_accuracy (runs' note)
-
-
-@functools.lru_cache(maxsize=None)
-def _demo(name: str):
-    """demos/<name>.py as a module (demos/ is not a package), loaded once."""
-    spec = importlib.util.spec_from_file_location(f"demo_{name}", ROOT / "demos" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    return module
 
 
 def _finite(x):
@@ -273,7 +262,7 @@ def model_file(r_c: int) -> Path:
 
     path = WORK / "models" / f"rom_rc{r_c}.npz"
     if not path.is_file():
-        cm = _demo("contact_map")
+        cm = load_demo("contact_map")
         config = cm.ContactMapConfig(**{**MAP, "r_c": r_c, "out": WORK / "models"})
         save_reduced_model(cm.build_model(config), path)
     return path
@@ -289,7 +278,7 @@ def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_pat
     map's plus the retries'."""
     from rotor37_rom.sweep import load_sweep
 
-    cm = _demo("contact_map")
+    cm = load_demo("contact_map")
     opts = dict(options)
     r_c = opts.pop("r_c", 15)
     model_path = model_path or model_file(r_c)
@@ -453,7 +442,7 @@ def study_training_speeds() -> tuple[float, ...]:
     """The speeds a cubature of the map scenes is trained at (6 of the study's, as contact_map picks them)."""
     from rotor37_rom.integrator import training_speeds
 
-    return tuple(training_speeds(_demo("contact_map").ContactMapConfig(**MAP).speed_grid).tolist())
+    return tuple(training_speeds(load_demo("contact_map").ContactMapConfig(**MAP).speed_grid).tolist())
 
 
 def held_out_map(scene: dict, gnl: bool, tolerances=TOLERANCES) -> None:
@@ -507,7 +496,7 @@ def stress_at_tmax(run: MapRun, options: dict, gnl: bool, speed: float) -> dict:
     procedure: ``analysis.stress_at_peak``, the largest outside the contact nodes' tip band), with the wall time."""
     from rotor37_rom.analysis import stress_at_peak
 
-    cm = _demo("contact_map")
+    cm = load_demo("contact_map")
     sector, model, recovery = _recovery(int(options.get("r_c", 15)))     # made once per basis, not timed
     k = int(np.argmin(np.abs(run.speeds - speed)))
     record, h = run.records[k], run.record_h[k]
@@ -594,7 +583,7 @@ def scene_paper_speedup(study: dict, tolerance: float = 0.05) -> dict:
     from rotor37_rom.model_choice import choose_model
     from rotor37_rom.reduction import load_reduced_model
 
-    cm = _demo("contact_map")
+    cm = load_demo("contact_map")
     for tolerance in (tolerance, 0.2):          # no 5 % model: the 20 % one (the docs say which)
         try:
             choice = choose_model("map-gnl", tolerance, study)
