@@ -97,6 +97,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_contact_reference.py --gnl --no-full-order --speeds 1280 1520 --r-md 0 20 50 --rom-cap 120 --rom-step 4e-7
 	$(PY) benchmarks/bench_contact_ecsw.py
 	$(PY) benchmarks/bench_integrator.py
+	$(PY) benchmarks/bench_disk_stress_convergence.py
 
 # the speed-accuracy study (docs/choosing-a-model.md): every scene's candidates, cost and error, the charts and the
 # file choose_model reads (rotor37_rom/data/speed_accuracy.json); 52 min from scratch on 2 cores
@@ -108,11 +109,13 @@ speed-accuracy-disk: $(STAMP)
 	$(PY) benchmarks/speed_accuracy.py --scene disk
 
 # the full-disk maps (issue #21): 90 speeds x 200 revolutions, 36 x 8 tip nodes, without GNL (2 h) and with GNL,
-# point cubature 3e-3 in float32, and its exact reference at 4 speeds (about 11 h; stopped, it resumes when run again)
+# point cubature 3e-3 in float32, its exact reference at 4 speeds (about 11 h; stopped, it resumes when run again), and
+# the stress at the two maps' largest responses, GNL off and on (20 min)
 disk-map: $(STAMP)
 	OPENBLAS_NUM_THREADS=1 mpirun -n 2 $(PY) demos/contact_map.py --disk --direction cone --frequency-cap 60 \
 		--speeds 1200 1650 90 --revolutions 200 --gnl off --stress --out results/disk_map200
 	OPENBLAS_NUM_THREADS=1 mpirun -n 2 $(PY) benchmarks/bench_disk_map.py
+	OPENBLAS_NUM_THREADS=1 $(PY) benchmarks/bench_disk_map.py --part stress
 
 clean:
 	rm -rf $(VENV) results .pytest_cache

@@ -21,6 +21,12 @@ runs over several sittings. The wall time is accounted by a heartbeat (every 30 
     OPENBLAS_NUM_THREADS=1 mpirun -n 2 python benchmarks/bench_disk_map.py [--reference 10 30 50 70] [--part all]
     OPENBLAS_NUM_THREADS=1 mpirun -n 2 python benchmarks/bench_disk_map.py --revolutions 0.5 --out results/smoke
 
+The stress of the paper's Fig. 25 at the maps' largest responses (1,255.6 and 1,513.5 rad/s, indices 11 and 62),
+each speed run from rest with GNL off and on, and carried on one revolution (``--stress`` of the map command), in
+<out>/stress_<index>/summary.json (one process: one speed each):
+
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_disk_map.py --part stress [--stress-at 11 62]
+
 Results: results/bench_disk_map.json (machine stated; written once the map and the reference are complete; with
 fewer --revolutions results/bench_disk_map_<N>rev.json). The reference alone, without the whole map (the map's model
 runs at the reference speeds only; each sitting's report shows the floor's runs already made at its speeds):
@@ -125,9 +131,14 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, default=Path("results/disk_map200"), help="the map's folder")
     parser.add_argument("--reference", type=int, nargs="+", default=[10, 30, 50, 70],
                         help="indices (0..89) of the map's speeds run with the exact sector tensors")
-    parser.add_argument("--part", choices=["all", "map", "reference"], default="all",
+    parser.add_argument("--part", choices=["all", "map", "reference", "stress"], default="all",
                         help="reference: the map's model at the --reference speeds only (what the map has not run "
-                             "yet), the exact tensors and the floor there")
+                             "yet), the exact tensors and the floor there; stress: the disk's stress at t_max at the "
+                             "--stress-at speeds, GNL off and on (the map's model and step)")
+    parser.add_argument("--stress-at", type=int, nargs="+", default=[11, 62],
+                        help="with --part stress: indices (0..89) of the map's speeds, each run from rest GNL off "
+                             "and on and carried on one revolution for the stress at t_max, in <out>/stress_<index> "
+                             "(default 11 62: the largest responses of the maps without and with GNL)")
     parser.add_argument("--no-floor", action="store_true",
                         help="skip the floor run (exact forces x (1 + 1e-4)); the report still shows the floor's runs "
                              "an earlier sitting made at these speeds")
@@ -138,6 +149,10 @@ def main(argv=None) -> int:
         print(f"error: --revolutions must be in (0, 1000], got {args.revolutions:g}", file=sys.stderr)
         return 2
     grid = np.linspace(*SPEEDS[:2], int(SPEEDS[2]))
+    if not all(0 <= i < grid.size for i in args.stress_at):
+        print(f"error: --stress-at must be indices in 0..{grid.size - 1} of the map's speeds, got {args.stress_at}",
+              file=sys.stderr)
+        return 2
     train = training_speeds(grid)
     if not all(0 <= i < grid.size for i in args.reference) or set(grid[args.reference]) & set(train):
         print(f"error: --reference must be indices in 0..{grid.size - 1} of the map's speeds, none of the training "
@@ -168,6 +183,13 @@ def run(args, config: ContactMapConfig, grid: np.ndarray, comm, sittings: Sittin
     config = dataclasses.replace(config, model=rom)
     scheme = time_scheme(config.setting(True), model, True, comm)      # the map's own scheme (probe, cubature)
     spec = config.sweep_spec(model)
+    if args.part == "stress":
+        for i in args.stress_at:
+            w = float(grid[i])
+            sittings.enter(f"stress at {w:.1f} rad/s")
+            run_contact_map(dataclasses.replace(config, speeds=(w, w, 1), gnl="both", out=args.out / f"stress_{i}"),
+                            comm, schemes={True: scheme})
+        return 0
     if args.part in ("all", "map"):
         sittings.enter("map")
         run_contact_map(config, comm, schemes={True: scheme})

@@ -923,13 +923,17 @@ def disk_peak_stress(config: ContactMapConfig, scheme: CentralDifference, result
     numbers.update(speed=speed, t_max=t_start + float(res.t[0][k]), u_le=float(u[k]))
     factor = 0.1 * 0.074 / max(np.abs(fields).max(), 1e-12)     # largest motion drawn at 10 % of the blade's span
     title = (f"{result.label}: von Mises at t_max, Omega = {speed:.0f} rad/s, node {config.node} (x{factor:.0f})")
-    picture = render_stress(sector, fields[config.sector], values, config.out / f"stress_disk_{tag}.png", title,
-                            n_sectors=model.nodes.n_sectors, factor=factor, clim=numbers["clim"],
+    picture = render_stress(sector, fields[config.sector], values.max(axis=2), config.out / f"stress_disk_{tag}.png",
+                            title, n_sectors=model.nodes.n_sectors, factor=factor, clim=numbers["clim"],
                             sector_displacements=fields)
     print(f"         stress at t_max ({speed:.0f} rad/s): sector {config.sector} {numbers['vm_max'] / 1e6:.0f} MPa "
           f"({numbers['ratio_yield']:.2f} sigma_Y) outside the tip band ({describe_location(numbers['location'])}), "
           f"largest over the sectors {numbers['vm_max_all_sectors'] / 1e6:.0f} MPa (sector {numbers['sector_of_max']}: "
-          f"{describe_location(numbers['location_all_sectors'])})")
+          f"{describe_location(numbers['location_all_sectors'])}); off the root corner (> "
+          f"{1e3 * numbers['root_band_m']:.0f} mm from the blade-rim junction): sector {config.sector} "
+          f"{numbers['vm_max_off_root'] / 1e6:.0f} MPa ({numbers['ratio_yield_off_root']:.2f} sigma_Y, "
+          f"{describe_location(numbers['location_off_root'])}), over the sectors "
+          f"{numbers['vm_max_off_root_all_sectors'] / 1e6:.0f} MPa (sector {numbers['sector_of_max_off_root']})")
     return numbers, [picture]
 
 

@@ -469,15 +469,19 @@ def test_disk_stress_of_a_tuned_state(ci_disk, disk_model):
     _, vm_one = disk_stress(ci_disk, model, q_one, sectors=(3, 10))
     assert vm_one[0].max() > 0 and vm_one[1].max() == 0.0
     # the summary of a field that loads sector 3 only: its largest is sector 3's, the others' is 0
-    values = np.zeros((36, vm_one.shape[1]))
+    values = np.zeros((36,) + vm_one.shape[1:])
     values[3] = vm_one[0]
     numbers = disk_stress_summary(ci_disk, model, values, monitored=10)
     band, _ = tip_band(ci_disk, model)
     assert numbers["sector_of_max"] == 3 and numbers["vm_max"] == 0.0
     assert numbers["vm_max_all_sectors"] == vm_one[0][~band].max()
     assert numbers["ratio_yield"] == 0.0 and 0 < band.sum() < band.size
+    assert numbers["sector_of_max_off_root"] == 3 and numbers["vm_max_off_root"] == 0.0
+    assert 0 < numbers["vm_max_off_root_all_sectors"] <= numbers["vm_max_all_sectors"]
     with pytest.raises(ValueError, match="entries"):
         disk_stress(ci_disk, model, q[:-1])
+    with pytest.raises(ValueError, match="vertices"):
+        disk_stress_summary(ci_disk, model, values.max(axis=2))
 
 
 def test_disk_stress_of_the_1b_mode_peaks_at_the_blade_root(ci_disk, disk_model):
@@ -487,8 +491,10 @@ def test_disk_stress_of_the_1b_mode_peaks_at_the_blade_root(ci_disk, disk_model)
     it: the largest stress outside the tip band is in the lowest quarter of the span or within 5 mm under the hub
     cone (either side of the junction). (A point load at node LE would not do: it bends the thin LE locally, and the
     largest stress then sits just outside the tip band.) The location's numbers are the cell's centroid's, its height
-    the radius less the hub cone's."""
-    from rotor37_rom.analysis import describe_location, disk_stress, disk_stress_summary, tip_band
+    the radius less the hub cone's. Off the root corner (every vertex within ROOT_BAND of the junction left out) the
+    largest is still the root's bending stress: in the blade, in the lowest third of the span, and below the
+    corner's."""
+    from rotor37_rom.analysis import ROOT_BAND, describe_location, disk_stress, disk_stress_summary, tip_band
     from rotor37_rom.geometry.disk import hub_radius
     import scipy.linalg
 
@@ -503,8 +509,12 @@ def test_disk_stress_of_the_1b_mode_peaks_at_the_blade_root(ci_disk, disk_model)
     print(f"1B, 0 diameters, 1 mm at LE: {numbers['vm_max'] / 1e6:.0f} MPa at {describe_location(where)} ({where})")
     assert where == numbers["location_all_sectors"]
     assert (where["region"] == "blade" and where["span"] <= 0.25) or -5.0 <= where["height_mm"] <= 0.0
+    off = numbers["location_off_root"]
+    print(f"off the root corner: {numbers['vm_max_off_root'] / 1e6:.0f} MPa at {describe_location(off)}")
+    assert off["region"] == "blade" and off["span"] <= 1 / 3 and off["height_mm"] > 1e3 * ROOT_BAND / 2
+    assert numbers["vm_max_off_root"] < numbers["vm_max"]
     band, _ = tip_band(ci_disk, model)
-    cell = int(np.argmax(np.where(band, -np.inf, vm[0])))
+    cell = int(np.argmax(np.where(band, -np.inf, vm[0].max(axis=1))))
     x = fem.cell_midpoints(ci_disk)[cell]
     assert np.isclose(where["r_mm"], 1e3 * np.hypot(x[0], x[1]), rtol=1e-12)
     assert np.isclose(where["height_mm"], 1e3 * (np.hypot(x[0], x[1]) - hub_radius(x[2])), rtol=1e-12)
@@ -538,3 +548,48 @@ def test_repeating_sectors_contact_rows_through_an_interface(ci_disk, ci_disk_op
     assert np.abs(patch.N @ x - node.N @ x).max() > 1e-3 * scale    # the patch is not the node
     with pytest.raises(ValueError, match="contact interface must be"):
         system.contact_operators(casing, C[:6])
+
+
+def test_von_mises_at_vertices_of_a_uniform_strain(ci_disk):
+    """Patch test of the vertex stress: an affine displacement u = A x is in the P2 space exactly, its strain is
+    uniform, so at every vertex of every cell von Mises equals the closed form (linear: of eps = sym A; SVK Cauchy of
+    F = I + A) to round-off; and the cells' vertices average to their midpoints."""
+    from dolfinx import fem as dfem
+
+    from rotor37_rom.stress import svk_cauchy, von_mises
+
+    A = 1e-3 * np.array([[0.3, -1.2, 0.5], [0.8, 0.1, -0.4], [0.2, 0.9, -0.6]])
+    u = dfem.Function(ci_disk.V)
+    u.interpolate(lambda x: A @ x)
+    lmbda, mu = ci_disk.material.lame
+    for nonlinear in (False, True):
+        vm = fem.von_mises_at_vertices(ci_disk, u, nonlinear)
+        exact = float(von_mises(svk_cauchy(A, lmbda, mu, nonlinear)))
+        n_cells = ci_disk.mesh.topology.index_map(3).size_local
+        assert vm.shape == (n_cells, 4)
+        np.testing.assert_allclose(vm, exact, rtol=1e-9)
+    np.testing.assert_allclose(fem.cell_vertices(ci_disk).mean(axis=1), fem.cell_midpoints(ci_disk), rtol=0,
+                               atol=1e-15)
+
+
+def test_root_junction_is_the_blade_root_on_the_hub_cone(ci_disk, ci_blade):
+    """The line where the blade meets the rim (``fem.root_junction``): every point lies on the hub cone (the rim's
+    outer surface) to the chord sagitta of the mesh's straight edges on that curved surface, L^2 / (8 r_hub) for the
+    longest junction edge L; it runs along the whole root chord (rotor37-notes: z = 0.28 ... 43.05 mm), on both
+    sides of the blade, and ``root_distance`` is zero on it. A blade without a disk has no junction: an error."""
+    from rotor37_rom.analysis import root_distance
+    from rotor37_rom.geometry.disk import hub_radius
+
+    J = fem.root_junction(ci_disk)
+    r = np.hypot(J[:, 0], J[:, 1])
+    height = r - hub_radius(J[:, 2])
+    longest_edge = 12e-3                                    # the ci preset's element size bounds an edge
+    assert np.abs(height).max() <= longest_edge ** 2 / (8 * r.min())
+    assert J[:, 2].min() < 0.28e-3 + 0.5e-3 and J[:, 2].max() > 43.05e-3 - 0.5e-3
+    # both sides: at mid-chord the junction has points on either side of the camber (two distinct angles)
+    mid = J[np.abs(J[:, 2] - 20e-3) < 1e-3]
+    theta = np.arctan2(mid[:, 1], mid[:, 0])
+    assert np.ptp(theta) * 0.18 > 2e-3                       # the root is some mm thick there
+    assert np.abs(root_distance(ci_disk, J[::7])).max() == 0.0
+    with pytest.raises(ValueError, match="no group"):
+        fem.root_junction(ci_blade)

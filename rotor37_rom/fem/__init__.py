@@ -18,8 +18,8 @@ from slepc4py import SLEPc  # noqa: F401
 
 from .cyclic import (CyclicModes, CyclicOperators, assemble_cyclic_operators, create_annular_sector, create_disk_sector,
                      sector_fields, solve_cyclic_modes)
-from .fields import (cell_midpoints, cells_touching_points, displacement_function, von_mises_at_quadrature,
-                     von_mises_function)
+from .fields import (cell_midpoints, cell_vertices, cells_touching_points, displacement_function, root_junction,
+                     von_mises_at_quadrature, von_mises_at_vertices, von_mises_function)
 from .operators import (JIT_PARAMS, MASS_DIAGONAL, SvkOperators, assemble_free_operators, assemble_mass,
                         assemble_scalar, assemble_spin_softening, assemble_stiffness, assemble_tangent,
                         assemble_tangent_scipy, assemble_vector,
@@ -43,7 +43,8 @@ __all__ = [
     "assemble_tangent", "assemble_spin_softening",
     "quadrature_gradients", "solve_eigenproblem", "compute_clamped_modes", "solve_static", "solve_newmark",
     "solve_clamped_static", "mumps_solver", "slepc_eigenpairs", "displacement_function", "von_mises_function",
-    "von_mises_at_quadrature", "cell_midpoints", "cells_touching_points", "MASS_DIAGONAL", "JIT_PARAMS",
+    "von_mises_at_quadrature", "von_mises_at_vertices", "cell_midpoints", "cell_vertices", "cells_touching_points",
+    "root_junction", "MASS_DIAGONAL", "JIT_PARAMS",
     "create_disk_sector", "create_annular_sector", "locate_cyclic_pairs", "assemble_cyclic_operators", "CyclicModes",
     "solve_cyclic_modes", "sector_fields", "clamp_cell_group", "build_on_rank0", "CyclicOperators",
     "RepeatingSectors", "solve_repeating_newmark", "sector_harmonic_load", "write_sector_mesh", "facet_centroid",

@@ -13,8 +13,8 @@ from rotor37_rom import forms
 from .operators import JIT_PARAMS, _require_serial
 from .sector import Sector
 
-__all__ = ["displacement_function", "von_mises_function", "von_mises_at_quadrature", "cell_midpoints",
-           "cells_touching_points"]
+__all__ = ["displacement_function", "von_mises_function", "von_mises_at_vertices", "von_mises_at_quadrature",
+           "cell_midpoints", "cell_vertices", "cells_touching_points", "root_junction"]
 
 
 def displacement_function(sector: Sector, Phi: np.ndarray, q: np.ndarray, name: str = "displacement"):
@@ -48,6 +48,62 @@ def von_mises_function(sector: Sector, u, nonlinear: bool = True, degree: int = 
     out = fem.Function(W, name="von_mises")
     out.interpolate(expr)
     return out
+
+
+def von_mises_at_vertices(sector: Sector, u, nonlinear: bool = True) -> np.ndarray:
+    """von Mises stress (Pa) at the four vertices of every local cell, (n_cells, 4), in the order of
+    ``cell_vertices``: the cell's own value at each vertex (the stress of a P2 displacement is discontinuous across
+    cells; a surface stress is read at the vertices, where bending puts its largest, not at the midpoint)."""
+    f = von_mises_function(sector, u, nonlinear, degree=1)
+    n_cells = sector.mesh.topology.index_map(3).size_local
+    dofs = f.function_space.dofmap.list.array.reshape(-1, 4)[:n_cells]
+    return f.x.array[dofs]
+
+
+def cell_vertices(sector: Sector) -> np.ndarray:
+    """Coordinates (n_cells, 4, 3) of the vertices of every local cell, in the order of ``von_mises_at_vertices``."""
+    W = fem.FunctionSpace(sector.mesh, ("DG", 1))
+    n_cells = sector.mesh.topology.index_map(3).size_local
+    dofs = W.dofmap.list.array.reshape(-1, 4)[:n_cells]
+    return W.tabulate_dof_coordinates()[dofs]
+
+
+def root_junction(sector: Sector, faces=("pressure", "suction", "leading_edge", "trailing_edge"),
+                  region: str = "disk", spacing: float = 2e-4) -> np.ndarray:
+    """Points (n, 3) along the line where the blade's surface meets the disk (a disk sector's blade root, a sharp
+    re-entrant corner without a fillet): the mesh edges of the ``faces`` groups whose two vertices belong to cells of
+    the ``region`` volume group, each sampled every ``spacing`` m or closer (distances to the line are then exact
+    to spacing / 2). Serial (the sector of one rank)."""
+    _require_serial(sector, "root_junction")
+    missing = [g for g in (*faces, region) if g not in sector.groups]
+    if missing:
+        raise ValueError(f"root_junction: the sector has no group {missing} (a disk sector has 'disk' and the blade's "
+                         f"faces; it has {sorted(sector.groups)})")
+    topo = sector.mesh.topology
+    topo.create_connectivity(2, 0)
+    topo.create_connectivity(3, 0)
+    c2v = topo.connectivity(3, 0)
+    f2v = topo.connectivity(2, 0)
+    in_region = np.zeros(topo.index_map(0).size_local + topo.index_map(0).num_ghosts, bool)
+    for c in sector.cell_tags.find(sector.groups[region]):
+        in_region[c2v.links(c)] = True
+    # vertex coordinates through a P1 space, whose cell dofs follow the cell's vertices in the same local order
+    P1 = fem.FunctionSpace(sector.mesh, ("Lagrange", 1))
+    vertex_x = np.empty((in_region.size, 3))
+    vertex_x[c2v.array] = P1.tabulate_dof_coordinates()[P1.dofmap.list.array]
+    segments = set()
+    for name in faces:
+        for facet in sector.facets(name):
+            v = [int(i) for i in f2v.links(facet) if in_region[i]]
+            segments.update((min(a, b), max(a, b)) for k, a in enumerate(v) for b in v[k + 1:])
+    if not segments:
+        raise ValueError(f"root_junction: no edge of {list(faces)} lies on the {region!r} cells (not a bladed sector?)")
+    points = []
+    for a, b in sorted(segments):
+        pa, pb = vertex_x[a], vertex_x[b]
+        n = max(2, int(np.ceil(np.linalg.norm(pb - pa) / spacing)) + 1)
+        points.append(pa + np.linspace(0.0, 1.0, n)[:, None] * (pb - pa))
+    return np.unique(np.vstack(points), axis=0)
 
 
 def von_mises_at_quadrature(sector: Sector, u, nonlinear: bool = True, degree: int = 4) -> np.ndarray:
