@@ -82,9 +82,9 @@ def main(argv=None) -> int:
         print(f"error: --model {args.model} not found (make speed-accuracy builds it)", file=sys.stderr)
         return 2
     sys.path.insert(0, str(ROOT / "benchmarks"))
-    sys.path.insert(0, str(ROOT / "demos"))
-    import contact_map as cm
+    from _common import load_demo
     from speed_accuracy import study_training_speeds
+    cm = load_demo("contact_map")             # the one copy speed_accuracy's study_training_speeds also loads
 
     from rotor37_rom.reduction import load_reduced_model
     from rotor37_rom.sweep import continuation

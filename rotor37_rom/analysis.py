@@ -11,7 +11,8 @@ __all__ = ["stress_at_peak", "disk_stress", "disk_stress_summary", "stress_locat
            "tip_band", "TIP_BAND", "ROOT_BAND", "root_distance", "cyclic_harmonic_frequencies"]
 
 TIP_BAND = 0.1     # cells closer to a contact node than this fraction of the span are reported apart
-ROOT_BAND = 4e-3   # m: a disk sector's points closer than this to the blade-rim junction (a sharp corner) likewise
+ROOT_BAND = 4e-3   # m: a disk sector's cells with a vertex closer than this to the blade-rim junction (a sharp
+                   # corner) likewise
 
 
 def stress_at_peak(sector, model, recovery, result, nonlinear: bool, sim: int = 0, magnitude: bool = False) -> dict:
@@ -79,10 +80,10 @@ def disk_stress_summary(sector, model, values: np.ndarray, monitored: int = 0) -
     the tip band, the ratio of the sector's to the yield stress, and where the two largest sit (``stress_location``).
 
     The blade meets the rim at a sharp re-entrant corner (no fillet), where the FE stress is singular: its largest
-    there does not converge under mesh refinement. The same numbers off the root corner (``*_off_root``: every vertex
-    within ``ROOT_BAND`` of the junction left out as well; ``location_off_root`` is the vertex's) converge with the
-    mesh (benchmarks/bench_disk_stress_convergence.py: the disk's 1B mode on meshes of 12 to 1.5 mm); they are the
-    stress to compare with sigma_Y."""
+    there does not converge under mesh refinement. The same numbers off the root corner (``*_off_root``: every cell
+    with a vertex within ``ROOT_BAND`` of the junction left out as well; ``location_off_root`` is the vertex's)
+    converge with the mesh (benchmarks/bench_disk_stress_convergence.py: the disk's 1B mode on meshes of 12 to 1.5
+    mm); they are the stress to compare with sigma_Y."""
     values = np.asarray(values, float)
     if values.ndim != 3 or values.shape[2] != 4:
         raise ValueError(f"values must be (N, n_cells, 4) von Mises at the cells' vertices (disk_stress), got "
@@ -94,8 +95,9 @@ def disk_stress_summary(sector, model, values: np.ndarray, monitored: int = 0) -
     per_sector = regular.max(axis=1)
     worst = int(np.argmax(per_sector))
     vertices = fem.cell_vertices(sector)                                           # (n_cells, 4, 3)
-    near_root = root_distance(sector, vertices) < ROOT_BAND                         # (n_cells, 4)
-    off_vertices = np.where((band[:, None] | near_root)[None], -np.inf, values)     # (N, n_cells, 4)
+    # a cell with any vertex in the band is left out whole: its far vertices' values are the corner's, extrapolated
+    near_root = (root_distance(sector, vertices) < ROOT_BAND).any(axis=1)           # (n_cells,)
+    off_vertices = np.where((band | near_root)[None, :, None], -np.inf, values)     # (N, n_cells, 4)
     off = off_vertices.max(axis=2)
     off_sector = off.max(axis=1)
     worst_off = int(np.argmax(off_sector))

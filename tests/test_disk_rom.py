@@ -574,22 +574,27 @@ def test_von_mises_at_vertices_of_a_uniform_strain(ci_disk):
 
 def test_root_junction_is_the_blade_root_on_the_hub_cone(ci_disk, ci_blade):
     """The line where the blade meets the rim (``fem.root_junction``): every point lies on the hub cone (the rim's
-    outer surface) to the chord sagitta of the mesh's straight edges on that curved surface, L^2 / (8 r_hub) for the
-    longest junction edge L; it runs along the whole root chord (rotor37-notes: z = 0.28 ... 43.05 mm), on both
-    sides of the blade, and ``root_distance`` is zero on it. A blade without a disk has no junction: an error."""
+    outer surface) to the chord sagitta of the mesh's straight edges on that curved surface, L^2 / (8 r) for the
+    longest junction edge L and the smallest radius r; it runs along the whole root chord (rotor37-notes: z = 0.28 ...
+    43.05 mm), on the pressure and on the suction side, which are apart by the root's thickness at mid-chord; points
+    are at most ``spacing`` apart along each edge, and ``root_distance`` is zero on them. A blade without a disk has
+    no junction: an error."""
     from rotor37_rom.analysis import root_distance
     from rotor37_rom.geometry.disk import hub_radius
 
+    edges = fem.root_junction(ci_disk, spacing=None)                       # (n, 2, 3)
     J = fem.root_junction(ci_disk)
     r = np.hypot(J[:, 0], J[:, 1])
-    height = r - hub_radius(J[:, 2])
-    longest_edge = 12e-3                                    # the ci preset's element size bounds an edge
-    assert np.abs(height).max() <= longest_edge ** 2 / (8 * r.min())
+    longest = np.linalg.norm(edges[:, 1] - edges[:, 0], axis=1).max()
+    assert np.abs(r - hub_radius(J[:, 2])).max() <= longest ** 2 / (8 * r.min())
     assert J[:, 2].min() < 0.28e-3 + 0.5e-3 and J[:, 2].max() > 43.05e-3 - 0.5e-3
-    # both sides: at mid-chord the junction has points on either side of the camber (two distinct angles)
-    mid = J[np.abs(J[:, 2] - 20e-3) < 1e-3]
-    theta = np.arctan2(mid[:, 1], mid[:, 0])
-    assert np.ptp(theta) * 0.18 > 2e-3                       # the root is some mm thick there
+    assert len(J) >= np.linalg.norm(edges[:, 1] - edges[:, 0], axis=1).sum() / 2e-4
+    sides = {name: fem.root_junction(ci_disk, faces=(name,)) for name in ("pressure", "suction")}
+    for name, points in sides.items():          # each side spans the chord but for the blunt LE and TE strips
+        assert points[:, 2].min() < 2e-3 and points[:, 2].max() > 41e-3, name
+    # at mid-chord the two sides are apart: the root is several mm thick there (> 1 mm)
+    mid = {name: p[np.argmin(np.abs(p[:, 2] - 20e-3))] for name, p in sides.items()}
+    assert np.linalg.norm(mid["pressure"] - mid["suction"]) > 1e-3
     assert np.abs(root_distance(ci_disk, J[::7])).max() == 0.0
     with pytest.raises(ValueError, match="no group"):
         fem.root_junction(ci_blade)

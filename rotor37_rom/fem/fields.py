@@ -69,11 +69,12 @@ def cell_vertices(sector: Sector) -> np.ndarray:
 
 
 def root_junction(sector: Sector, faces=("pressure", "suction", "leading_edge", "trailing_edge"),
-                  region: str = "disk", spacing: float = 2e-4) -> np.ndarray:
+                  region: str = "disk", spacing: float | None = 2e-4) -> np.ndarray:
     """Points (n, 3) along the line where the blade's surface meets the disk (a disk sector's blade root, a sharp
     re-entrant corner without a fillet): the mesh edges of the ``faces`` groups whose two vertices belong to cells of
     the ``region`` volume group, each sampled every ``spacing`` m or closer (distances to the line are then exact
-    to spacing / 2). Serial (the sector of one rank)."""
+    to spacing / 2); ``spacing`` None: the edges themselves, (n, 2, 3) end points. Serial (the sector of one
+    rank)."""
     _require_serial(sector, "root_junction")
     missing = [g for g in (*faces, region) if g not in sector.groups]
     if missing:
@@ -98,6 +99,8 @@ def root_junction(sector: Sector, faces=("pressure", "suction", "leading_edge", 
             segments.update((min(a, b), max(a, b)) for k, a in enumerate(v) for b in v[k + 1:])
     if not segments:
         raise ValueError(f"root_junction: no edge of {list(faces)} lies on the {region!r} cells (not a bladed sector?)")
+    if spacing is None:
+        return np.array([[vertex_x[a], vertex_x[b]] for a, b in sorted(segments)])
     points = []
     for a, b in sorted(segments):
         pa, pb = vertex_x[a], vertex_x[b]
