@@ -81,7 +81,6 @@ def main(argv=None) -> int:
     if not args.model.is_file():
         print(f"error: --model {args.model} not found (make speed-accuracy builds it)", file=sys.stderr)
         return 2
-    sys.path.insert(0, str(ROOT / "benchmarks"))
     from _common import load_demo
     from speed_accuracy import study_training_speeds
     cm = load_demo("contact_map")             # the one copy speed_accuracy's study_training_speeds also loads

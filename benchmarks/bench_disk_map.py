@@ -16,7 +16,8 @@ answer). Per speed: node LE of sector 0 and the largest over the 36 blades, max 
 
 Every part resumes: the model, the probe and the cubature are cached, the sweeps checkpoint every 60 s; so the map
 runs over several sittings. The wall time is accounted by a heartbeat (every 30 s, rank 0) per phase and sitting in
-<out>/bench_disk_map_sittings.json: a sitting that is killed loses at most 30 s of its account.
+<out>/bench_disk_map_sittings.json (--part stress: <out>/bench_disk_map_stress_sittings.json): a sitting that is
+killed loses at most 30 s of its account.
 
     OPENBLAS_NUM_THREADS=1 mpirun -n 2 python benchmarks/bench_disk_map.py [--reference 10 30 50 70] [--part all]
     OPENBLAS_NUM_THREADS=1 mpirun -n 2 python benchmarks/bench_disk_map.py --revolutions 0.5 --out results/smoke

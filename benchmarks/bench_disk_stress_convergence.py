@@ -39,8 +39,7 @@ def mode_stress(size_mm: float) -> dict:
     from mpi4py import MPI
 
     from rotor37_rom import fem
-    from rotor37_rom.analysis import root_distance, tip_band
-    from rotor37_rom.geometry.disk import hub_radius
+    from rotor37_rom.analysis import disk_stress_summary, tip_band
     from rotor37_rom.geometry.blade import MeshPreset
 
     t0 = time.perf_counter()
@@ -55,25 +54,19 @@ def mode_stress(size_mm: float) -> dict:
         cyc.destroy()
     u = modes.a[0]
     u.x.array[:] *= 1e-3 / np.abs(u.x.array[np.asarray(sector.tip_dofs[0])]).max()
-    vertex = fem.von_mises_at_vertices(sector, u, nonlinear=False)                     # (n_cells, 4)
+    vertex = fem.von_mises_at_vertices(sector, u, nonlinear=False)[None]              # (1, n_cells, 4)
     midpoint = fem.von_mises_function(sector, u, False, degree=0).x.array
-    mid = fem.cell_midpoints(sector)
-    band, _ = tip_band(sector, None, mid)
-    corner = np.where(band[:, None], -np.inf, vertex)
-    vertices = fem.cell_vertices(sector)
-    dist = root_distance(sector, vertices)
-    row = {"size_mm": size_mm, "n_dofs": sector.n_dofs, "n_cells": int(mid.shape[0]),
-           "frequency_hz": float(modes.omega[0] / (2 * np.pi)), "corner_mpa": float(corner.max() / 1e6),
-           "corner_distance_mm": float(1e3 * dist.ravel()[np.argmax(corner)]),
+    band, _ = tip_band(sector, None)
+    row = {"size_mm": size_mm, "n_dofs": sector.n_dofs, "n_cells": int(band.size),
+           "frequency_hz": float(modes.omega[0] / (2 * np.pi)),
            "midpoint_mpa": float(np.where(band, -np.inf, midpoint).max() / 1e6), "off_root": {}}
-    for d in BANDS_MM:
-        near = (dist < d * 1e-3).any(axis=1)     # cells with a vertex within d: their far vertices extrapolate it
-        off = np.where((band | near)[:, None], -np.inf, vertex)
-        at = np.unravel_index(int(np.argmax(off)), off.shape)
-        x = vertices[at]                                    # the vertex where the largest is read
-        row["off_root"][f"{d:g}"] = {"mpa": float(off.max() / 1e6), "z_mm": float(1e3 * x[2]),
-                                     "height_mm": float(1e3 * (np.hypot(x[0], x[1]) - hub_radius(x[2]))),
-                                     "junction_mm": float(1e3 * dist[at])}
+    for d in BANDS_MM:               # the disk maps' summary (its sector's own tip nodes), with a band of d mm
+        numbers = disk_stress_summary(sector, None, vertex, root_band=d * 1e-3)
+        where = numbers["location_off_root"]
+        row["off_root"][f"{d:g}"] = {"mpa": numbers["vm_max_off_root"] / 1e6, "z_mm": where["z_mm"],
+                                     "height_mm": where["height_mm"], "span": where["span"]}
+    row["corner_mpa"] = numbers["vm_max"] / 1e6
+    row["corner_location"] = numbers["location"]           # the cell's centroid
     row["wall_s"] = time.perf_counter() - t0
     row["mesh_s"] = t_mesh
     return row

@@ -74,15 +74,15 @@ def root_distance(sector, points: np.ndarray) -> np.ndarray:
     return cKDTree(fem.root_junction(sector)).query(points.reshape(-1, 3))[0].reshape(points.shape[:-1])
 
 
-def disk_stress_summary(sector, model, values: np.ndarray, monitored: int = 0) -> dict:
+def disk_stress_summary(sector, model, values: np.ndarray, monitored: int = 0, root_band: float = ROOT_BAND) -> dict:
     """The numbers of a disk's von Mises field (``disk_stress`` values, (N, n_cells, 4) at the cells' vertices, all
     sectors): the largest in sector ``monitored`` and over all sectors outside the tip band (and which sector), in
     the tip band, the ratio of the sector's to the yield stress, and where the two largest sit (``stress_location``).
 
     The blade meets the rim at a sharp re-entrant corner (no fillet), where the FE stress is singular: its largest
     there does not converge under mesh refinement. The same numbers off the root corner (``*_off_root``: every cell
-    with a vertex within ``ROOT_BAND`` of the junction left out as well; ``location_off_root`` is the vertex's)
-    converge with the mesh (benchmarks/bench_disk_stress_convergence.py: the disk's 1B mode on meshes of 12 to 1.5
+    with a vertex within ``root_band`` (m, default ``ROOT_BAND``) of the junction left out as well;
+    ``location_off_root`` is the vertex's) converge with the mesh (benchmarks/bench_disk_stress_convergence.py: the disk's 1B mode on meshes of 12 to 1.5
     mm); they are the stress to compare with sigma_Y."""
     values = np.asarray(values, float)
     if values.ndim != 3 or values.shape[2] != 4:
@@ -96,12 +96,12 @@ def disk_stress_summary(sector, model, values: np.ndarray, monitored: int = 0) -
     worst = int(np.argmax(per_sector))
     vertices = fem.cell_vertices(sector)                                           # (n_cells, 4, 3)
     # a cell with any vertex in the band is left out whole: its far vertices' values are the corner's, extrapolated
-    near_root = (root_distance(sector, vertices) < ROOT_BAND).any(axis=1)           # (n_cells,)
+    near_root = (root_distance(sector, vertices) < root_band).any(axis=1)           # (n_cells,)
     off_vertices = np.where((band | near_root)[None, :, None], -np.inf, values)     # (N, n_cells, 4)
     off = off_vertices.max(axis=2)
     off_sector = off.max(axis=1)
     worst_off = int(np.argmax(off_sector))
-    cell_off, vertex_off = np.unravel_index(int(np.argmax(off_vertices[monitored])), off.shape[1:] + (4,))
+    cell_off, vertex_off = np.unravel_index(int(np.argmax(off_vertices[monitored])), off_vertices.shape[1:])
     sigma_y = sector.material.sigma_y
     return {"vm_max": float(per_sector[monitored]), "ratio_yield": float(per_sector[monitored] / sigma_y),
             "vm_max_all_sectors": float(per_sector.max()), "sector_of_max": worst,
@@ -113,7 +113,7 @@ def disk_stress_summary(sector, model, values: np.ndarray, monitored: int = 0) -
             "vm_max_off_root_all_sectors": float(off_sector.max()), "sector_of_max_off_root": worst_off,
             "location_off_root": stress_location(sector, model, int(cell_off), mid,
                                                  point=vertices[cell_off, vertex_off]),
-            "root_band_m": ROOT_BAND,
+            "root_band_m": root_band,
             "clim": [0.0, float(np.percentile(cells[:, ~band], 99.5))]}
 
 

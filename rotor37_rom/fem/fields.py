@@ -83,20 +83,22 @@ def root_junction(sector: Sector, faces=("pressure", "suction", "leading_edge", 
     topo = sector.mesh.topology
     topo.create_connectivity(2, 0)
     topo.create_connectivity(3, 0)
-    c2v = topo.connectivity(3, 0)
-    f2v = topo.connectivity(2, 0)
+    cell_v = topo.connectivity(3, 0).array.reshape(-1, 4)          # tetrahedra: 4 vertices per cell
+    facet_v = topo.connectivity(2, 0).array.reshape(-1, 3)
     in_region = np.zeros(topo.index_map(0).size_local + topo.index_map(0).num_ghosts, bool)
-    for c in sector.cell_tags.find(sector.groups[region]):
-        in_region[c2v.links(c)] = True
+    in_region[cell_v[sector.cell_tags.find(sector.groups[region])].ravel()] = True
     # vertex coordinates through a P1 space, whose cell dofs follow the cell's vertices in the same local order
     P1 = fem.FunctionSpace(sector.mesh, ("Lagrange", 1))
     vertex_x = np.empty((in_region.size, 3))
-    vertex_x[c2v.array] = P1.tabulate_dof_coordinates()[P1.dofmap.list.array]
+    vertex_x[cell_v.ravel()] = P1.tabulate_dof_coordinates()[P1.dofmap.list.array]
     segments = set()
     for name in faces:
-        for facet in sector.facets(name):
-            v = [int(i) for i in f2v.links(facet) if in_region[i]]
-            segments.update((min(a, b), max(a, b)) for k, a in enumerate(v) for b in v[k + 1:])
+        tri = facet_v[sector.facets(name)]
+        on = in_region[tri]
+        for i, j in ((0, 1), (0, 2), (1, 2)):                      # the facet's edges with both ends on the region
+            both = on[:, i] & on[:, j]
+            segments.update(zip(np.minimum(tri[both, i], tri[both, j]).tolist(),
+                                np.maximum(tri[both, i], tri[both, j]).tolist()))
     if not segments:
         raise ValueError(f"root_junction: no edge of {list(faces)} lies on the {region!r} cells (not a bladed sector?)")
     if spacing is None:
