@@ -1,5 +1,5 @@
 """Mesh convergence of the bladed-disk sector's stress (issue #21, item 4): the sharp blade-rim corner against the
-stress off it, on the disk's 1B mode.
+stress off it, on the disk's 1B mode; and the stress next to a contact load at node LE.
 
 The disk sector of the maps has no root fillet: the blade meets the rim at a re-entrant corner, where the elastic
 stress is singular (a 270-degree wedge: sigma ~ rho^(lambda - 1), lambda = 0.5445, Williams 1952), so its largest FE
@@ -14,8 +14,18 @@ displacement component at node LE, and reports its linear von Mises stress outsi
 - the largest at the cells' midpoints (DG0, what the disk maps reported before: a midpoint misses the surface's
   bending stress on a coarse mesh).
 
+The contact case: the static response of the same sector (0 diameters, every blade alike, the bore clamped) to the
+force the casing puts on node LE when it touches, 1 kN along the cone's inward normal plus the Coulomb friction
+against the sliding (mu = 0.15, the maps' casing), linear stress per kN. A reduced model carries a contact force
+through its constraint modes, which are static responses to the tip nodes' displacements, so this is the field the
+maps' stress next to the contact loads is made of. The point load's own stress is singular at the node (~ 1/rho^2);
+reported are the disk summaries' largest off the corner (outside the tip band, the cells within 10 % of the span of a
+contact node, by their midpoints: on a coarse mesh a cell clear of the band by its midpoint can reach far into it)
+and the largest in the cells whose every vertex lies more than d = 8, 16, 24 mm from node LE (and off the corner).
+
     python benchmarks/bench_disk_stress_convergence.py                 # 12, 6, 3, 2, 1.5 mm: ~4 min on 2 cores
     python benchmarks/bench_disk_stress_convergence.py --sizes 12 3     # a quick look
+    python benchmarks/bench_disk_stress_convergence.py --case contact   # the contact load only
 
 Results to results/bench_disk_stress_convergence.json and a Markdown table (docs/results.md).
 """
@@ -32,21 +42,78 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import write_results  # noqa: E402
 
 BANDS_MM = (2.0, 4.0, 8.0)
+LOAD_BALLS_MM = (8.0, 16.0, 24.0)
+CASES = ("mode", "contact")
 
 
-def mode_stress(size_mm: float) -> dict:
-    """One mesh: the 1B 0-diameter mode's stresses (MPa) at 1 mm at node LE and where the off-corner largest sits."""
+def disk_sector(size_mm: float):
+    """The ci disk sector meshed at ``size_mm`` (the LE/TE refinement kept at min(2 mm, size)) and its meshing time."""
     from mpi4py import MPI
 
     from rotor37_rom import fem
-    from rotor37_rom.analysis import disk_stress_summary, tip_band
     from rotor37_rom.geometry.blade import MeshPreset
 
     t0 = time.perf_counter()
     preset = MeshPreset(f"h{size_mm:g}mm", size=size_mm * 1e-3, curvature_points=0,
                         min_size=min(2.0, size_mm) * 1e-3)
-    sector = fem.create_disk_sector(MPI.COMM_SELF, preset=preset)
-    t_mesh = time.perf_counter() - t0
+    return fem.create_disk_sector(MPI.COMM_SELF, preset=preset), time.perf_counter() - t0
+
+
+def contact_stress(sector, mu: float = 0.15) -> dict:
+    """The static response of the sector closed on itself (0 diameters, ``fem.RepeatingSectors``) to 1 kN of casing
+    contact on node LE (inward cone normal, friction mu against the sliding): von Mises per kN (MPa) off the corner,
+    outside the tip band and outside balls around node LE, and where the largest sit."""
+    from rotor37_rom import fem
+    from rotor37_rom.analysis import ROOT_BAND, disk_stress_summary, root_distance, stress_location, tip_band
+    from rotor37_rom.casing import Casing, contact_frames
+
+    t0 = time.perf_counter()
+    casing = Casing(direction="cone", mu=mu)
+    le = sector.tip_names.index("LE")
+    node = sector.tip_nodes[le]
+    normal, slide, _ = contact_frames(node, casing.direction, casing.rotation_sense, casing.cone_slope)
+    force = 1e3 * (-normal[0] - mu * slide[0])           # the casing pushes in; friction opposes the sliding
+    f = np.zeros(sector.n_dofs)
+    f[np.asarray(sector.tip_dofs[le])] = force
+    closed = fem.RepeatingSectors(sector, 1)
+    solve = fem.mumps_solver(closed.K)
+    try:
+        x = solve(closed.maps[0].T @ (closed.free * f))
+    finally:
+        solve.destroy()
+    u = fem.displacement_function(sector, np.eye(sector.n_dofs, 1), np.zeros(1))
+    u.x.array[:] = closed.fields(x)[0]
+    vertex = fem.von_mises_at_vertices(sector, u, nonlinear=False)                  # (n_cells, 4)
+    corners = fem.cell_vertices(sector)                                            # (n_cells, 4, 3)
+    off_root = ~(root_distance(sector, corners) < ROOT_BAND).any(axis=1)
+    band, _ = tip_band(sector, None)
+    reach = np.linalg.norm(corners - node, axis=2)                                 # (n_cells, 4), m
+
+    def largest(keep: np.ndarray) -> dict:
+        cell, vert = np.unravel_index(int(np.argmax(np.where(keep[:, None], vertex, -np.inf))), vertex.shape)
+        loc = stress_location(sector, None, int(cell), point=corners[cell, vert])
+        return {"mpa_per_kn": float(vertex[cell, vert] / 1e6), "span": loc["span"], "z_mm": loc["z_mm"],
+                "height_mm": loc["height_mm"], "from_le_mm": float(1e3 * reach[cell, vert])}
+
+    clear = off_root & ~band
+    row = {"force_n": force.tolist(), "le_displacement_mm_per_kn": float(
+               1e3 * np.linalg.norm(u.x.array[np.asarray(sector.tip_dofs[le])])),
+           "tip_band": largest(clear),
+           "nearest_vertex_outside_band_mm": float(1e3 * reach[clear].min()),
+           "balls": {f"{d:g}": largest(off_root & (reach.min(axis=1) > d * 1e-3)) for d in LOAD_BALLS_MM}}
+    summary = disk_stress_summary(sector, None, vertex[None])       # the maps' number: the same cells
+    if not np.isclose(summary["vm_max_off_root"] / 1e6, row["tip_band"]["mpa_per_kn"], rtol=1e-12):
+        raise RuntimeError("the tip-band value differs from disk_stress_summary's")
+    row["wall_s"] = time.perf_counter() - t0
+    return row
+
+
+def mode_stress(sector) -> dict:
+    """One mesh: the 1B 0-diameter mode's stresses (MPa) at 1 mm at node LE and where the off-corner largest sits."""
+    from rotor37_rom import fem
+    from rotor37_rom.analysis import disk_stress_summary, tip_band
+
+    t0 = time.perf_counter()
     cyc = fem.CyclicOperators(sector)
     try:
         modes = cyc.modes(0, 1)
@@ -57,7 +124,7 @@ def mode_stress(size_mm: float) -> dict:
     vertex = fem.von_mises_at_vertices(sector, u, nonlinear=False)[None]              # (1, n_cells, 4)
     midpoint = fem.von_mises_function(sector, u, False, degree=0).x.array
     band, _ = tip_band(sector, None)
-    row = {"size_mm": size_mm, "n_dofs": sector.n_dofs, "n_cells": int(band.size),
+    row = {"n_cells": int(band.size),
            "frequency_hz": float(modes.omega[0] / (2 * np.pi)),
            "midpoint_mpa": float(np.where(band, -np.inf, midpoint).max() / 1e6), "off_root": {}}
     for d in BANDS_MM:               # the disk maps' summary (its sector's own tip nodes), with a band of d mm
@@ -68,7 +135,6 @@ def mode_stress(size_mm: float) -> dict:
     row["corner_mpa"] = numbers["vm_max"] / 1e6
     row["corner_location"] = numbers["location"]           # the cell's centroid
     row["wall_s"] = time.perf_counter() - t0
-    row["mesh_s"] = t_mesh
     return row
 
 
@@ -88,25 +154,66 @@ def markdown(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def markdown_contact(rows: list[dict]) -> str:
+    finest = rows[-1]["contact"]
+
+    def cell(o, ref):
+        return (f"{o['mpa_per_kn']:.1f} ({100 * (o['mpa_per_kn'] / ref['mpa_per_kn'] - 1):+.1f} %; "
+                f"{o['from_le_mm']:.1f} mm from LE, {100 * o['span']:.0f} % span)")
+
+    head = ("| element size | DOFs | node LE (mm/kN) | outside the tip band (nearest vertex to LE) | " +
+            " | ".join(f"> {d:g} mm from LE" for d in LOAD_BALLS_MM) + " |")
+    lines = [head, "|" + "---|" * (4 + len(LOAD_BALLS_MM))]
+    for r in rows:
+        c = r["contact"]
+        lines.append(f"| {r['size_mm']:g} mm | {r['n_dofs']:,} | {c['le_displacement_mm_per_kn']:.3f} | "
+                     f"{cell(c['tip_band'], finest['tip_band'])} ({c['nearest_vertex_outside_band_mm']:.1f} mm) | "
+                     + " | ".join(cell(c["balls"][f"{d:g}"], finest["balls"][f"{d:g}"]) for d in LOAD_BALLS_MM)
+                     + " |")
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=float, nargs="+", default=[12.0, 6.0, 3.0, 2.0, 1.5],
                         help="element sizes (mm), coarse to fine, each in [1, 20] (default 12 6 3 2 1.5)")
+    parser.add_argument("--case", choices=CASES + ("both",), default="both",
+                        help="the 1B mode (results/bench_disk_stress_convergence.json), the contact load at node LE "
+                             "(..._contact.json) or both (default)")
     args = parser.parse_args(argv)
     if any(not 1.0 <= s <= 20.0 for s in args.sizes):
         print(f"error: --sizes must each be in [1, 20] mm, got {args.sizes}", file=sys.stderr)
         return 2
-    rows = []
+    cases = CASES if args.case == "both" else (args.case,)
+    rows = {case: [] for case in cases}
     for size in args.sizes:
-        rows.append(mode_stress(size))
-        r = rows[-1]
-        print(f"{size:g} mm: {r['n_dofs']} DOFs, {r['frequency_hz']:.2f} Hz, corner {r['corner_mpa']:.1f} MPa, off "
-              f"the corner (> 4 mm) {r['off_root']['4']['mpa']:.1f} MPa, midpoints {r['midpoint_mpa']:.1f} MPa; "
-              f"{r['wall_s']:.0f} s", flush=True)
-    machine = write_results("bench_disk_stress_convergence", rows,
-                            mode="the disk's lowest 0-diameter mode, 1 mm largest component at node LE, linear "
-                                 "stress, outside the tip band (10 % of the span around the contact nodes)")
-    print(f"{machine}\n\n{markdown(rows)}")
+        sector, t_mesh = disk_sector(size)
+        common = {"size_mm": size, "n_dofs": sector.n_dofs, "mesh_s": t_mesh}
+        if "mode" in cases:
+            r = {**common, **mode_stress(sector)}
+            rows["mode"].append(r)
+            print(f"{size:g} mm: {r['n_dofs']} DOFs, {r['frequency_hz']:.2f} Hz, corner {r['corner_mpa']:.1f} MPa, "
+                  f"off the corner (> 4 mm) {r['off_root']['4']['mpa']:.1f} MPa, midpoints {r['midpoint_mpa']:.1f} "
+                  f"MPa; {r['wall_s']:.0f} s", flush=True)
+        if "contact" in cases:
+            r = {**common, "contact": contact_stress(sector)}
+            rows["contact"].append(r)
+            c = r["contact"]
+            print(f"{size:g} mm: contact at LE, per kN: {c['le_displacement_mm_per_kn']:.3f} mm at LE; outside the "
+                  f"tip band {c['tip_band']['mpa_per_kn']:.1f} MPa ({c['tip_band']['from_le_mm']:.1f} mm from LE), "
+                  + ", ".join(f"> {d} mm {c['balls'][d]['mpa_per_kn']:.1f}" for d in c["balls"])
+                  + f" MPa; {c['wall_s']:.0f} s", flush=True)
+    if "mode" in cases:
+        machine = write_results("bench_disk_stress_convergence", rows["mode"],
+                                mode="the disk's lowest 0-diameter mode, 1 mm largest component at node LE, linear "
+                                     "stress, outside the tip band (10 % of the span around the contact nodes)")
+        print(f"{machine}\n\n{markdown(rows['mode'])}")
+    if "contact" in cases:
+        machine = write_results("bench_disk_stress_convergence_contact", rows["contact"],
+                                load="1 kN of casing contact at node LE: the cone's inward normal and friction 0.15 "
+                                     "against the sliding; static, 0 diameters, linear stress per kN, off the root "
+                                     "corner (ROOT_BAND)")
+        print(f"{machine}\n\n{markdown_contact(rows['contact'])}")
     return 0
 
 
