@@ -653,7 +653,8 @@ def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: Centr
     if runs is not None:
         Q_train, step_states = runs["train"], runs["step"]
     else:
-        Q_train, step_states = contact_training_states(scheme, train, casing, revolutions)
+        Q_train, step_states = contact_training_states(scheme, train, casing, revolutions,
+                                                       checkpoint=runs_cache.with_suffix(".ckpt.npz"))
         save_npz(runs_cache, train=Q_train, step=step_states)
     create = fem.create_disk_sector if model.sectors is not None else fem.create_blade_sector
     sector = create(MPI.COMM_SELF, preset=config.preset)

@@ -30,6 +30,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import time
+from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
@@ -124,17 +125,65 @@ def training_speeds(speeds: Sequence[float], n: int = 6) -> np.ndarray:
 
 
 def contact_training_states(scheme: "CentralDifference", speeds, casing, revolutions: float,
-                            n_largest: int = 24) -> tuple[np.ndarray, np.ndarray]:
+                            n_largest: int = 24, checkpoint: "str | Path | None" = None,
+                            checkpoint_seconds: float = 60.0) -> tuple[np.ndarray, np.ndarray]:
     """States of exact GNL contact runs at ``speeds`` (records every 1e-5 s) for training a hyper-reduction
     (``ecsw.trajectory_states``), and the states a GNL step is taken over: the n_largest of largest tip motion and
     the training states (the stiffest tangent belongs to a deformation shape, not to the largest tip amplitude: on
-    the r = 55 headline the 24 largest gave 7.62e-7 s, the 179 training states 6.21e-7 s). Returns (train, step)."""
+    the r = 55 headline the 24 largest gave 7.62e-7 s, the 179 training states 6.21e-7 s). Returns (train, step).
+    ``checkpoint``: a file the runs' loop state is saved to every ``checkpoint_seconds`` (``save_loop_state``) and
+    resumed from when it holds these speeds (exact runs of a large basis take an hour); removed when they end."""
     from rotor37_rom.ecsw import trajectory_states
+    from rotor37_rom.npz import load_npz
+
+    speeds = np.atleast_1d(np.asarray(speeds, float))
+    state, save = None, None
+    if checkpoint is not None:
+        checkpoint = Path(checkpoint)
+        data = load_npz(checkpoint, what="training runs' checkpoint")
+        if data is not None and np.array_equal(np.asarray(data["speeds"], float), speeds):
+            state = loop_state(data, speeds.size)
+
+        def save(st):
+            save_loop_state(checkpoint, st, speeds)
 
     res = simulate(scheme, speeds, casing, revolutions=revolutions, record_q=True, on_blowup="flag",
-                   record_every=max(1, int(round(1e-5 / scheme.h))))
+                   record_every=max(1, int(round(1e-5 / scheme.h))), state=state, checkpoint=save,
+                   checkpoint_seconds=checkpoint_seconds)
+    if checkpoint is not None:
+        checkpoint.unlink(missing_ok=True)
     Q_train, _ = trajectory_states(res.records_q, scheme.boundary_rows)
     return Q_train, np.hstack([largest_states(res, scheme.boundary_rows, n_largest), Q_train])
+
+
+def save_loop_state(path: "str | Path", st: dict, speeds: np.ndarray) -> None:
+    """``simulate``'s loop state ``st`` (what its ``checkpoint`` receives) to ``path`` (``save_npz``: whole or not at
+    all), with the speeds it runs; the full states too when the run records them (``record_q``)."""
+    from rotor37_rom.npz import save_npz
+
+    arrays = {"speeds": np.asarray(speeds, float), "n": st["n"], "Q": st["Q"], "Qp": st["Qp"], "done": st["done"],
+              "max_pen": st["max_pen"], "min_lam": st["min_lam"], "fric_pow": st["fric_pow"],
+              "contact_steps": st["contact_steps"], "diverged": st["diverged"], "work": st["work"]}
+    for p in range(len(st["u_r"])):
+        arrays[f"u_r{p}"] = st["u_r"][p]
+        arrays[f"lam{p}"] = st["lam"][p]
+        if st.get("q_rec") is not None:
+            arrays[f"q_rec{p}"] = st["q_rec"][p]
+    save_npz(path, **arrays)
+
+
+def loop_state(data, P: int) -> dict:
+    """The loop state of ``save_loop_state``'s file (any mapping of its arrays) for ``simulate(state=...)``; P
+    simulations. Energies are not kept (a run with ``energy=True`` starts over)."""
+    st = {k: data[k] for k in ("Q", "Qp", "done", "max_pen", "min_lam", "fric_pow", "contact_steps", "diverged")}
+    st["n"] = int(data["n"])
+    if "work" in data:                         # older checkpoints: the works count from the resumed step
+        st["work"] = data["work"]
+    st["u_r"] = [data[f"u_r{p}"] for p in range(P)]
+    st["lam"] = [data[f"lam{p}"] for p in range(P)]
+    st["q_rec"] = [data[f"q_rec{p}"] for p in range(P)] if "q_rec0" in data else None
+    st["energy"] = None
+    return st
 
 
 def largest_states(result: "SimulationResult", boundary_rows: np.ndarray, n: int) -> np.ndarray:
@@ -474,6 +523,10 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                 st["q_rec"][p][:, 0] = Q[:, p]
     else:
         st = state
+        if record_q and st.get("q_rec") is None:
+            raise ValueError("record_q=True cannot resume from a state saved without the full states (q_rec)")
+        if energy and st.get("energy") is None:
+            raise ValueError("energy=True cannot resume from a saved state (its energies are not kept)")
     Q, Qp = st["Q"], st["Qp"]
     energy_forces = scheme.model.forces if (energy and scheme.nonlinear) else None
     if energy and scheme.nonlinear and not isinstance(energy_forces, PolynomialForces):

@@ -18,7 +18,7 @@ from typing import Sequence
 import numpy as np
 
 from rotor37_rom.casing import Casing
-from rotor37_rom.integrator import CentralDifference, simulate
+from rotor37_rom.integrator import CentralDifference, loop_state, save_loop_state, simulate
 from rotor37_rom.npz import save_npz
 
 __all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "load_speed", "sweep_folder", "interaction_map",
@@ -243,27 +243,14 @@ def rerun_diverged(scheme: CentralDifference, results: Sequence[dict], spec: Swe
 
 
 def _save_state(path: Path, st: dict, speeds: np.ndarray) -> None:
-    arrays = {"speeds": speeds, "n": st["n"], "Q": st["Q"], "Qp": st["Qp"], "done": st["done"],
-              "max_pen": st["max_pen"],
-              "min_lam": st["min_lam"], "fric_pow": st["fric_pow"], "contact_steps": st["contact_steps"],
-              "diverged": st["diverged"], "work": st["work"]}
-    for p in range(len(st["u_r"])):
-        arrays[f"u_r{p}"] = st["u_r"][p]
-        arrays[f"lam{p}"] = st["lam"][p]
-    save_npz(path, **arrays)
+    save_loop_state(path, st, speeds)
 
 
 def _load_state(path: Path, P: int) -> dict | None:
     data = _load_result(path) if path.exists() else None
     if data is None:
         return None
-    st = {k: data[k] for k in ("Q", "Qp", "done", "max_pen", "min_lam", "fric_pow", "contact_steps", "diverged")}
-    st["n"] = int(data["n"])
-    if "work" in data:                         # older checkpoints: the works count from the resumed step
-        st["work"] = data["work"]
-    st["u_r"] = [data[f"u_r{p}"] for p in range(P)]
-    st["lam"] = [data[f"lam{p}"] for p in range(P)]
-    st["energy"] = st["q_rec"] = None
+    st = loop_state(data, P)
     LOG.info("resuming batch from %s at step %d", path, st["n"])
     return st
 

@@ -75,6 +75,56 @@ def test_killed_sweep_resumes(ci_rom, tmp_path, monkeypatch, capsys):
     assert len(load_sweep(folder)) == 2
 
 
+def test_killed_training_runs_resume(ci_rom, tmp_path, monkeypatch):
+    """The cubature's exact GNL training runs (an hour on r = 104) checkpoint their loop state with the recorded full
+    states: killed after one speed has ended and half-way through the other, they resume where they stopped and give
+    the uninterrupted runs' training and step states bit for bit; the checkpoint goes when they end, and one of other
+    speeds is not resumed."""
+    from rotor37_rom import integrator
+
+    scheme = CentralDifference(ci_rom, nonlinear=True, safety=0.5)
+    casing = Casing(c0=2e-4)                                       # in contact within the quarter revolution
+    steps = np.ceil(0.25 * 2 * np.pi / SPEEDS / scheme.h).astype(int)
+    kill_at = (steps.min() + steps.max()) // 2
+    ckpt = tmp_path / "runs.ckpt.npz"
+    real = integrator.simulate
+
+    def killed_simulate(*args, checkpoint=None, **kwargs):
+        def save_then_die(st):
+            if st["n"] >= kill_at:
+                checkpoint(st)
+                raise _Killed
+
+        return real(*args, checkpoint=save_then_die, **{**kwargs, "checkpoint_seconds": 0.0})
+
+    def kill(speeds):
+        monkeypatch.setattr(integrator, "simulate", killed_simulate)
+        with pytest.raises(_Killed):
+            integrator.contact_training_states(scheme, speeds, casing, 0.25, checkpoint=ckpt)
+        assert ckpt.is_file()
+
+    resumed_from = []
+
+    def spy(*args, state=None, **kwargs):
+        resumed_from.append(None if state is None else state["n"])
+        return real(*args, state=state, **kwargs)
+
+    kill(SPEEDS)
+    monkeypatch.setattr(integrator, "simulate", spy)
+    train, step = integrator.contact_training_states(scheme, SPEEDS, casing, 0.25, checkpoint=ckpt)
+    assert resumed_from == [kill_at] and not ckpt.exists()
+    monkeypatch.setattr(integrator, "simulate", real)
+    ref_train, ref_step = integrator.contact_training_states(scheme, SPEEDS, casing, 0.25)
+    np.testing.assert_array_equal(train, ref_train)
+    np.testing.assert_array_equal(step, ref_step)
+    res = real(scheme, SPEEDS, casing, revolutions=0.25)
+    assert (res.min_multiplier < np.inf).all()                      # both speeds touched the casing
+    kill(SPEEDS)                                                     # a checkpoint of these speeds ...
+    monkeypatch.setattr(integrator, "simulate", spy)
+    integrator.contact_training_states(scheme, SPEEDS[:1], casing, 0.25, checkpoint=ckpt)
+    assert resumed_from[-1] is None and not ckpt.exists()           # ... is not resumed by a run of others
+
+
 def test_sweep_folder_absorbs_the_steps_round_off(ci_rom, tmp_path):
     """The explicit step comes from the highest frequency, whose last digits depend on the BLAS threads: a restart
     with a step that differs by round-off finds the runs already done; a step that differs for real does not."""
