@@ -19,15 +19,18 @@ force the casing puts on node LE when it touches, 1 kN along the cone's inward n
 against the sliding (mu = 0.15, the maps' casing), linear stress per kN. A reduced model carries a contact force
 through its constraint modes, which are static responses to the tip nodes' displacements, so this is the field the
 maps' stress next to the contact loads is made of. The point load's own stress is singular at the node (~ 1/rho^2);
-reported are the disk summaries' largest off the corner (outside the tip band, the cells within 10 % of the span of a
-contact node, by their midpoints: on a coarse mesh a cell clear of the band by its midpoint can reach far into it)
-and the largest in the cells whose every vertex lies more than d = 8, 16, 24 mm from node LE (and off the corner).
+reported are the disk summaries' largest off the corner (outside the tip band: the cells whose midpoint lies within
+``analysis.TIP_BAND`` = 10 % of the sector's radial extent, bore to tip, of a contact node - 10.6 mm on the ci
+sector), the largest in the cells whose every vertex lies more than d = 8, 16, 24 mm from node LE (and off the
+corner), and node LE's displacement. Both cases are also read at one point: the largest vertex value within 3 mm of
+where the linear disk map's largest stress off the corner sits (MAP_POINT, at the LE 16 mm under the tip).
 
-    python benchmarks/bench_disk_stress_convergence.py                 # 12, 6, 3, 2, 1.5 mm: ~4 min on 2 cores
+    python benchmarks/bench_disk_stress_convergence.py                 # 12, 6, 3, 2, 1.5 mm, both cases: ~6 min
     python benchmarks/bench_disk_stress_convergence.py --sizes 12 3     # a quick look
-    python benchmarks/bench_disk_stress_convergence.py --case contact   # the contact load only
+    python benchmarks/bench_disk_stress_convergence.py --case contact   # the contact load only (~3 min)
 
-Results to results/bench_disk_stress_convergence.json and a Markdown table (docs/results.md).
+Results to results/bench_disk_stress_convergence.json (the mode), ..._contact.json and Markdown tables
+(docs/results.md).
 """
 from __future__ import annotations
 
@@ -44,6 +47,27 @@ from _common import write_results  # noqa: E402
 BANDS_MM = (2.0, 4.0, 8.0)
 LOAD_BALLS_MM = (8.0, 16.0, 24.0)
 CASES = ("mode", "contact")
+# where the linear disk map's largest stress off the corner sits (1,255.6 rad/s, node LE of sector 0 at t_max: the
+# vertex of results/disk_map200/stress_11/summary.json, location_off_root; bench_disk_map.py --part stress): radius,
+# axial position (mm), angle (deg) in the sector's frame. Each case reads the largest vertex value within
+# POINT_RADIUS_MM of it on every mesh.
+MAP_POINT = (230.911, 8.585, -3.898)
+POINT_RADIUS_MM = 3.0
+
+
+def point_xyz(point) -> np.ndarray:
+    r, z, theta = point
+    return 1e-3 * np.array([r * np.cos(np.radians(theta)), r * np.sin(np.radians(theta)), z])
+
+
+def near_point(sector, vertex: np.ndarray, point) -> dict:
+    """The largest of ``vertex`` ((n_cells, 4) values) at the vertices within POINT_RADIUS_MM of ``point``."""
+    from rotor37_rom import fem
+
+    near = np.linalg.norm(fem.cell_vertices(sector) - point_xyz(point), axis=2) < POINT_RADIUS_MM * 1e-3
+    if not near.any():
+        raise ValueError(f"no vertex within {POINT_RADIUS_MM} mm of the point {point} (r, z, theta)")
+    return {"mpa": float(vertex[near].max() / 1e6), "n_vertices": int(near.sum())}
 
 
 def disk_sector(size_mm: float):
@@ -59,12 +83,14 @@ def disk_sector(size_mm: float):
     return fem.create_disk_sector(MPI.COMM_SELF, preset=preset), time.perf_counter() - t0
 
 
-def contact_stress(sector, mu: float = 0.15) -> dict:
+def contact_stress(sector, point=MAP_POINT, mu: float = 0.15) -> dict:
     """The static response of the sector closed on itself (0 diameters, ``fem.RepeatingSectors``) to 1 kN of casing
     contact on node LE (inward cone normal, friction mu against the sliding): von Mises per kN (MPa) off the corner,
-    outside the tip band and outside balls around node LE, and where the largest sit."""
+    outside the tip band and outside balls around node LE, and where the largest sit; near ``point`` (r, z, theta in
+    mm, mm, deg); node LE's displacement per kN (its length and inward along the normal)."""
     from rotor37_rom import fem
-    from rotor37_rom.analysis import ROOT_BAND, disk_stress_summary, root_distance, stress_location, tip_band
+    from rotor37_rom.analysis import (ROOT_BAND, TIP_BAND, disk_stress_summary, root_distance, stress_location,
+                                      tip_band)
     from rotor37_rom.casing import Casing, contact_frames
 
     t0 = time.perf_counter()
@@ -96,8 +122,12 @@ def contact_stress(sector, mu: float = 0.15) -> dict:
                 "height_mm": loc["height_mm"], "from_le_mm": float(1e3 * reach[cell, vert])}
 
     clear = off_root & ~band
-    row = {"force_n": force.tolist(), "le_displacement_mm_per_kn": float(
-               1e3 * np.linalg.norm(u.x.array[np.asarray(sector.tip_dofs[le])])),
+    u_le = u.x.array[np.asarray(sector.tip_dofs[le])]
+    mid = fem.cell_midpoints(sector)
+    row = {"force_n": force.tolist(), "le_displacement_mm_per_kn": float(1e3 * np.linalg.norm(u_le)),
+           "le_inward_mm_per_kn": float(-1e3 * normal[0] @ u_le),
+           "tip_band_radius_mm": float(1e3 * TIP_BAND * np.ptp(np.hypot(mid[:, 0], mid[:, 1]))),
+           "map_point": {**near_point(sector, vertex, point), "point_r_z_theta": list(point)},
            "tip_band": largest(clear),
            "nearest_vertex_outside_band_mm": float(1e3 * reach[clear].min()),
            "balls": {f"{d:g}": largest(off_root & (reach.min(axis=1) > d * 1e-3)) for d in LOAD_BALLS_MM}}
@@ -108,7 +138,7 @@ def contact_stress(sector, mu: float = 0.15) -> dict:
     return row
 
 
-def mode_stress(sector) -> dict:
+def mode_stress(sector, point=MAP_POINT) -> dict:
     """One mesh: the 1B 0-diameter mode's stresses (MPa) at 1 mm at node LE and where the off-corner largest sits."""
     from rotor37_rom import fem
     from rotor37_rom.analysis import disk_stress_summary, tip_band
@@ -133,6 +163,7 @@ def mode_stress(sector) -> dict:
         row["off_root"][f"{d:g}"] = {"mpa": numbers["vm_max_off_root"] / 1e6, "z_mm": where["z_mm"],
                                      "height_mm": where["height_mm"], "span": where["span"]}
     row["corner_mpa"] = numbers["vm_max"] / 1e6
+    row["map_point"] = {**near_point(sector, vertex[0], point), "point_r_z_theta": list(point)}
     row["corner_location"] = numbers["location"]           # the cell's centroid
     row["wall_s"] = time.perf_counter() - t0
     return row
@@ -141,8 +172,8 @@ def mode_stress(sector) -> dict:
 def markdown(rows: list[dict]) -> str:
     finest = rows[-1]
     head = ("| element size | DOFs | 1B (k = 0) | at the corner | " +
-            " | ".join(f"off the corner, > {d:g} mm" for d in BANDS_MM) + " | at the midpoints (DG0) |")
-    lines = [head, "|" + "---|" * (5 + len(BANDS_MM))]
+            " | ".join(f"off the corner, > {d:g} mm" for d in BANDS_MM) + " | at the midpoints (DG0) | at the map's point |")
+    lines = [head, "|" + "---|" * (6 + len(BANDS_MM))]
     for r in rows:
         offs = []
         for d in BANDS_MM:
@@ -150,26 +181,32 @@ def markdown(rows: list[dict]) -> str:
             change = 100 * (o["mpa"] / finest["off_root"][f"{d:g}"]["mpa"] - 1)
             offs.append(f"{o['mpa']:.1f} ({change:+.1f} %; {o['height_mm']:.1f} mm up, z = {o['z_mm']:.1f} mm)")
         lines.append(f"| {r['size_mm']:g} mm | {r['n_dofs']:,} | {r['frequency_hz']:.2f} Hz | {r['corner_mpa']:.1f} | "
-                     + " | ".join(offs) + f" | {r['midpoint_mpa']:.1f} |")
+                     + " | ".join(offs) + f" | {r['midpoint_mpa']:.1f} | {r['map_point']['mpa']:.1f} |")
     return "\n".join(lines)
 
 
 def markdown_contact(rows: list[dict]) -> str:
+    """The contact case's table as in docs/results.md: per kN, the change against the finest mesh in brackets."""
     finest = rows[-1]["contact"]
 
-    def cell(o, ref):
-        return (f"{o['mpa_per_kn']:.1f} ({100 * (o['mpa_per_kn'] / ref['mpa_per_kn'] - 1):+.1f} %; "
-                f"{o['from_le_mm']:.1f} mm from LE, {100 * o['span']:.0f} % span)")
+    def change(value, ref):
+        return f"{value:,.0f} ({100 * (value / ref - 1):+.1f} %)"
 
-    head = ("| element size | DOFs | node LE (mm/kN) | outside the tip band (nearest vertex to LE) | " +
-            " | ".join(f"> {d:g} mm from LE" for d in LOAD_BALLS_MM) + " |")
-    lines = [head, "|" + "---|" * (4 + len(LOAD_BALLS_MM))]
+    head = ("| element size | node LE inward (mm per kN) | outside the tip band (MPa per kN) | where: from node LE, span | "
+            + " | ".join(f"> {d:g} mm from node LE" for d in LOAD_BALLS_MM)
+            + " | at the map's point: per kN | per mm of node LE inward |")
+    lines = [head, "|" + "---|" * (6 + len(LOAD_BALLS_MM))]
+    ref_mm = finest["map_point"]["mpa"] / finest["le_inward_mm_per_kn"]
     for r in rows:
         c = r["contact"]
-        lines.append(f"| {r['size_mm']:g} mm | {r['n_dofs']:,} | {c['le_displacement_mm_per_kn']:.3f} | "
-                     f"{cell(c['tip_band'], finest['tip_band'])} ({c['nearest_vertex_outside_band_mm']:.1f} mm) | "
-                     + " | ".join(cell(c["balls"][f"{d:g}"], finest["balls"][f"{d:g}"]) for d in LOAD_BALLS_MM)
-                     + " |")
+        band = c["tip_band"]
+        per_mm = c["map_point"]["mpa"] / c["le_inward_mm_per_kn"]
+        lines.append(f"| {r['size_mm']:g} mm | {c['le_inward_mm_per_kn']:.2f} | "
+                     f"{change(band['mpa_per_kn'], finest['tip_band']['mpa_per_kn'])} | "
+                     f"{band['from_le_mm']:.1f} mm, {100 * band['span']:.0f} % | "
+                     + " | ".join(change(c["balls"][f"{d:g}"]["mpa_per_kn"], finest["balls"][f"{d:g}"]["mpa_per_kn"])
+                                  for d in LOAD_BALLS_MM)
+                     + f" | {change(c['map_point']['mpa'], finest['map_point']['mpa'])} | {change(per_mm, ref_mm)} |")
     return "\n".join(lines)
 
 
@@ -180,6 +217,9 @@ def main(argv=None) -> int:
     parser.add_argument("--case", choices=CASES + ("both",), default="both",
                         help="the 1B mode (results/bench_disk_stress_convergence.json), the contact load at node LE "
                              "(..._contact.json) or both (default)")
+    parser.add_argument("--point", type=float, nargs=3, default=list(MAP_POINT), metavar=("R", "Z", "THETA"),
+                        help="where each case is also read (mm, mm, deg in the sector's frame; default the linear "
+                             "disk map's largest off the corner)")
     args = parser.parse_args(argv)
     if any(not 1.0 <= s <= 20.0 for s in args.sizes):
         print(f"error: --sizes must each be in [1, 20] mm, got {args.sizes}", file=sys.stderr)
@@ -190,19 +230,19 @@ def main(argv=None) -> int:
         sector, t_mesh = disk_sector(size)
         common = {"size_mm": size, "n_dofs": sector.n_dofs, "mesh_s": t_mesh}
         if "mode" in cases:
-            r = {**common, **mode_stress(sector)}
+            r = {**common, **mode_stress(sector, args.point)}
             rows["mode"].append(r)
             print(f"{size:g} mm: {r['n_dofs']} DOFs, {r['frequency_hz']:.2f} Hz, corner {r['corner_mpa']:.1f} MPa, "
                   f"off the corner (> 4 mm) {r['off_root']['4']['mpa']:.1f} MPa, midpoints {r['midpoint_mpa']:.1f} "
                   f"MPa; {r['wall_s']:.0f} s", flush=True)
         if "contact" in cases:
-            r = {**common, "contact": contact_stress(sector)}
+            r = {**common, "contact": contact_stress(sector, args.point)}
             rows["contact"].append(r)
             c = r["contact"]
             print(f"{size:g} mm: contact at LE, per kN: {c['le_displacement_mm_per_kn']:.3f} mm at LE; outside the "
                   f"tip band {c['tip_band']['mpa_per_kn']:.1f} MPa ({c['tip_band']['from_le_mm']:.1f} mm from LE), "
                   + ", ".join(f"> {d} mm {c['balls'][d]['mpa_per_kn']:.1f}" for d in c["balls"])
-                  + f" MPa; {c['wall_s']:.0f} s", flush=True)
+                  + f" MPa, at the map's point {c['map_point']['mpa']:.1f} MPa; {c['wall_s']:.0f} s", flush=True)
     if "mode" in cases:
         machine = write_results("bench_disk_stress_convergence", rows["mode"],
                                 mode="the disk's lowest 0-diameter mode, 1 mm largest component at node LE, linear "

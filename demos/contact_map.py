@@ -653,9 +653,10 @@ def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: Centr
     if runs is not None:
         Q_train, step_states = runs["train"], runs["step"]
     else:
-        Q_train, step_states = contact_training_states(scheme, train, casing, revolutions,
-                                                       checkpoint=runs_cache.with_suffix(".ckpt.npz"))
+        checkpoint = runs_cache.with_suffix(".ckpt.npz")
+        Q_train, step_states = contact_training_states(scheme, train, casing, revolutions, checkpoint=checkpoint)
         save_npz(runs_cache, train=Q_train, step=step_states)
+        checkpoint.unlink(missing_ok=True)
     create = fem.create_disk_sector if model.sectors is not None else fem.create_blade_sector
     sector = create(MPI.COMM_SELF, preset=config.preset)
     reduced, rep = hyper_reduce(sector, model, Q_train, tol=config.cubature, level="point",

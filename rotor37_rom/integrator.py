@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import json
 import time
 from pathlib import Path
 from typing import Callable, Sequence
@@ -132,36 +133,45 @@ def contact_training_states(scheme: "CentralDifference", speeds, casing, revolut
     the training states (the stiffest tangent belongs to a deformation shape, not to the largest tip amplitude: on
     the r = 55 headline the 24 largest gave 7.62e-7 s, the 179 training states 6.21e-7 s). Returns (train, step).
     ``checkpoint``: a file the runs' loop state is saved to every ``checkpoint_seconds`` (``save_loop_state``) and
-    resumed from when it holds these speeds (exact runs of a large basis take an hour); removed when they end."""
+    resumed from when it holds the same runs (speeds, model, step, frequency cap, casing, length; exact runs of a
+    large basis take an hour). It is left in place: the caller removes it once it has kept the result (a finished
+    checkpoint resumed gives the result at once)."""
     from rotor37_rom.ecsw import trajectory_states
     from rotor37_rom.npz import load_npz
 
     speeds = np.atleast_1d(np.asarray(speeds, float))
+    record_every = max(1, int(round(1e-5 / scheme.h)))
     state, save = None, None
     if checkpoint is not None:
         checkpoint = Path(checkpoint)
-        data = load_npz(checkpoint, what="training runs' checkpoint")
-        if data is not None and np.array_equal(np.asarray(data["speeds"], float), speeds):
+        setup = json.dumps([getattr(scheme.model, "key", None), scheme.r, scheme.h, scheme.nonlinear,
+                            scheme.frequency_cap, revolutions, record_every, vars(casing)], sort_keys=True,
+                           default=str)
+
+        def same_runs(arrays):
+            if not np.array_equal(np.asarray(arrays["speeds"], float), speeds) or str(arrays["setup"]) != setup:
+                raise ValueError("the checkpoint holds other runs")
+
+        data = load_npz(checkpoint, check=same_runs, what="training runs' checkpoint")
+        if data is not None:
             state = loop_state(data, speeds.size)
 
         def save(st):
-            save_loop_state(checkpoint, st, speeds)
+            save_loop_state(checkpoint, st, speeds, setup=np.array(setup))
 
     res = simulate(scheme, speeds, casing, revolutions=revolutions, record_q=True, on_blowup="flag",
-                   record_every=max(1, int(round(1e-5 / scheme.h))), state=state, checkpoint=save,
-                   checkpoint_seconds=checkpoint_seconds)
-    if checkpoint is not None:
-        checkpoint.unlink(missing_ok=True)
+                   record_every=record_every, state=state, checkpoint=save, checkpoint_seconds=checkpoint_seconds)
     Q_train, _ = trajectory_states(res.records_q, scheme.boundary_rows)
     return Q_train, np.hstack([largest_states(res, scheme.boundary_rows, n_largest), Q_train])
 
 
-def save_loop_state(path: "str | Path", st: dict, speeds: np.ndarray) -> None:
+def save_loop_state(path: "str | Path", st: dict, speeds: np.ndarray, **extra) -> None:
     """``simulate``'s loop state ``st`` (what its ``checkpoint`` receives) to ``path`` (``save_npz``: whole or not at
-    all), with the speeds it runs; the full states too when the run records them (``record_q``)."""
+    all), with the speeds it runs and the arrays ``extra`` (what identifies the runs); the full states too when the
+    run records them (``record_q``)."""
     from rotor37_rom.npz import save_npz
 
-    arrays = {"speeds": np.asarray(speeds, float), "n": st["n"], "Q": st["Q"], "Qp": st["Qp"], "done": st["done"],
+    arrays = {**extra, "speeds": np.asarray(speeds, float), "n": st["n"], "Q": st["Q"], "Qp": st["Qp"], "done": st["done"],
               "max_pen": st["max_pen"], "min_lam": st["min_lam"], "fric_pow": st["fric_pow"],
               "contact_steps": st["contact_steps"], "diverged": st["diverged"], "work": st["work"]}
     for p in range(len(st["u_r"])):

@@ -77,9 +77,9 @@ def test_killed_sweep_resumes(ci_rom, tmp_path, monkeypatch, capsys):
 
 def test_killed_training_runs_resume(ci_rom, tmp_path, monkeypatch):
     """The cubature's exact GNL training runs (an hour on r = 104) checkpoint their loop state with the recorded full
-    states: killed after one speed has ended and half-way through the other, they resume where they stopped and give
-    the uninterrupted runs' training and step states bit for bit; the checkpoint goes when they end, and one of other
-    speeds is not resumed."""
+    states: killed after one speed has ended, before the other has, they resume at the killed step and give the
+    uninterrupted runs' training and step states bit for bit. A checkpoint of other speeds or of another step is not
+    resumed; a run that records its states refuses a state saved without them."""
     from rotor37_rom import integrator
 
     scheme = CentralDifference(ci_rom, nonlinear=True, safety=0.5)
@@ -97,32 +97,37 @@ def test_killed_training_runs_resume(ci_rom, tmp_path, monkeypatch):
 
         return real(*args, checkpoint=save_then_die, **{**kwargs, "checkpoint_seconds": 0.0})
 
-    def kill(speeds):
-        monkeypatch.setattr(integrator, "simulate", killed_simulate)
-        with pytest.raises(_Killed):
-            integrator.contact_training_states(scheme, speeds, casing, 0.25, checkpoint=ckpt)
-        assert ckpt.is_file()
-
     resumed_from = []
 
     def spy(*args, state=None, **kwargs):
         resumed_from.append(None if state is None else state["n"])
         return real(*args, state=state, **kwargs)
 
-    kill(SPEEDS)
-    monkeypatch.setattr(integrator, "simulate", spy)
-    train, step = integrator.contact_training_states(scheme, SPEEDS, casing, 0.25, checkpoint=ckpt)
-    assert resumed_from == [kill_at] and not ckpt.exists()
+    def run(resumer, speeds):
+        """Kill the runs at SPEEDS with ``scheme``, then run ``speeds`` with ``resumer`` on that checkpoint."""
+        monkeypatch.setattr(integrator, "simulate", killed_simulate)
+        ckpt.unlink(missing_ok=True)
+        with pytest.raises(_Killed):
+            integrator.contact_training_states(scheme, SPEEDS, casing, 0.25, checkpoint=ckpt)
+        monkeypatch.setattr(integrator, "simulate", spy)
+        return integrator.contact_training_states(resumer, speeds, casing, 0.25, checkpoint=ckpt)
+
+    train, step = run(scheme, SPEEDS)
+    assert resumed_from == [kill_at]
     monkeypatch.setattr(integrator, "simulate", real)
     ref_train, ref_step = integrator.contact_training_states(scheme, SPEEDS, casing, 0.25)
     np.testing.assert_array_equal(train, ref_train)
     np.testing.assert_array_equal(step, ref_step)
-    res = real(scheme, SPEEDS, casing, revolutions=0.25)
-    assert (res.min_multiplier < np.inf).all()                      # both speeds touched the casing
-    kill(SPEEDS)                                                     # a checkpoint of these speeds ...
-    monkeypatch.setattr(integrator, "simulate", spy)
-    integrator.contact_training_states(scheme, SPEEDS[:1], casing, 0.25, checkpoint=ckpt)
-    assert resumed_from[-1] is None and not ckpt.exists()           # ... is not resumed by a run of others
+    assert (real(scheme, SPEEDS, casing, revolutions=0.25).min_multiplier < np.inf).all()   # both touched
+    with np.load(ckpt) as data:                                   # the killed step's state ...
+        state = integrator.loop_state(data, SPEEDS.size)
+    state["q_rec"] = None                                         # ... as a sweep saves it: no full states
+    with pytest.raises(ValueError, match="record_q=True cannot resume"):
+        real(scheme, SPEEDS, casing, revolutions=0.25, record_q=True, state=state)
+    run(scheme, SPEEDS[:1])                                       # other speeds
+    other_step = CentralDifference(ci_rom, nonlinear=True, safety=0.45)
+    run(other_step, SPEEDS)                                       # another step
+    assert resumed_from[1:] == [None, None]
 
 
 def test_sweep_folder_absorbs_the_steps_round_off(ci_rom, tmp_path):
