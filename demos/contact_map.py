@@ -42,7 +42,7 @@ from rotor37_rom.cli import ArgumentParser, run_main
 from rotor37_rom.charts import plot_interaction_map, plot_nfrc, plot_time_history
 from rotor37_rom.friction import sprag_slip_friction
 from rotor37_rom.geometry.blade import MESH_PRESETS
-from rotor37_rom.integrator import (CentralDifference, gnl_time_step, largest_states, probe_states, simulate,
+from rotor37_rom.integrator import (CentralDifference, gnl_step_report, largest_states, probe_states, simulate,
                                     training_speeds)
 from rotor37_rom.npz import load_npz, save_npz
 from rotor37_rom.reduction import (GLOBAL_MD_MAX, ReducedModel, load_reduced_model, save_reduced_model,
@@ -692,11 +692,26 @@ def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: Re
         if verbose:
             print(f"GNL step from the tangent limit on a {revolutions:g}-revolution {kind} probe at {len(probe)} "
                   f"speeds")
-    h = gnl_time_step(run_model, states, config.frequency_cap_rad_s, safety=config.tangent_safety,
-                      cap_safety=config.safety)
+    step = gnl_step_report(run_model, states, config.frequency_cap_rad_s, safety=config.tangent_safety,
+                           cap_safety=config.safety)
+    h = step["h"]
     if verbose:
         print(f"GNL with a {config.frequency_cap:g} kHz cap: h = {h:.3g} s")
+        print_step_outliers(step)
     return h
+
+
+def print_step_outliers(step: dict) -> None:
+    """A line when a few states set the GNL step far below the others' (``integrator.step_outliers``)."""
+    out = step["outliers"]
+    if out.size:
+        w = step["w_states"]
+        print(f"note: {out.size} of {w.size} states set this step: their tangent's highest frequency reaches "
+              f"{w[out].max() / 2e3 / np.pi:.4g} kHz, the others' at most {np.delete(w, out).max() / 2e3 / np.pi:.4g} "
+              f"kHz; without them the step would be {step['h_without_outliers']:.3g} s, and the map takes "
+              f"{step['h_without_outliers'] / step['h']:.1f} times as long as it would then. Such states are where the "
+              f"St. Venant-Kirchhoff model collapses under a point contact (docs/results.md, 'GNL against linear with "
+              f"the paper's friction').")
 
 
 def capped_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np.ndarray, revolutions: float

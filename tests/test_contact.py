@@ -338,6 +338,26 @@ def test_frequency_cap_mass_scaling(ci_rom):
         CentralDifference(ci_rom, nonlinear=False, frequency_cap=cap, massless_boundary=True)
 
 
+def test_gnl_step_report_names_the_states_that_set_the_step(ci_rom):
+    """A few states far stiffer than the rest (a St. Venant-Kirchhoff collapse under a point contact: 55 times the
+    median tangent frequency on the ci blade at mu = 0.1) set the GNL step alone: ``gnl_step_report`` names them and
+    gives the step without them, each equal to ``gnl_time_step`` on the states concerned."""
+    from rotor37_rom.integrator import gnl_step_report, gnl_time_step, step_outliers
+
+    assert step_outliers(np.array([1.0, 2.0, 3.0, 100.0])).tolist() == [3]
+    assert step_outliers(np.array([1.0, 2.0, 19.0])).size == 0 and step_outliers(np.array([])).size == 0
+    rng = np.random.default_rng(0)
+    small = 1e-5 * rng.standard_normal((ci_rom.r, 6))
+    states = np.hstack([small, 3e3 * small[:, :1]])            # one state with 3,000 times the amplitude
+    cap = 2 * np.pi * 120e3
+    rep = gnl_step_report(ci_rom, states, cap, safety=0.5)
+    w = rep["w_states"]
+    assert w[-1] > 10 * np.median(w) and (w[:-1] < 10 * np.median(w)).all()     # the construction holds
+    assert rep["outliers"].tolist() == [6]
+    assert rep["h"] == gnl_time_step(ci_rom, states, cap, safety=0.5)
+    assert rep["h_without_outliers"] == gnl_time_step(ci_rom, small, cap, safety=0.5) > rep["h"]
+
+
 def test_linear_rom_matches_full_order_transient(ci_blade, ci_ops, ci_rom):
     """Point force F sin(3000 t) along e_x at node LE from rest, undamped, 2 ms: the linear ROM with central
     differences equals the full-order linear Newmark transient within 1 % (max over time of node LE's e_x)."""
