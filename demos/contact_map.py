@@ -704,14 +704,14 @@ def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: Re
 def print_step_outliers(step: dict) -> None:
     """A line when a few states set the GNL step far below the others' (``integrator.step_outliers``)."""
     out = step["outliers"]
-    if out.size:
+    if out.size and step["h_without_outliers"] > step["h"]:
         w = step["w_states"]
-        print(f"note: {out.size} of {w.size} states set this step: their tangent's highest frequency reaches "
+        print(f"note: {out.size} of {w.size} states set this GNL step: their tangent's highest frequency reaches "
               f"{w[out].max() / 2e3 / np.pi:.4g} kHz, the others' at most {np.delete(w, out).max() / 2e3 / np.pi:.4g} "
-              f"kHz; without them the step would be {step['h_without_outliers']:.3g} s, and the map takes "
-              f"{step['h_without_outliers'] / step['h']:.1f} times as long as it would then. Such states are where the "
-              f"St. Venant-Kirchhoff model collapses under a point contact (docs/results.md, 'GNL against linear with "
-              f"the paper's friction').")
+              f"kHz; without them the step would be {step['h_without_outliers']:.3g} s, so the GNL runs at this step "
+              f"take {step['h_without_outliers'] / step['h']:.1f} times as many steps. Such states may be where the "
+              f"St. Venant-Kirchhoff model collapses under a point contact (docs/results.md, 'GNL against linear "
+              f"with the paper's friction').")
 
 
 def capped_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np.ndarray, revolutions: float

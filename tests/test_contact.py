@@ -338,11 +338,13 @@ def test_frequency_cap_mass_scaling(ci_rom):
         CentralDifference(ci_rom, nonlinear=False, frequency_cap=cap, massless_boundary=True)
 
 
-def test_gnl_step_report_names_the_states_that_set_the_step(ci_rom):
+def test_gnl_step_report_names_the_states_that_set_the_step(ci_rom, capsys):
     """A few states far stiffer than the rest (a St. Venant-Kirchhoff collapse under a point contact: 55 times the
     median tangent frequency on the ci blade at mu = 0.1) set the GNL step alone: ``gnl_step_report`` names them and
     gives the step without them, each equal to ``gnl_time_step`` on the states concerned."""
-    from rotor37_rom.integrator import gnl_step_report, gnl_time_step, step_outliers
+    from conftest import load_demo
+    from rotor37_rom.integrator import (capped_mass, gnl_step_report, gnl_time_step, highest_frequency, step_outliers,
+                                        tangent_highest_frequency)
 
     assert step_outliers(np.array([1.0, 2.0, 3.0, 100.0])).tolist() == [3]
     assert step_outliers(np.array([1.0, 2.0, 19.0])).size == 0 and step_outliers(np.array([])).size == 0
@@ -354,8 +356,22 @@ def test_gnl_step_report_names_the_states_that_set_the_step(ci_rom):
     w = rep["w_states"]
     assert w[-1] > 10 * np.median(w) and (w[:-1] < 10 * np.median(w)).all()     # the construction holds
     assert rep["outliers"].tolist() == [6]
+    M = capped_mass(ci_rom.M, ci_rom.K, cap)                   # the step's definition, written out
+    assert rep["h"] == min(0.5 * 2.0 / highest_frequency(M, ci_rom.K),
+                           0.5 * 2.0 / tangent_highest_frequency(ci_rom, states, mass=M))
     assert rep["h"] == gnl_time_step(ci_rom, states, cap, safety=0.5)
     assert rep["h_without_outliers"] == gnl_time_step(ci_rom, small, cap, safety=0.5) > rep["h"]
+    with pytest.raises(ValueError, match="safety factors"):
+        gnl_time_step(ci_rom, states, cap, safety=0.0)
+    with pytest.raises(ValueError, match="finite tangent frequencies"):
+        gnl_time_step(ci_rom, np.zeros((ci_rom.r, 0)), cap)
+    contact_map = load_demo("contact_map")                     # the demo's note names them, only when they bind
+    contact_map.print_step_outliers(rep)
+    note = capsys.readouterr().out
+    assert note.startswith("note: 1 of 7 states set this GNL step") and \
+        f"{rep['h_without_outliers'] / rep['h']:.1f} times as many steps" in note
+    contact_map.print_step_outliers(gnl_step_report(ci_rom, small, cap, safety=0.5))
+    assert capsys.readouterr().out == ""
 
 
 def test_linear_rom_matches_full_order_transient(ci_blade, ci_ops, ci_rom):
