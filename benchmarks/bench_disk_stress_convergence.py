@@ -172,7 +172,8 @@ def mode_stress(sector, point=MAP_POINT) -> dict:
 def markdown(rows: list[dict]) -> str:
     finest = rows[-1]
     head = ("| element size | DOFs | 1B (k = 0) | at the corner | " +
-            " | ".join(f"off the corner, > {d:g} mm" for d in BANDS_MM) + " | at the midpoints (DG0) | at the map's point |")
+            " | ".join(f"off the corner, > {d:g} mm" for d in BANDS_MM)
+            + " | at the midpoints (DG0) | at the map's point |")
     lines = [head, "|" + "---|" * (6 + len(BANDS_MM))]
     for r in rows:
         offs = []
@@ -192,7 +193,8 @@ def markdown_contact(rows: list[dict]) -> str:
     def change(value, ref):
         return f"{value:,.0f} ({100 * (value / ref - 1):+.1f} %)"
 
-    head = ("| element size | node LE inward (mm per kN) | outside the tip band (MPa per kN) | where: from node LE, span | "
+    head = ("| element size | node LE inward (mm per kN) | outside the tip band (MPa per kN) | "
+            "where: from node LE, span | "
             + " | ".join(f"> {d:g} mm from node LE" for d in LOAD_BALLS_MM)
             + " | at the map's point: per kN | per mm of node LE inward |")
     lines = [head, "|" + "---|" * (6 + len(LOAD_BALLS_MM))]

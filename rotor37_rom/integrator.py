@@ -203,8 +203,8 @@ def save_loop_state(path: "str | Path", st: dict, speeds: np.ndarray, **extra) -
     run records them (``record_q``)."""
     from rotor37_rom.npz import save_npz
 
-    arrays = {**extra, "speeds": np.asarray(speeds, float), "n": st["n"], "Q": st["Q"], "Qp": st["Qp"], "done": st["done"],
-              "max_pen": st["max_pen"], "min_lam": st["min_lam"], "fric_pow": st["fric_pow"],
+    arrays = {**extra, "speeds": np.asarray(speeds, float), "n": st["n"], "Q": st["Q"], "Qp": st["Qp"],
+              "done": st["done"], "max_pen": st["max_pen"], "min_lam": st["min_lam"], "fric_pow": st["fric_pow"],
               "contact_steps": st["contact_steps"], "diverged": st["diverged"], "work": st["work"]}
     for p in range(len(st["u_r"])):
         arrays[f"u_r{p}"] = st["u_r"][p]

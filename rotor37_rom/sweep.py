@@ -198,7 +198,7 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
         state = _load_state(ckpt, batch.size)
 
         def save_state(st, ckpt=ckpt, batch=batch):
-            _save_state(ckpt, st, batch)
+            save_loop_state(ckpt, st, batch)
 
         simulate(scheme, batch, spec.casing, revolutions=spec.revolutions, record_every=record_every,
                  monitor=spec.monitor, on_blowup="flag", on_finish=on_finish, state=state, checkpoint=save_state,
@@ -240,10 +240,6 @@ def rerun_diverged(scheme: CentralDifference, results: Sequence[dict], spec: Swe
             results = [again.get(float(r["omega"]), r) if int(r["diverged_step"]) >= 0 else r for r in results]
         retried.update({w: h for w in bad.tolist()})
     return results, retried
-
-
-def _save_state(path: Path, st: dict, speeds: np.ndarray) -> None:
-    save_loop_state(path, st, speeds)
 
 
 def _load_state(path: Path, P: int) -> dict | None:
