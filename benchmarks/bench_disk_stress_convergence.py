@@ -60,11 +60,10 @@ def point_xyz(point) -> np.ndarray:
     return 1e-3 * np.array([r * np.cos(np.radians(theta)), r * np.sin(np.radians(theta)), z])
 
 
-def near_point(sector, vertex: np.ndarray, point) -> dict:
-    """The largest of ``vertex`` ((n_cells, 4) values) at the vertices within POINT_RADIUS_MM of ``point``."""
-    from rotor37_rom import fem
-
-    near = np.linalg.norm(fem.cell_vertices(sector) - point_xyz(point), axis=2) < POINT_RADIUS_MM * 1e-3
+def near_point(corners: np.ndarray, vertex: np.ndarray, point) -> dict:
+    """The largest of ``vertex`` ((n_cells, 4) values at the vertices ``corners``, (n_cells, 4, 3) from
+    ``fem.cell_vertices``) within POINT_RADIUS_MM of ``point``."""
+    near = np.linalg.norm(corners - point_xyz(point), axis=2) < POINT_RADIUS_MM * 1e-3
     if not near.any():
         raise ValueError(f"no vertex within {POINT_RADIUS_MM} mm of the point {point} (r, z, theta)")
     return {"mpa": float(vertex[near].max() / 1e6), "n_vertices": int(near.sum())}
@@ -127,7 +126,7 @@ def contact_stress(sector, point=MAP_POINT, mu: float = 0.15) -> dict:
     row = {"force_n": force.tolist(), "le_displacement_mm_per_kn": float(1e3 * np.linalg.norm(u_le)),
            "le_inward_mm_per_kn": float(-1e3 * normal[0] @ u_le),
            "tip_band_radius_mm": float(1e3 * TIP_BAND * np.ptp(np.hypot(mid[:, 0], mid[:, 1]))),
-           "map_point": {**near_point(sector, vertex, point), "point_r_z_theta": list(point)},
+           "map_point": {**near_point(corners, vertex, point), "point_r_z_theta": list(point)},
            "tip_band": largest(clear),
            "nearest_vertex_outside_band_mm": float(1e3 * reach[clear].min()),
            "balls": {f"{d:g}": largest(off_root & (reach.min(axis=1) > d * 1e-3)) for d in LOAD_BALLS_MM}}
@@ -163,7 +162,7 @@ def mode_stress(sector, point=MAP_POINT) -> dict:
         row["off_root"][f"{d:g}"] = {"mpa": numbers["vm_max_off_root"] / 1e6, "z_mm": where["z_mm"],
                                      "height_mm": where["height_mm"], "span": where["span"]}
     row["corner_mpa"] = numbers["vm_max"] / 1e6
-    row["map_point"] = {**near_point(sector, vertex[0], point), "point_r_z_theta": list(point)}
+    row["map_point"] = {**near_point(fem.cell_vertices(sector), vertex[0], point), "point_r_z_theta": list(point)}
     row["corner_location"] = numbers["location"]           # the cell's centroid
     row["wall_s"] = time.perf_counter() - t0
     return row
