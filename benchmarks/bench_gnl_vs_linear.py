@@ -25,6 +25,13 @@ output (a rerun that finds every speed done takes seconds).
     python benchmarks/bench_gnl_vs_linear.py --mu 0 0.05 0.1 0.15 # every friction value of issue #23 (4-12 h)
     python benchmarks/bench_gnl_vs_linear.py --global-md 10 --capped-training --speeds 1300 1600 4 --ranks 1
                                           # r = 104 (modal derivatives of 10 clamped modes) at 4 speeds
+    python benchmarks/bench_gnl_vs_linear.py --mu 0.1 --gnl on --speeds 1620 2000 20 --step-outliers drop \
+        --step-check 1840 1860 2          # the GNL step without a collapse state, two speeds checked at the full one
+
+With ``--step-outliers drop`` the GNL step leaves out the few step states whose tangent frequency is far above the
+others' (``integrator.step_outliers``; St. Venant-Kirchhoff collapse states), and ``--step-check START STOP N`` runs
+those speeds of the map again at the step from every state, on the same cubature (OUT/step_check), and reports the
+difference of the largest LE response.
 
 The r = 55 ci model is built (20 s) when --model is missing; another --global-md builds its own model and maps into
 folders of their own, and each row says its model's r. Each cubature training takes 8-30 min (r = 55; about 1 h
@@ -53,12 +60,29 @@ SETTINGS = {"off": (False,), "on": (True,), "both": (False, True)}
 
 def map_command(args, mu: float, speeds: tuple, out: Path) -> list[str]:
     """The demo's command line of one friction value and speed range (under mpirun with more than one rank)."""
+    extra = ["--step-outliers", args.step_outliers] if args.step_outliers != "keep" else []
+    return demo_command(args, args.gnl, mu, speeds, out, extra)
+
+
+def check_command(args, mu: float, speeds: tuple, check: tuple, out: Path) -> list[str]:
+    """The demo's command line of the step check of one speed range: the GNL runs at the ``check`` speeds (START
+    STOP N) again with the step from every state (--step-outliers keep), on the range's cubature (its cache and
+    training speeds), into OUT/step_check."""
+    from rotor37_rom.integrator import training_speeds
+
+    train = training_speeds(np.linspace(speeds[0], speeds[1], int(speeds[2])))
+    extra = ["--cubature-speeds", *[str(float(w)) for w in train], "--cache", str(out / "cache")]
+    return demo_command(args, "on", mu, check, out / "step_check", extra)
+
+
+def demo_command(args, gnl: str, mu: float, speeds: tuple, out: Path, extra: list[str]) -> list[str]:
+    """demos/contact_map.py with the benchmark's settings, under mpirun with --ranks ranks (more than one)."""
     start, stop, n = speeds
-    cmd = [sys.executable, str(DEMO), "--model", str(args.model), "--gnl", args.gnl,
+    cmd = [sys.executable, str(DEMO), "--model", str(args.model), "--gnl", gnl,
            "--frequency-cap", f"{args.cap:g}", "--cubature", f"{args.cubature:g}", "--precision", "single",
            "--mu", f"{mu:g}", "--direction", args.direction, "--speeds", f"{start:g}", f"{stop:g}", f"{int(n)}",
            "--revolutions", f"{args.revolutions:g}", "--retry-diverged", "2", "--batch", f"{args.batch}",
-           "--out", str(out), "--quiet"]
+           "--out", str(out), "--quiet"] + extra
     if args.capped_training:
         cmd.append("--capped-training")
     if args.ranks > 1:
@@ -73,8 +97,10 @@ def contact_share(record: dict) -> float:
     return float(np.mean(np.any(half > 0.0, axis=0)))
 
 
-def setting_records(folder: Path, gnl: bool, revolutions: float) -> tuple[dict, dict]:
-    """({speed: per-speed record}, summary.json entry) of one setting (GNL off or on) of the map in ``folder``."""
+def setting_records(folder: Path, gnl: bool, revolutions: float, every: bool = False) -> tuple[dict, dict]:
+    """({speed: per-speed record}, summary.json entry) of one setting (GNL off or on) of the map in ``folder``: the
+    speeds of its last run, or with ``every`` all those its sweeps at that step hold (step checks run one after
+    another)."""
     from rotor37_rom.sweep import load_sweep
 
     summary = json.loads((folder / "summary.json").read_text())
@@ -82,12 +108,34 @@ def setting_records(folder: Path, gnl: bool, revolutions: float) -> tuple[dict, 
     records = {}
     for sweep in sorted((folder / "sweeps").iterdir()):
         spec = json.loads((sweep / "spec.json").read_text())
-        if bool(spec["nonlinear"]) != gnl or float(spec["spec"]["revolutions"]) != revolutions:
+        if bool(spec["nonlinear"]) != gnl or float(spec["spec"]["revolutions"]) != revolutions \
+                or not same_step(entry["h"], float(spec["h"])):
             continue
         for rec in load_sweep(sweep):                  # the retries' records replace the first run's
             if int(rec["diverged_step"]) < 0 or float(rec["omega"]) not in records:
                 records[float(rec["omega"])] = rec
-    return {w: records[w] for w in entry["speeds"]}, entry
+    return (dict(sorted(records.items())) if every else {w: records[w] for w in entry["speeds"]}), entry
+
+
+def same_step(h_map: float, h: float) -> bool:
+    """Whether a sweep at step ``h`` belongs to a map run at ``h_map``: the same step or one of its retries' (halved
+    up to 8 times); a map run again at another step (e.g. --step-outliers) keeps its earlier sweeps beside it."""
+    return any(abs(h * 2 ** k / h_map - 1.0) < 1e-9 for k in range(9))
+
+
+def step_check(folder: Path, revolutions: float) -> list[dict]:
+    """The GNL map in ``folder`` (run with --step-outliers drop) against its speeds run again in folder/step_check
+    at the step from every state: per speed, the largest LE response of both (mm), their relative difference and
+    both steps."""
+    from rotor37_rom.sweep import interaction_map
+
+    runs = [setting_records(folder, True, revolutions), setting_records(folder / "step_check", True, revolutions,
+                                                                         every=True)]
+    (dropped, entry), (kept, entry_kept) = runs
+    speeds = [w for w in kept if w in dropped]
+    amp = [interaction_map([recs[w] for w in speeds]).nfrc * 1e3 for recs in (dropped, kept)]
+    return [{"speed": w, "mm_dropped": float(a), "mm_kept": float(b), "rel": float(a / b - 1.0),
+             "h_dropped": entry["h"], "h_kept": entry_kept["h"]} for w, a, b in zip(speeds, *amp)]
 
 
 def map_row(folders: list[Path], mu: float, gnl: bool, revolutions: float, quarter_omega1: float) -> dict:
@@ -124,24 +172,49 @@ def map_row(folders: list[Path], mu: float, gnl: bool, revolutions: float, quart
         "nfrc_mm": (imap.nfrc * 1e3).tolist(), "speeds": speeds.tolist()}
 
 
+def in_range(check, speeds: tuple) -> bool:
+    """Whether the --step-check grid lies in the speed range (START, STOP, N)."""
+    return speeds[0] <= check[0] and check[1] <= speeds[1]
+
+
+def check_speeds_error(args, ranges: list[tuple]) -> str | None:
+    """Why the --step-check grid cannot be run (None: it can): it needs --step-outliers drop and GNL maps, and
+    each of its speeds must be one of a range's."""
+    if args.step_outliers != "drop" or args.gnl == "off":
+        return "needs --step-outliers drop and --gnl on or both (it checks the GNL maps' dropped step)"
+    start, stop, n = args.step_check
+    if not (0 < start <= stop and n >= 1 and float(n).is_integer()):
+        return f"need 0 < START <= STOP and an integer N >= 1, got {args.step_check}"
+    inside = [r for r in ranges if in_range(args.step_check, r)]
+    grid = np.linspace(start, stop, int(n))
+    if not inside or not all(np.isclose(np.linspace(inside[0][0], inside[0][1], int(inside[0][2])), w, rtol=1e-12,
+                                        atol=0).any() for w in grid):
+        return f"its speeds {grid.tolist()} must be speeds of one of the ranges {[list(r) for r in ranges]}"
+    return None
+
+
 def earlier_rows(rows: list[dict]) -> list[dict]:
     """The rows of results/bench_gnl_vs_linear.json that ``rows`` do not replace (another model size, friction value,
     setting, normal or training, e.g. from a run with --gnl off only), so that the file collects every run. A row
     written before rows carried their model's r is the file's model's; one written before --capped-training was
-    trained unscaled."""
+    trained unscaled; a GNL row written before --step-outliers took its step from every state."""
     path = Path("results/bench_gnl_vs_linear.json")
     if not path.is_file():
         return []
-    key = ("r", "mu", "gnl", "direction", "speeds", "capped_training")
+    key = ("r", "mu", "gnl", "direction", "speeds", "capped_training", "step_outliers")
     new = {tuple(json.dumps(r[k]) for k in key) for r in rows}
     stored = json.loads(path.read_text())
-    old = [{"r": stored["model"]["r"], "capped_training": False} | r for r in stored["rows"]]
+    old = [{"r": stored["model"]["r"], "capped_training": False, "step_outliers": "keep" if r["gnl"] else None} | r
+           for r in stored["rows"]]
     return [r for r in old if tuple(json.dumps(r.get(k)) for k in key) not in new]
 
 
 def gnl_label(row: dict) -> str:
-    """'off', 'on' or 'on, capped training' (the cubature trained on capped runs)."""
-    return ("on, capped training" if row.get("capped_training") else "on") if row["gnl"] else "off"
+    """'off', 'on', 'on, capped training' (the cubature trained on capped runs), '…, step outliers dropped'."""
+    if not row["gnl"]:
+        return "off"
+    return "on" + (", capped training" if row.get("capped_training") else "") \
+        + (", step outliers dropped" if row.get("step_outliers") == "drop" else "")
 
 
 def markdown(rows: list[dict], quarter_omega1: float) -> str:
@@ -158,6 +231,13 @@ def markdown(rows: list[dict], quarter_omega1: float) -> str:
             f"({f(r['stiffening_pct'], '+.1f')} %) | {f(r['resonance_mm'], '.2f')} mm | "
             f"{f(None if r['contact_share'] is None else 100 * r['contact_share'], '.1f')} % | "
             f"{f(r['work_normal_J_per_rev'], '.3f')} / {f(r['work_friction_J_per_rev'], '.3f')} |")
+    checks = [(r, c) for r in rows for c in r.get("step_check", [])]
+    if checks:
+        lines += ["", "| r | μ | Ω (rad/s) | LE, step without the outliers | LE, step from every state | "
+                      "difference |", "|---|---|---|---|---|---|"]
+        lines += [f"| {r['r']} | {r['mu']:g} | {c['speed']:.0f} | {c['mm_dropped']:.3f} mm (h = {c['h_dropped']:.3g} "
+                  f"s) | {c['mm_kept']:.3f} mm (h = {c['h_kept']:.3g} s) | {100 * c['rel']:+.1f} % |"
+                  for r, c in checks]
     return "\n".join(lines)
 
 
@@ -208,10 +288,22 @@ def main(argv=None) -> int:
     parser.add_argument("--cubature", type=float, default=1e-4, help="tolerance of the GNL point cubature")
     parser.add_argument("--batch", type=int, default=11, help="speeds integrated together per rank")
     parser.add_argument("--ranks", type=int, default=2, help="MPI ranks of the maps (1: serial)")
+    parser.add_argument("--step-outliers", choices=["keep", "drop"], default="keep",
+                        help="the GNL maps' step from every state (keep) or without the few collapse states far "
+                             "above the others (drop; demos/contact_map.py --step-outliers)")
+    parser.add_argument("--step-check", type=float, nargs=3, metavar=("START", "STOP", "N"),
+                        help="with --step-outliers drop: run these speeds of the GNL map again at the step from "
+                             "every state and compare (each speed one of a range's)")
     args = parser.parse_args(argv)
     if len(args.speeds) % 3:
         print(f"error: --speeds takes START STOP N per range, got {len(args.speeds)} numbers", file=sys.stderr)
         return 2
+    ranges = [tuple(args.speeds[i:i + 3]) for i in range(0, len(args.speeds), 3)]
+    if args.step_check is not None:
+        error = check_speeds_error(args, ranges)
+        if error:
+            print(f"error: --step-check: {error}", file=sys.stderr)
+            return 2
     from rotor37_rom.reduction import GLOBAL_MD_MAX, load_reduced_model
 
     if not 0 <= args.global_md <= GLOBAL_MD_MAX:
@@ -225,7 +317,6 @@ def main(argv=None) -> int:
     model = load_reduced_model(args.model)
     quarter_omega1 = float(load_demo("contact_map").eigenfrequencies(model)[0]) / 4
     env = mpirun_env(OPENBLAS_NUM_THREADS="1") if args.ranks > 1 else None    # one BLAS thread per rank
-    ranges = [tuple(args.speeds[i:i + 3]) for i in range(0, len(args.speeds), 3)]
     rows, commands = [], []
     # the maps' r = 55 trained unscaled keeps its folders; another model or training its own
     tag = ("" if args.model == OUT / "rom.npz" else f"{args.model.stem}_") + ("capped_" if args.capped_training else "")
@@ -233,18 +324,27 @@ def main(argv=None) -> int:
         folders = []
         for speeds in ranges:
             out = OUT / f"{tag}{args.direction}_mu{mu:g}_{speeds[0]:g}-{speeds[1]:g}"
-            cmd = map_command(args, mu, speeds, out)
-            commands.append(" ".join(str(c) for c in cmd))
-            t0 = time.perf_counter()
-            done = subprocess.run(cmd, env=env, cwd=Path.cwd())
-            if done.returncode != 0:
-                print(f"the map at mu = {mu:g} failed (exit {done.returncode}): {commands[-1]}", file=sys.stderr)
-                return 1
-            print(f"mu = {mu:g}, {speeds[0]:g}-{speeds[1]:g} rad/s: {time.perf_counter() - t0:.0f} s")
+            cmds = [map_command(args, mu, speeds, out)]
+            if args.step_check is not None and in_range(args.step_check, speeds):
+                cmds.append(check_command(args, mu, speeds, tuple(args.step_check), out))
+            for cmd in cmds:
+                commands.append(" ".join(str(c) for c in cmd))
+                t0 = time.perf_counter()
+                done = subprocess.run(cmd, env=env, cwd=Path.cwd())
+                if done.returncode != 0:
+                    print(f"the map at mu = {mu:g} failed (exit {done.returncode}): {commands[-1]}", file=sys.stderr)
+                    return 1
+                print(f"mu = {mu:g}, {speeds[0]:g}-{speeds[1]:g} rad/s{', step check' if cmd is not cmds[0] else ''}: "
+                      f"{time.perf_counter() - t0:.0f} s")
             folders.append(out)
-        rows += [map_row(folders, mu, gnl, args.revolutions, quarter_omega1)
-                 | {"direction": args.direction, "r": model.r, "capped_training": args.capped_training and gnl}
-                 for gnl in SETTINGS[args.gnl]]
+        for gnl in SETTINGS[args.gnl]:
+            row = map_row(folders, mu, gnl, args.revolutions, quarter_omega1)
+            row |= {"direction": args.direction, "r": model.r, "capped_training": args.capped_training and gnl,
+                    "step_outliers": args.step_outliers if gnl else None}
+            if gnl and args.step_outliers == "drop":                 # the checks run so far, by this or earlier calls
+                row["step_check"] = [c for f in folders if (f / "step_check" / "summary.json").is_file()
+                                     for c in step_check(f, args.revolutions)]
+            rows.append(row)
     rows = earlier_rows(rows) + rows
     machine = write_results("bench_gnl_vs_linear", rows, model={"file": str(args.model), "r": model.r,
                             "sizes": model.sizes, "quarter_omega1": quarter_omega1},

@@ -116,6 +116,13 @@ class ContactMapConfig:
         frequency_cap: spectral mass scaling (kHz): the modes above it are slowed to it; a GNL step then comes from
             the tangent limit on a short unscaled probe run. None: no scaling.
         tangent_safety: with a cap, the GNL step is this x 2 / the largest tangent frequency, in (0, 1].
+        step_outliers: with a cap, 'keep' (the GNL step from every step state) or 'drop' (from the states other than
+            ``integrator.step_outliers``, those above 10 times the median tangent frequency: on the ci blade at
+            mu = 0.1 over 1,620-2,000 rad/s one of 204, a St. Venant-Kirchhoff collapse that alone sets a step 19
+            times smaller). With 'drop' a run that stays near such a state at the larger step blows up and is
+            flagged (and run again with the step halved, ``retry_diverged``); a brief pass may not, so
+            benchmarks/bench_gnl_vs_linear.py --step-check measures the dropped step's error against runs at the
+            kept one.
         cubature: GNL forces by point cubature trained to this relative tolerance, in (0, 1). None: exact tensors.
         precision: arithmetic of the cubature forces: 'double' or 'single' (float32; needs ``cubature``).
         cubature_speeds: the speeds (rad/s) of the exact GNL runs the cubature is trained on (needs ``cubature``).
@@ -143,6 +150,8 @@ class ContactMapConfig:
         unsteady_step: the continuation's point when no halving is steady: 'smallest' (the paper read literally:
             the step stays divided) or 'full' (the full step, marked not steady; ``sweep.continuation``).
         out: folder of the charts, summary.json, the sweeps' records and the caches.
+        cache: folder of the model, cubature, training-run and probe caches; None: OUT/cache. Maps in other folders
+            given the same cache share its cubature (e.g. a few speeds run again at another step).
         quiet: no progress bars and no sprag-slip note.
     """
 
@@ -165,6 +174,7 @@ class ContactMapConfig:
     h: float | None = None
     frequency_cap: float | None = None
     tangent_safety: float = 0.5
+    step_outliers: str = "keep"
     cubature: float | None = None
     precision: str = "double"
     cubature_speeds: tuple[float, ...] | None = None
@@ -181,6 +191,7 @@ class ContactMapConfig:
     steady_window: int = 1
     unsteady_step: str = "smallest"
     out: Path = Path("results/contact_map")
+    cache: Path | None = None
     quiet: bool = False
 
     def __post_init__(self):
@@ -275,6 +286,11 @@ class ContactMapConfig:
             raise ValueError(f"--frequency-cap must be > 0 kHz, got {self.frequency_cap}")
         if not 0 < self.tangent_safety <= 1:
             raise ValueError(f"--tangent-safety must be in (0, 1], got {self.tangent_safety}")
+        if self.step_outliers not in ("keep", "drop"):
+            raise ValueError(f"--step-outliers must be 'keep' or 'drop', got {self.step_outliers!r}")
+        if self.step_outliers == "drop" and (self.frequency_cap is None or self.h is not None):
+            raise ValueError("--step-outliers drop needs --frequency-cap and no --h (it chooses the GNL step from "
+                             "the tangent limit)")
         if self.cubature is not None and not 0 < self.cubature < 1:
             raise ValueError(f"--cubature must be in (0, 1), got {self.cubature}")
         if self.precision not in PRECISIONS:
@@ -338,8 +354,15 @@ class ContactMapConfig:
         if self.cubature_speeds is not None:
             object.__setattr__(self, "cubature_speeds", tuple(sorted({float(w) for w in self.cubature_speeds})))
         object.__setattr__(self, "out", Path(self.out))
+        if self.cache is not None:
+            object.__setattr__(self, "cache", Path(self.cache))
         if self.model is not None:
             object.__setattr__(self, "model", Path(self.model))
+
+    @property
+    def cache_dir(self) -> Path:
+        """The caches' folder: ``cache``, or OUT/cache."""
+        return self.cache if self.cache is not None else self.out / "cache"
 
     @property
     def speed_grid(self) -> np.ndarray:
@@ -528,14 +551,14 @@ def build_model(config: ContactMapConfig) -> ReducedModel:
                                                                               config.seed).tolist())
         reduction = DiskReductionConfig(tip_nodes="all", r_c=r_c, r_md=r_md, criterion="MI2b",
                                         r_cyclic=config.r_cyclic, mistuning=factors)
-        model, _ = build_disk_model(sector, reduction, cache_dir=config.out / "cache")
+        model, _ = build_disk_model(sector, reduction, cache_dir=config.cache_dir)
     else:
         from rotor37_rom.builder import ReductionConfig, build_reduced_model
 
         sector = fem.create_blade_sector(MPI.COMM_SELF, preset=config.preset)
         reduction = ReductionConfig(r_c=r_c, r_md=r_md, global_md_modes=config.global_md, forces="intrusive",
                                     contact_patch=config.contact_patch)
-        model, _ = build_reduced_model(sector, reduction, cache_dir=config.out / "cache")
+        model, _ = build_reduced_model(sector, reduction, cache_dir=config.cache_dir)
     print(f"reduced model: {config.preset} preset ({sector.n_dofs} DOF) -> r = {model.r} {model.sizes} "
           f"in {time.perf_counter() - t0:.1f} s")
     return model
@@ -612,10 +635,10 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
     runs = [model.key, train.tolist(), revolutions, scheme.h, vars(config.casing)]
     key = hashlib.sha256(json.dumps(runs + [config.cubature, "step states: largest and training"],
                                     sort_keys=True, default=str).encode()).hexdigest()[:16]
-    cache = config.out / "cache" / f"cubature_{key}.npz"
+    cache = config.cache_dir / f"cubature_{key}.npz"
     runs_key = json.dumps(runs + ["states every 1e-5 s; step states: largest and training"], sort_keys=True,
                           default=str)
-    runs_cache = config.out / "cache" / f"training_runs_{hashlib.sha256(runs_key.encode()).hexdigest()[:16]}.npz"
+    runs_cache = config.cache_dir / f"training_runs_{hashlib.sha256(runs_key.encode()).hexdigest()[:16]}.npz"
     rank = 0 if comm is None else comm.rank
     if cache.is_file():
         if rank == 0:
@@ -694,24 +717,34 @@ def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: Re
                   f"speeds")
     step = gnl_step_report(run_model, states, config.frequency_cap_rad_s, safety=config.tangent_safety,
                            cap_safety=config.safety)
-    h = step["h"]
+    drop = config.step_outliers == "drop" and step["h_without_outliers"] > step["h"]
+    h = step["h_without_outliers"] if drop else step["h"]
     if verbose:
         print(f"GNL with a {config.frequency_cap:g} kHz cap: h = {h:.3g} s")
-        print_step_outliers(step)
+        print_step_outliers(step, dropped=drop)
     return h
 
 
-def print_step_outliers(step: dict) -> None:
-    """A line when a few states set the GNL step far below the others' (``integrator.step_outliers``)."""
+def print_step_outliers(step: dict, dropped: bool = False) -> None:
+    """A line when a few states set the GNL step far below the others' (``integrator.step_outliers``), and whether
+    the step was taken without them (--step-outliers drop)."""
     out = step["outliers"]
     if out.size and step["h_without_outliers"] > step["h"]:
         w = step["w_states"]
-        print(f"note: {out.size} of {w.size} states set this GNL step: their tangent's highest frequency reaches "
-              f"{w[out].max() / 2e3 / np.pi:.4g} kHz, the others' at most {np.delete(w, out).max() / 2e3 / np.pi:.4g} "
-              f"kHz; without them the step would be {step['h_without_outliers']:.3g} s, so the GNL runs at this step "
-              f"take {step['h_without_outliers'] / step['h']:.1f} times as many steps. Such states may be where the "
-              f"St. Venant-Kirchhoff model collapses under a point contact (docs/results.md, 'GNL against linear "
-              f"with the paper's friction').")
+        ratio = step["h_without_outliers"] / step["h"]
+        head = (f"note: {out.size} of {w.size} states would set the GNL step: their tangent's highest frequency "
+                f"reaches {w[out].max() / 2e3 / np.pi:.4g} kHz, the others' at most "
+                f"{np.delete(w, out).max() / 2e3 / np.pi:.4g} kHz; ")
+        if dropped:
+            tail = (f"--step-outliers drop takes the step without them, {ratio:.1f} times the {step['h']:.3g} s they "
+                    f"set; a run that stays near such a state blows up and is flagged, a brief pass may not "
+                    f"(benchmarks/bench_gnl_vs_linear.py --step-check measures the error).")
+        else:
+            tail = (f"without them the step would be {step['h_without_outliers']:.3g} s, so the GNL runs at this "
+                    f"step take {ratio:.1f} times as many steps (--step-outliers drop). Such states may be where the "
+                    f"St. Venant-Kirchhoff model collapses under a point contact (docs/results.md, 'GNL against "
+                    f"linear with the paper's friction').")
+        print(head + tail)
 
 
 def capped_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np.ndarray, revolutions: float
@@ -722,7 +755,7 @@ def capped_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np
     scheme = CentralDifference(model, nonlinear=True, safety=config.safety, frequency_cap=config.frequency_cap_rad_s)
     key = json.dumps([model.key, probe.tolist(), revolutions, scheme.h, scheme.frequency_cap, vars(config.casing),
                       "8 largest states"], sort_keys=True, default=str)
-    cache = config.out / "cache" / f"gnl_probe_{hashlib.sha256(key.encode()).hexdigest()[:16]}.npz"
+    cache = config.cache_dir / f"gnl_probe_{hashlib.sha256(key.encode()).hexdigest()[:16]}.npz"
     cached = load_npz(cache, ("states", "h"), what="probe")
     if cached is not None:
         return cached["states"], float(cached["h"])
@@ -853,6 +886,7 @@ def summary_entry(config: ContactMapConfig, scheme: CentralDifference, result: M
     imap, wall = result.imap, result.wall_s
     works = np.array([np.asarray(r.get("work", np.full(4, np.nan)), float)[:2] for r in records])
     entry = {"h": scheme.h, "h_crit": scheme.h_crit, "frequency_cap_khz": config.frequency_cap,
+             "step_outliers": config.step_outliers if scheme.nonlinear else None,
              "cubature": scheme.model.metadata.get("hyper_reduction"),
              # from the metadata: a disk's sector forces wrap the quadrature forces that carry the precision
              "force_precision": scheme.model.metadata.get("force_precision", "double"), "peak_speed": result.peak_speed,
@@ -1101,6 +1135,10 @@ def build_parser() -> ArgumentParser:
                         help="GNL with a cap: h = this x 2 / tangent omega_max on the probe's largest states "
                              "(default 0.5; 0.7 lost speeds at 120 kHz in bench_contact_convergence, 0.5 none in "
                              "bench_contact_ecsw)")
+    parser.add_argument("--step-outliers", choices=["keep", "drop"],
+                        help="with a cap: the GNL step from every probe/training state (keep, the default) or "
+                             "without the few whose tangent frequency is above 10x the median (drop: St. Venant-"
+                             "Kirchhoff collapse states; a run that reaches one blows up and is flagged)")
     parser.add_argument("--cubature", type=float, metavar="TOL",
                         help="GNL: replace the exact cubic forces by point cubature trained to this relative "
                              "tolerance on exact GNL runs at 6 of the speeds (min(revolutions, 12) each; "
@@ -1142,6 +1180,8 @@ def build_parser() -> ArgumentParser:
                              "literally, the default: the step stays divided) or full (the full step, marked not "
                              "steady: 8 times fewer points across an unsteady stretch)")
     parser.add_argument("--out", type=Path, help="output folder (default results/contact_map)")
+    parser.add_argument("--cache", type=Path, help="folder of the model, cubature and probe caches (default "
+                                                   "OUT/cache; another map's to share its cubature)")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     return parser
 

@@ -368,10 +368,49 @@ def test_gnl_step_report_names_the_states_that_set_the_step(ci_rom, capsys):
     contact_map = load_demo("contact_map")                     # the demo's note names them, only when they bind
     contact_map.print_step_outliers(rep)
     note = capsys.readouterr().out
-    assert note.startswith("note: 1 of 7 states set this GNL step") and \
+    assert note.startswith("note: 1 of 7 states would set the GNL step") and \
         f"{rep['h_without_outliers'] / rep['h']:.1f} times as many steps" in note
     contact_map.print_step_outliers(gnl_step_report(ci_rom, small, cap, safety=0.5))
     assert capsys.readouterr().out == ""
+    # the map's step: from every state (keep, the default) or without the outliers (--step-outliers drop)
+    for policy, h, says in (("keep", rep["h"], "times as many steps (--step-outliers drop)"),
+                            ("drop", rep["h_without_outliers"], "--step-outliers drop takes the step without them")):
+        config = contact_map.ContactMapConfig(frequency_cap=120.0, step_outliers=policy)
+        # the same step up to round-off (the demo's cap in rad/s is 120 kHz converted in another order)
+        assert contact_map.capped_gnl_step(config, ci_rom, ci_rom, states) == pytest.approx(h, rel=1e-12)
+        out = capsys.readouterr().out
+        assert f"h = {h:.3g} s" in out and says in out
+    config = contact_map.ContactMapConfig(frequency_cap=120.0, step_outliers="drop")
+    assert contact_map.capped_gnl_step(config, ci_rom, ci_rom, small) == pytest.approx(rep["h_without_outliers"],
+                                                                                      rel=1e-12)  # none: as keep
+
+
+@pytest.mark.parametrize("args, says", [
+    (["--step-check", "1840", "1860", "2"], "needs --step-outliers drop"),
+    (["--step-outliers", "drop", "--speeds", "1620", "2000", "20", "--step-check", "1850", "1850", "1"],
+     "must be speeds of one of the ranges")])
+def test_gnl_vs_linear_step_check_bad_input(tmp_path, args, says):
+    """benchmarks/bench_gnl_vs_linear.py --step-check: without --step-outliers drop, or at speeds the map does not
+    run, one line on stderr naming the option, exit status 2, nothing written; and the sweeps a map reads are those
+    at its step or its retries' (halved), not those of the same map run earlier at another step."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    proc = subprocess.run([sys.executable, str(root / "benchmarks" / "bench_gnl_vs_linear.py")] + args, cwd=tmp_path,
+                          capture_output=True, text=True, timeout=300)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1 and lines[0].startswith("error: --step-check") and says in lines[0]
+    assert not (tmp_path / "results").exists()
+    sys.path.insert(0, str(root / "benchmarks"))
+    try:
+        from bench_gnl_vs_linear import same_step
+    finally:
+        sys.path.remove(str(root / "benchmarks"))
+    h = 3.96e-7
+    assert same_step(h, h) and same_step(h, h / 2) and same_step(h, h / 4 * (1 + 1e-12))
+    assert not same_step(h, 2.11e-8) and not same_step(h, 2 * h) and not same_step(h, h / 3)
 
 
 def test_linear_rom_matches_full_order_transient(ci_blade, ci_ops, ci_rom):

@@ -23,7 +23,8 @@ CASES = {
                       "numbers": (["--levels", "0"], "--levels")},
     "contact_map": {"preset": (["--preset", "huge"], "--preset"), "model file": (["--model", "{text}"], "--model"),
                     "numbers": (["--revolutions", "-1"], "--revolutions"),
-                    "patch": (["--contact-patch", "0.05"], "--contact-patch")},
+                    "patch": (["--contact-patch", "0.05"], "--contact-patch"),
+                    "step outliers": (["--step-outliers", "drop"], "--step-outliers")},   # needs --frequency-cap
     "report": {"preset": (["--preset", "huge"], "--preset"), "model file": (["--table", "{text}"], "--table"),
                "numbers": (["--speeds", "1600", "1200", "5"], "--speeds")},
     "bladed_disk": {"preset": (["--preset", "huge"], "--preset"), "model file": (["--table", "{text}"], "--table"),
