@@ -120,9 +120,9 @@ class ContactMapConfig:
             ``integrator.step_outliers``, those above 10 times the median tangent frequency: on the ci blade at
             mu = 0.1 over 1,620-2,000 rad/s one of 204, a St. Venant-Kirchhoff collapse that alone sets a step 19
             times smaller). With 'drop' a run that stays near such a state at the larger step blows up and is
-            flagged (and run again with the step halved, ``retry_diverged``); a brief pass may not, so
-            benchmarks/bench_gnl_vs_linear.py --step-check measures the dropped step's error against runs at the
-            kept one.
+            flagged; its retries (``retry_diverged``) halve that step, which may still be above the one from every
+            state, and the demo then says so. A brief pass may not blow up, so benchmarks/bench_gnl_vs_linear.py
+            --step-check measures the dropped step's error against runs at the kept one.
         cubature: GNL forces by point cubature trained to this relative tolerance, in (0, 1). None: exact tensors.
         precision: arithmetic of the cubature forces: 'double' or 'single' (float32; needs ``cubature``).
         cubature_speeds: the speeds (rad/s) of the exact GNL runs the cubature is trained on (needs ``cubature``).
@@ -535,8 +535,8 @@ def reduced_model(config: ContactMapConfig, comm: MPI.Comm | None) -> tuple[Redu
 
 
 def build_model(config: ContactMapConfig) -> ReducedModel:
-    """Build the reduced model of the ``config.preset`` blade, or of the bladed disk (cached in <out>/cache), in this
-    process alone."""
+    """Build the reduced model of the ``config.preset`` blade, or of the bladed disk (cached in ``config.cache_dir``),
+    in this process alone."""
     from mpi4py import MPI
 
     from rotor37_rom import fem
@@ -617,7 +617,7 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
                    ) -> tuple[ReducedModel, np.ndarray]:
     """The model with point-cubature GNL forces trained on exact GNL runs at 6 of the speeds (trajectory states), and
     the states the GNL step is taken over (those runs' 24 of largest tip motion and the training states). Cached in
-    <out>/cache: a restarted map does not retrain, and another tolerance reuses the exact training runs.
+    ``config.cache_dir``: a restarted map does not retrain, and another tolerance reuses the exact training runs.
     Under MPI rank 0 trains (serial FE quadrature on its own copy of the mesh) while the others wait."""
     importlib.import_module("rotor37_rom.fem")    # on every rank: importing dolfinx initializes PETSc (collective)
     train = training_speeds(config.speed_grid) if config.cubature_speeds is None else \
@@ -625,10 +625,13 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
     revolutions = min(config.revolutions, 12.0)
     if capped_probe(config, model):
         # a disk's unscaled GNL step (~5e-8 s) would make the training runs hours long: they run capped, at the
-        # tangent limit on the capped probe's states (exact forces); a blade's with --capped-training
+        # tangent limit on the capped probe's states (exact forces); a blade's with --capped-training. The training
+        # runs take the step from every probe state (--step-outliers is the map's): a step check at 'keep' then
+        # finds the same cubature
         scheme = CentralDifference(model, nonlinear=True, safety=config.safety,
                                    frequency_cap=config.frequency_cap_rad_s,
-                                   h=config.h or capped_gnl_step(config, model, model, None,
+                                   h=config.h or capped_gnl_step(dataclasses.replace(config, step_outliers="keep"),
+                                                                  model, model, None,
                                                                   verbose=comm is None or comm.rank == 0))
     else:
         scheme = CentralDifference(model, nonlinear=True, safety=config.safety)
@@ -751,7 +754,7 @@ def capped_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np
                         ) -> tuple[np.ndarray, float]:
     """The 8 largest states of a capped GNL run of the disk or blade (exact forces) at the ``probe`` speeds, its step
     halved until no speed blows up (the capped modes stiffen with the amplitude), and that step. Cached in
-    <out>/cache (a resumed map does not probe again; every rank computes or reads the same)."""
+    ``config.cache_dir`` (a resumed map does not probe again; every rank computes or reads the same)."""
     scheme = CentralDifference(model, nonlinear=True, safety=config.safety, frequency_cap=config.frequency_cap_rad_s)
     key = json.dumps([model.key, probe.tolist(), revolutions, scheme.h, scheme.frequency_cap, vars(config.casing),
                       "8 largest states"], sort_keys=True, default=str)
@@ -1012,7 +1015,12 @@ def merge_earlier_runs(summary: dict, previous: Path) -> None:
                                                                       summary["revolutions"]):
         return
     for label, run in old.get("runs", {}).items():
-        summary["runs"][label] = {**run, **summary["runs"].get(label, {})}
+        new = summary["runs"].get(label, {})
+        merged = {**run, **new}
+        if new and new.get("rev_per_s") is None and run.get("rev_per_s") and run.get("h") == new.get("h"):
+            # a call that found every speed done keeps the wall time of the call that ran them
+            merged["wall_s"], merged["rev_per_s"] = run["wall_s"], run["rev_per_s"]
+        summary["runs"][label] = merged
 
 
 def write_summary(out: Path, summary: dict) -> list[Path]:
@@ -1080,6 +1088,10 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
             summary["runs"][label]["chosen"] = dict(tolerance=config.tolerance, model=choice.name,
                                                     options=choice.options, expected_error=choice.error)
         print_map(result, summary["linear_resonance"])
+        if gnl and setting.step_outliers == "drop" and result.imap.diverged.any():
+            print(f"         {int(result.imap.diverged.sum())} speeds still blew up with --step-outliers drop (their "
+                  f"retries halve a step above the one from every state): run them with --step-outliers keep before "
+                  f"reading them as grown")
         if config.stress:
             mesh = mesh or stress_mesh(config, model)
             summary["runs"][label]["stress"], pictures = disk_peak_stress(config, scheme, result, tag, mesh)
@@ -1138,7 +1150,7 @@ def build_parser() -> ArgumentParser:
     parser.add_argument("--step-outliers", choices=["keep", "drop"],
                         help="with a cap: the GNL step from every probe/training state (keep, the default) or "
                              "without the few whose tangent frequency is above 10x the median (drop: St. Venant-"
-                             "Kirchhoff collapse states; a run that reaches one blows up and is flagged)")
+                             "Kirchhoff collapse states; a run that stays near one blows up and is flagged)")
     parser.add_argument("--cubature", type=float, metavar="TOL",
                         help="GNL: replace the exact cubic forces by point cubature trained to this relative "
                              "tolerance on exact GNL runs at 6 of the speeds (min(revolutions, 12) each; "

@@ -47,6 +47,23 @@ def test_contact_map_runs_in_process(contact_map, ci_rom, tmp_path):
     assert all(p.parent == out and p.is_file() for p in result.files)
 
 
+def test_contact_map_rerun_keeps_the_wall_time(contact_map, tmp_path):
+    """A call that finds every speed of a setting done (wall < 1 s, no rate) keeps the wall time and rate of the call
+    that ran them; a run at another step, or one that ran, reports its own."""
+    previous = tmp_path / "summary.json"
+    head = {"r": 55, "speeds": [1620.0, 2000.0, 20], "revolutions": 200.0}
+    previous.write_text(json.dumps(head | {"runs": {"GNL": {"h": 4e-7, "wall_s": 686.0, "rev_per_s": 5.8},
+                                                    "no GNL": {"h": 1e-6, "wall_s": 100.0, "rev_per_s": 40.0}}}))
+    summary = head | {"runs": {"GNL": {"h": 4e-7, "wall_s": 0.08, "rev_per_s": None},
+                               "no GNL": {"h": 5e-7, "wall_s": 0.05, "rev_per_s": None}}}
+    contact_map.merge_earlier_runs(summary, previous)
+    assert summary["runs"]["GNL"] == {"h": 4e-7, "wall_s": 686.0, "rev_per_s": 5.8}
+    assert summary["runs"]["no GNL"] == {"h": 5e-7, "wall_s": 0.05, "rev_per_s": None}     # another step
+    summary = head | {"runs": {"GNL": {"h": 4e-7, "wall_s": 300.0, "rev_per_s": 13.3}}}
+    contact_map.merge_earlier_runs(summary, previous)
+    assert summary["runs"]["GNL"]["wall_s"] == 300.0 and summary["runs"]["no GNL"]["wall_s"] == 100.0
+
+
 def test_contact_map_command_line_is_the_config(contact_map, tmp_path):
     """The options parse into the config a Python caller writes (numbers as floats: the same cache keys)."""
     argv = ["--model", str(tmp_path / "rom.npz"), "--speeds", "1400", "1450", "2", "--revolutions", "0.3", "--gnl",
