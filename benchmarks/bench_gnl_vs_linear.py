@@ -43,6 +43,7 @@ with --global-md 10 --capped-training); the maps run on
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import subprocess
 import sys
@@ -105,10 +106,12 @@ def contact_share(record: dict) -> float:
     return float(np.mean(np.any(half > 0.0, axis=0)))
 
 
+@functools.lru_cache(maxsize=None)
 def setting_records(folder: Path, gnl: bool, revolutions: float, every: bool = False) -> tuple[dict, dict]:
     """({speed: per-speed record}, summary.json entry) of one setting (GNL off or on) of the map in ``folder``: the
     speeds of its last run, or with ``every`` all those its sweeps at that step hold (step checks run one after
-    another)."""
+    another). Read once per process (``map_row`` and ``step_check`` both ask), after the maps have run; callers do
+    not modify what it returns."""
     from rotor37_rom.sweep import load_sweep
 
     summary = json.loads((folder / "summary.json").read_text())
@@ -131,6 +134,12 @@ def same_step(h_map: float, h: float) -> bool:
     return any(abs(h * 2 ** k / h_map - 1.0) < 1e-9 for k in range(9))
 
 
+def grid_index(grid, w: float) -> int | None:
+    """The index of speed ``w`` in ``grid`` up to round-off (linspace of another range), or None."""
+    hit = np.flatnonzero(np.isclose(np.asarray(grid, float), w, rtol=1e-12, atol=0))
+    return int(hit[0]) if hit.size else None
+
+
 def step_check(folder: Path, revolutions: float) -> list[dict]:
     """The GNL map in ``folder`` (run with --step-outliers drop) against its speeds run again in folder/step_check
     at the step from every state: per speed, the largest LE response of both (mm), their relative difference and
@@ -140,9 +149,8 @@ def step_check(folder: Path, revolutions: float) -> list[dict]:
     runs = [setting_records(folder, True, revolutions), setting_records(folder / "step_check", True, revolutions,
                                                                          every=True)]
     (dropped, entry), (kept, entry_kept) = runs
-    grid = np.array(list(dropped))
-    pairs = [(w, float(grid[np.isclose(grid, w, rtol=1e-12, atol=0)][0])) for w in kept
-             if np.isclose(grid, w, rtol=1e-12, atol=0).any()]       # the map's speed each check speed is
+    grid = list(dropped)
+    pairs = [(w, grid[i]) for w in kept if (i := grid_index(grid, w)) is not None]   # (check speed, map speed)
     if not pairs:
         return []
     amp = [interaction_map([recs[w] for w in ws]).nfrc * 1e3 for recs, ws in ((dropped, [p[1] for p in pairs]),
@@ -200,8 +208,8 @@ def check_speeds_error(args, ranges: list[tuple]) -> str | None:
         return f"need 0 < START <= STOP and an integer N >= 1, got {args.step_check}"
     inside = [r for r in ranges if in_range(args.step_check, r)]
     grid = np.linspace(start, stop, int(n))
-    if not inside or not all(np.isclose(np.linspace(inside[0][0], inside[0][1], int(inside[0][2])), w, rtol=1e-12,
-                                        atol=0).any() for w in grid):
+    if not inside or any(grid_index(np.linspace(inside[0][0], inside[0][1], int(inside[0][2])), w) is None
+                         for w in grid):
         return f"its speeds {grid.tolist()} must be speeds of one of the ranges {[list(r) for r in ranges]}"
     return None
 

@@ -132,10 +132,13 @@ def gnl_step_report(model, states: np.ndarray, frequency_cap: float | None = Non
         raise ValueError(f"the GNL step needs states with finite tangent frequencies, got {w_t.size} states "
                          f"({np.count_nonzero(~np.isfinite(w_t))} not finite)")
     outliers = step_outliers(w_t)
-    rest = np.delete(w_t, outliers)
-    h_rest = float(min(cap_safety * 2.0 / w_lin, safety * 2.0 / rest.max()))    # rest is never empty (median)
-    return {"h": float(min(cap_safety * 2.0 / w_lin, safety * 2.0 / w_t.max())), "w_linear": w_lin, "w_states": w_t,
-            "outliers": outliers, "h_without_outliers": h_rest}
+    rest = np.delete(w_t, outliers)                      # never empty: the outliers lie above the median
+
+    def step(w_max):
+        return float(min(cap_safety * 2.0 / w_lin, safety * 2.0 / w_max))
+
+    return {"h": step(w_t.max()), "w_linear": w_lin, "w_states": w_t, "outliers": outliers,
+            "h_without_outliers": step(rest.max())}
 
 
 def probe_states(model, speeds, casing, revolutions: float = 4.0, n: int = 24, safety: float = 0.5,
