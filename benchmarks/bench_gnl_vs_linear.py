@@ -34,6 +34,14 @@ those speeds of the map again at the step from every state, on the same cubature
 difference of the largest LE response. A speed of a drop map that still blows up after its retries (h/2, h/4: still
 above the step from every state) is reported grown; run it with the step check before reading it so.
 
+``--floor EPS`` runs the maps again with the internal forces scaled by 1 + EPS (``--perturbation``; the same cubature
+and step, OUT/floor) and, with ``--step-check``, the checked speeds too (OUT/step_check_floor): a speed whose
+response a 1e-4 perturbation moves by as much as the step does is one where any small change picks another
+response, and the step's difference there says nothing of the step.
+
+    python benchmarks/bench_gnl_vs_linear.py --mu 0.1 --gnl on --speeds 1620 2000 20 --step-outliers drop \
+        --step-check 1960 1960 1 --floor 1e-4    # the floor of the map and of 1,960 rad/s at the full step
+
 The r = 55 ci model is built (20 s) when --model is missing; another --global-md builds its own model and maps into
 folders of their own, and each row says its model's r. Each cubature training takes 8-30 min (r = 55; about 1 h
 with --global-md 10 --capped-training); the maps run on
@@ -67,15 +75,32 @@ def map_command(args, mu: float, speeds: tuple, out: Path) -> list[str]:
     return demo_command(args, args.gnl, mu, speeds, out, extra)
 
 
-def check_command(args, mu: float, speeds: tuple, check: tuple, out: Path) -> list[str]:
+def floor_command(args, mu: float, speeds: tuple, out: Path) -> list[str]:
+    """The map of one speed range again with the internal forces scaled by 1 + args.floor, on its cubature and at
+    its step, into OUT/floor."""
+    extra = ["--step-outliers", args.step_outliers] if args.step_outliers != "keep" else []
+    extra += ["--perturbation", f"{args.floor:g}", "--cache", str(out / "cache")]
+    return demo_command(args, args.gnl, mu, speeds, out / "floor", extra)
+
+
+def check_command(args, mu: float, speeds: tuple, check: tuple, out: Path, perturbation: float = 0.0
+                  ) -> list[str]:
     """The demo's command line of the step check of one speed range: the GNL runs at the ``check`` speeds (START
     STOP N) again with the step from every state (--step-outliers keep), on the range's cubature (its cache and
-    training speeds), into OUT/step_check."""
+    training speeds), into OUT/step_check (with a perturbation: OUT/step_check_floor)."""
     from rotor37_rom.integrator import training_speeds
 
     train = training_speeds(np.linspace(speeds[0], speeds[1], int(speeds[2])))
     extra = ["--cubature-speeds", *[str(float(w)) for w in train], "--cache", str(out / "cache")]
-    return demo_command(args, "on", mu, check, out / "step_check", extra)
+    if perturbation:
+        extra += ["--perturbation", f"{perturbation:g}"]
+    return demo_command(args, "on", mu, check, out / ("step_check_floor" if perturbation else "step_check"), extra)
+
+
+def run_name(cmd: list[str]) -> str:
+    """'map', 'step check', 'floor' or 'step check, floor': which of a range's runs ``cmd`` is (its --out)."""
+    out = Path(cmd[cmd.index("--out") + 1]).name
+    return {"step_check": "step check", "floor": "floor", "step_check_floor": "step check, floor"}.get(out, "map")
 
 
 def speed_arg(w: float) -> str:
@@ -143,7 +168,7 @@ def grid_index(grid, w: float) -> int | None:
 def step_check(folder: Path, revolutions: float) -> list[dict]:
     """The GNL map in ``folder`` (run with --step-outliers drop) against its speeds run again in folder/step_check
     at the step from every state: per speed, the largest LE response of both (mm), their relative difference and
-    both steps."""
+    both steps; with the floor runs (folder/floor, folder/step_check_floor), both responses perturbed too."""
     from rotor37_rom.sweep import interaction_map
 
     runs = [setting_records(folder, True, revolutions), setting_records(folder / "step_check", True, revolutions,
@@ -155,8 +180,35 @@ def step_check(folder: Path, revolutions: float) -> list[dict]:
         return []
     amp = [interaction_map([recs[w] for w in ws]).nfrc * 1e3 for recs, ws in ((dropped, [p[1] for p in pairs]),
                                                                             (kept, [p[0] for p in pairs]))]
-    return [{"speed": w, "mm_dropped": float(a), "mm_kept": float(b), "rel": float(a / b - 1.0),
-             "h_dropped": entry["h"], "h_kept": entry_kept["h"]} for (_, w), a, b in zip(pairs, *amp)]
+    checks = [{"speed": w, "mm_dropped": float(a), "mm_kept": float(b), "rel": float(a / b - 1.0),
+               "h_dropped": entry["h"], "h_kept": entry_kept["h"]} for (_, w), a, b in zip(pairs, *amp)]
+    for name, key, ws in (("floor", "mm_dropped_perturbed", [p[1] for p in pairs]),
+                          ("step_check_floor", "mm_kept_perturbed", [p[0] for p in pairs])):
+        if (folder / name / "summary.json").is_file():
+            perturbed = {w: interaction_map([rec]).nfrc[0] * 1e3 for w, rec in
+                         setting_records(folder / name, True, revolutions, every=True)[0].items()}
+            for check, w in zip(checks, ws):
+                hit = grid_index(list(perturbed), w)
+                check[key] = None if hit is None else float(list(perturbed.values())[hit])
+    return checks
+
+
+def floor_row(folders: list[Path], gnl: bool, revolutions: float) -> dict | None:
+    """The maps of ``folders`` run again perturbed (folder/floor): their perturbation, speeds and NFRC (mm), or None
+    when none was run."""
+    from rotor37_rom.sweep import interaction_map
+
+    speeds, nfrc, eps = [], [], set()
+    for folder in folders:
+        if not (folder / "floor" / "summary.json").is_file():
+            continue
+        records, entry = setting_records(folder / "floor", gnl, revolutions)
+        eps.add(entry.get("perturbation"))
+        speeds += list(records)
+        nfrc += (interaction_map(list(records.values())).nfrc * 1e3).tolist()
+    if not speeds:
+        return None
+    return {"perturbation": sorted(eps, key=str), "speeds": speeds, "nfrc_mm": nfrc}
 
 
 def map_row(folders: list[Path], mu: float, gnl: bool, revolutions: float, quarter_omega1: float) -> dict:
@@ -206,10 +258,9 @@ def check_speeds_error(args, ranges: list[tuple]) -> str | None:
     start, stop, n = args.step_check
     if not (0 < start <= stop and n >= 1 and float(n).is_integer()):
         return f"need 0 < START <= STOP and an integer N >= 1, got {args.step_check}"
-    inside = [r for r in ranges if in_range(args.step_check, r)]
     grid = np.linspace(start, stop, int(n))
-    if not inside or any(grid_index(np.linspace(inside[0][0], inside[0][1], int(inside[0][2])), w) is None
-                         for w in grid):
+    if not any(in_range(args.step_check, r) and all(grid_index(np.linspace(r[0], r[1], int(r[2])), w) is not None
+                                                    for w in grid) for r in ranges):
         return f"its speeds {grid.tolist()} must be speeds of one of the ranges {[list(r) for r in ranges]}"
     return None
 
@@ -259,6 +310,22 @@ def markdown(rows: list[dict], quarter_omega1: float) -> str:
         lines += [f"| {r['r']} | {r['mu']:g} | {c['speed']:.0f} | {c['mm_dropped']:.3f} mm (h = {c['h_dropped']:.3g} "
                   f"s) | {c['mm_kept']:.3f} mm (h = {c['h_kept']:.3g} s) | {100 * c['rel']:+.1f} % |"
                   for r, c in checks]
+    perturbed = [(r, c) for r, c in checks if c.get("mm_dropped_perturbed") is not None
+                 or c.get("mm_kept_perturbed") is not None]
+    if perturbed:
+        lines += ["", "| r | μ | Ω (rad/s) | step without the outliers: LE, perturbed | step from every state: LE, "
+                      "perturbed |", "|---|---|---|---|---|"]
+        lines += [f"| {r['r']} | {r['mu']:g} | {c['speed']:.0f} | {c['mm_dropped']:.3f}, "
+                  f"{f(c.get('mm_dropped_perturbed'), '.3f')} mm | {c['mm_kept']:.3f}, "
+                  f"{f(c.get('mm_kept_perturbed'), '.3f')} mm |" for r, c in perturbed]
+    floors = [r for r in rows if r.get("floor")]
+    for r in floors:
+        fl = r["floor"]
+        peak = np.nanmax(r["nfrc_mm"])
+        moved = [f"{w:.0f}: {100 * abs(b - r['nfrc_mm'][i]) / peak:.1f} %"
+                 for w, b in zip(fl["speeds"], fl["nfrc_mm"]) if (i := grid_index(r["speeds"], w)) is not None]
+        lines += ["", f"r = {r['r']}, μ = {r['mu']:g}, GNL {gnl_label(r)}: x (1 + {fl['perturbation']}) moves the "
+                      f"NFRC by (of its peak {peak:.3f} mm) " + ", ".join(moved)]
     return "\n".join(lines)
 
 
@@ -312,6 +379,10 @@ def main(argv=None) -> int:
     parser.add_argument("--step-outliers", choices=["keep", "drop"], default="keep",
                         help="the GNL maps' step from every state (keep) or without the few collapse states far "
                              "above the others (drop; demos/contact_map.py --step-outliers)")
+    parser.add_argument("--floor", type=float, metavar="EPS",
+                        help="run the maps (and the --step-check speeds) again with the internal forces scaled by "
+                             "1 + EPS, |EPS| < 0.01, on the same cubature and step: the speeds a perturbation that "
+                             "small moves (OUT/floor, OUT/step_check_floor)")
     parser.add_argument("--step-check", type=float, nargs=3, metavar=("START", "STOP", "N"),
                         help="with --step-outliers drop: run these speeds of the GNL map again at the step from "
                              "every state and compare (each speed one of a range's)")
@@ -320,6 +391,9 @@ def main(argv=None) -> int:
         print(f"error: --speeds takes START STOP N per range, got {len(args.speeds)} numbers", file=sys.stderr)
         return 2
     ranges = [tuple(args.speeds[i:i + 3]) for i in range(0, len(args.speeds), 3)]
+    if args.floor is not None and not (np.isfinite(args.floor) and 0 < abs(args.floor) < 0.01):
+        print(f"error: --floor must be a perturbation with 0 < |EPS| < 0.01, got {args.floor}", file=sys.stderr)
+        return 2
     if args.step_check is not None:
         error = check_speeds_error(args, ranges)
         if error:
@@ -346,8 +420,13 @@ def main(argv=None) -> int:
         for speeds in ranges:
             out = OUT / f"{tag}{args.direction}_mu{mu:g}_{speeds[0]:g}-{speeds[1]:g}"
             cmds = [map_command(args, mu, speeds, out)]
-            if args.step_check is not None and in_range(args.step_check, speeds):
+            checked = args.step_check is not None and in_range(args.step_check, speeds)
+            if checked:
                 cmds.append(check_command(args, mu, speeds, tuple(args.step_check), out))
+            if args.floor is not None:
+                cmds.append(floor_command(args, mu, speeds, out))
+                if checked:
+                    cmds.append(check_command(args, mu, speeds, tuple(args.step_check), out, args.floor))
             for cmd in cmds:
                 commands.append(" ".join(str(c) for c in cmd))
                 t0 = time.perf_counter()
@@ -355,13 +434,14 @@ def main(argv=None) -> int:
                 if done.returncode != 0:
                     print(f"the map at mu = {mu:g} failed (exit {done.returncode}): {commands[-1]}", file=sys.stderr)
                     return 1
-                print(f"mu = {mu:g}, {speeds[0]:g}-{speeds[1]:g} rad/s{', step check' if cmd is not cmds[0] else ''}: "
+                print(f"mu = {mu:g}, {speeds[0]:g}-{speeds[1]:g} rad/s ({run_name(cmd)}): "
                       f"{time.perf_counter() - t0:.0f} s")
             folders.append(out)
         for gnl in SETTINGS[args.gnl]:
             row = map_row(folders, mu, gnl, args.revolutions, quarter_omega1)
             row |= {"direction": args.direction, "r": model.r, "capped_training": args.capped_training and gnl,
                     "step_outliers": args.step_outliers if gnl else None}
+            row["floor"] = floor_row(folders, gnl, args.revolutions)   # by this or earlier calls
             if gnl and args.step_outliers == "drop":                 # the checks run so far, by this or earlier calls
                 row["step_check"] = [c for f in folders if (f / "step_check" / "summary.json").is_file()
                                      for c in step_check(f, args.revolutions)]

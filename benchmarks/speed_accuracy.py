@@ -246,16 +246,6 @@ class MapRun:
     record_h: list = dataclasses.field(default_factory=list)     # the step each record ran at (retries: smaller)
 
 
-def perturbed(model, eps: float):
-    """The model with its linear stiffness (GNL off) or its cubic forces (GNL on) scaled by 1 + eps."""
-    from rotor37_rom.nonlinear_forces import PolynomialForces
-
-    forces = model.forces
-    if isinstance(forces, PolynomialForces):
-        forces = PolynomialForces(forces.A * (1 + eps), forces.B * (1 + eps))
-    return dataclasses.replace(model, K=model.K * (1 + eps), forces=forces)
-
-
 def model_file(r_c: int) -> Path:
     """The ci blade's r_c model (24 tip DOFs + r_c modes + the 6 MDs of 1B/1T/2B), exact tensors, built once."""
     from rotor37_rom.reduction import save_reduced_model
@@ -394,9 +384,10 @@ def scene_map(gnl: bool) -> tuple[dict, dict]:
     ref = run_map("reference", gnl, ref_options)
     pert_path = WORK / "models" / f"rom_rc{ref_options['r_c']}_perturbed_{'gnl' if gnl else 'linear'}.npz"
     if not pert_path.is_file():
-        from rotor37_rom.reduction import load_reduced_model, save_reduced_model
+        from rotor37_rom.reduction import load_reduced_model, perturbed_model, save_reduced_model
 
-        save_reduced_model(perturbed(load_reduced_model(model_file(ref_options["r_c"])), PERTURBATION), pert_path)
+        save_reduced_model(perturbed_model(load_reduced_model(model_file(ref_options["r_c"])), PERTURBATION),
+                           pert_path)
     pert = run_map("reference_perturbed", gnl, ref_options, model_path=pert_path)
     peak = np.nanmax(ref.nfrc)
     robust = np.abs(pert.nfrc - ref.nfrc) <= ROBUST * peak

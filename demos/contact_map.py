@@ -45,11 +45,11 @@ from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.integrator import (CentralDifference, gnl_step_report, largest_states, probe_states, simulate,
                                     training_speeds)
 from rotor37_rom.npz import load_npz, save_npz
-from rotor37_rom.reduction import (GLOBAL_MD_MAX, ReducedModel, load_reduced_model, save_reduced_model,
-                                   with_force_precision)
+from rotor37_rom.reduction import (GLOBAL_MD_MAX, ReducedModel, load_reduced_model, perturbed_model,
+                                   save_reduced_model, with_force_precision)
 from rotor37_rom.sweep import (ContinuationPoint, InteractionMap, SweepSpec, continuation, interaction_map,
-                               load_speed, load_sweep, record_row, rerun_diverged, run_sweep, sector_maxima,
-                               sweep_folder)
+                               idle_barrier, load_speed, load_sweep, record_row, rerun_diverged, run_sweep,
+                               sector_maxima, sweep_folder)
 
 if TYPE_CHECKING:
     from mpi4py import MPI
@@ -123,6 +123,10 @@ class ContactMapConfig:
             flagged; its retries (``retry_diverged``) halve that step, which may still be above the one from every
             state, and the demo then says so. A brief pass may not blow up, so benchmarks/bench_gnl_vs_linear.py
             --step-check measures the dropped step's error against runs at the kept one.
+        perturbation: the internal force K q + g(q) of the runs scaled by 1 + this, |.| < 0.01 (0: none), after
+            the cubature is trained and the step set, so that the same runs differ by the perturbation alone
+            (``reduction.perturbed_model``): a map again with 1e-4 shows the speeds whose response any force
+            approximation's error moves (the floor; docs/results.md).
         cubature: GNL forces by point cubature trained to this relative tolerance, in (0, 1). None: exact tensors.
         precision: arithmetic of the cubature forces: 'double' or 'single' (float32; needs ``cubature``).
         cubature_speeds: the speeds (rad/s) of the exact GNL runs the cubature is trained on (needs ``cubature``).
@@ -175,6 +179,7 @@ class ContactMapConfig:
     frequency_cap: float | None = None
     tangent_safety: float = 0.5
     step_outliers: str = "keep"
+    perturbation: float = 0.0
     cubature: float | None = None
     precision: str = "double"
     cubature_speeds: tuple[float, ...] | None = None
@@ -291,6 +296,8 @@ class ContactMapConfig:
         if self.step_outliers == "drop" and (self.frequency_cap is None or self.h is not None):
             raise ValueError("--step-outliers drop needs --frequency-cap and no --h (it chooses the GNL step from "
                              "the tangent limit)")
+        if not (isinstance(self.perturbation, numbers.Real) and abs(self.perturbation) < 0.01):
+            raise ValueError(f"--perturbation must be a number with |eps| < 0.01, got {self.perturbation}")
         if self.cubature is not None and not 0 < self.cubature < 1:
             raise ValueError(f"--cubature must be in (0, 1), got {self.cubature}")
         if self.precision not in PRECISIONS:
@@ -502,13 +509,6 @@ class ContactMapResult:
 # modal derivatives, exact cubic tensors) and saved as `<out>/rom.npz` for later runs and MPI runs.
 
 # +
-def idle_barrier(comm: MPI.Comm, poll: float = 0.05) -> None:
-    """A barrier the ranks wait at asleep (a blocking MPI call spins a core: the one rank 0's serial work needs)."""
-    request = comm.Ibarrier()
-    while not request.Test():
-        time.sleep(poll)
-
-
 def reduced_model(config: ContactMapConfig, comm: MPI.Comm | None) -> tuple[ReducedModel, list[Path]]:
     """The model of ``config.model``, or one built and saved; returns it and the files written."""
     if config.model is not None:
@@ -778,14 +778,19 @@ def capped_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np
 
 def time_scheme(config: ContactMapConfig, model: ReducedModel, gnl: bool, comm: MPI.Comm | None
                 ) -> CentralDifference:
-    """The central-difference scheme of one setting: its forces (exact or cubature), step and frequency cap."""
+    """The central-difference scheme of one setting: its forces (exact or cubature), step and frequency cap; with a
+    perturbation, the perturbed model's at the unperturbed model's step."""
     run_model, states, h = model, None, config.h
     if gnl and config.cubature is not None:
         run_model, states = cubature_model(config, model, comm)
         run_model = with_force_precision(run_model, config.precision)
     if gnl and config.frequency_cap is not None and h is None:
         h = capped_gnl_step(config, model, run_model, states, verbose=comm is None or comm.rank == 0)
-    return CentralDifference(run_model, nonlinear=gnl, h=h, safety=config.safety,
+    scheme = CentralDifference(run_model, nonlinear=gnl, h=h, safety=config.safety,
+                               frequency_cap=config.frequency_cap_rad_s)
+    if config.perturbation == 0:
+        return scheme
+    return CentralDifference(perturbed_model(run_model, config.perturbation), nonlinear=gnl, h=scheme.h,
                              frequency_cap=config.frequency_cap_rad_s)
 
 
@@ -847,6 +852,7 @@ def continuation_branches(config: ContactMapConfig, scheme: CentralDifference, r
                                   progress=not config.quiet)
             mine[name] = Branch(points, run_scheme.h, time.perf_counter() - t0)
     if comm is not None:
+        idle_barrier(comm)                                # the branches take hours apart
         gathered = comm.gather(mine, root=0)
         mine = {k: v for part in gathered for k, v in part.items()} if rank == 0 else {}
     return mine
@@ -890,6 +896,7 @@ def summary_entry(config: ContactMapConfig, scheme: CentralDifference, result: M
     works = np.array([np.asarray(r.get("work", np.full(4, np.nan)), float)[:2] for r in records])
     entry = {"h": scheme.h, "h_crit": scheme.h_crit, "frequency_cap_khz": config.frequency_cap,
              "step_outliers": config.step_outliers if scheme.nonlinear else None,
+             "perturbation": config.perturbation,
              "cubature": scheme.model.metadata.get("hyper_reduction"),
              # from the metadata: a disk's sector forces wrap the quadrature forces that carry the precision
              "force_precision": scheme.model.metadata.get("force_precision", "double"), "peak_speed": result.peak_speed,
@@ -1151,6 +1158,10 @@ def build_parser() -> ArgumentParser:
                         help="with a cap: the GNL step from every probe/training state (keep, the default) or "
                              "without the few whose tangent frequency is above 10x the median (drop: St. Venant-"
                              "Kirchhoff collapse states; a run that stays near one blows up and is flagged)")
+    parser.add_argument("--perturbation", type=float, metavar="EPS",
+                        help="scale the runs' internal force K q + g(q) by 1 + EPS, |EPS| < 0.01, after the cubature "
+                             "and the step are set: the map again with 1e-4 shows the speeds whose response a "
+                             "force error that small moves (the floor; default 0)")
     parser.add_argument("--cubature", type=float, metavar="TOL",
                         help="GNL: replace the exact cubic forces by point cubature trained to this relative "
                              "tolerance on exact GNL runs at 6 of the speeds (min(revolutions, 12) each; "

@@ -532,6 +532,33 @@ def with_force_precision(model: ReducedModel, precision: str) -> ReducedModel:
     return dataclasses.replace(model, forces=forces, metadata=metadata)
 
 
+def perturbed_model(model: ReducedModel, eps: float) -> ReducedModel:
+    """The model with its internal force K q + g(q) scaled by 1 + ``eps`` (|eps| < 0.01), whatever evaluates g:
+    exact tensors, a quadrature or cubature (its weights), a disk's sector forces (their per-sector scales). A
+    perturbation as small as any force approximation's error: the speeds whose response it moves are those no
+    approximation can be judged on (the floor, docs/results.md). The key changes with it (metadata 'perturbation',
+    the product of the factors applied), so cached sweeps are not mixed up."""
+    if not (isinstance(eps, (int, float)) and np.isfinite(eps) and abs(eps) < 0.01):
+        raise ValueError(f"perturbation must be a number with |eps| < 0.01, got {eps!r}")
+    if eps == 0:
+        return model
+    scale, forces = 1.0 + eps, model.forces
+    if forces is None:
+        pass
+    elif hasattr(forces, "blocks"):                          # a disk's sector forces (disk.SectorForces)
+        forces = dataclasses.replace(forces, scales=np.asarray(forces.scales, float) * scale)
+    elif isinstance(forces, QuadratureForces):
+        forces = dataclasses.replace(forces, w=forces.w * scale)
+    elif isinstance(forces, PolynomialForces):
+        forces = PolynomialForces(forces.A * scale, forces.B * scale)
+    else:
+        raise ValueError(f"perturbation: cannot scale forces of type {type(forces).__name__}")
+    prior = model.metadata.get("perturbation")
+    total = eps if prior is None else (1.0 + float(prior)) * scale - 1.0
+    return dataclasses.replace(model, K=model.K * scale, forces=forces,
+                               metadata={**model.metadata, "perturbation": total})
+
+
 def reduced_model_key(metadata: dict) -> str:
     """sha256 of the metadata (parameters, mesh signature, version) as canonical JSON."""
     return hashlib.sha256(json.dumps(metadata, sort_keys=True, default=str).encode()).hexdigest()[:24]

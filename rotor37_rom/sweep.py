@@ -11,6 +11,7 @@ import dataclasses
 import hashlib
 import json
 import logging
+import time
 from pathlib import Path
 from collections.abc import Iterator, Mapping
 from typing import Sequence
@@ -139,6 +140,14 @@ def _load_result(path: Path) -> SavedRecord | None:
         return None
 
 
+def idle_barrier(comm, poll: float = 0.05) -> None:
+    """A barrier the ranks wait at asleep, polling every ``poll`` s: OpenMPI's blocking calls spin a core, which a
+    rank that finished its speeds would hold for hours while another integrates (or rank 0 does serial work)."""
+    request = comm.Ibarrier()
+    while not request.Test():
+        time.sleep(poll)
+
+
 def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpec, out: str | Path,
               comm=None, progress: bool = True, checkpoint_seconds: float = 60.0) -> Path:
     """Simulate every speed from rest (paper §2.3.1) in batches; return the folder of per-speed results.
@@ -157,7 +166,7 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
                                                           "model": scheme.model.key, "r": scheme.r,
                                                           "spec": dataclasses.asdict(spec)}, default=str, indent=1))
     if comm is not None:
-        comm.Barrier()
+        idle_barrier(comm)
     # batches interrupted earlier resume first (their speeds stay together); then the speeds not done yet
     pending = sorted(p for p in folder.glob("batch_*.ckpt.npz") if ".tmp" not in p.name)
     resumed = []
@@ -208,7 +217,7 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
     if bar is not None:
         bar.close()
     if comm is not None:
-        comm.Barrier()
+        idle_barrier(comm)
     return folder
 
 
@@ -228,6 +237,7 @@ def rerun_diverged(scheme: CentralDifference, results: Sequence[dict], spec: Swe
     for k in range(1, retries + 1):
         bad = np.array([float(r["omega"]) for r in results if int(r["diverged_step"]) >= 0]) if root else None
         if comm is not None:
+            idle_barrier(comm)                           # rank 0 may still be reading the records
             bad = comm.bcast(bad, root=0)
         if bad.size == 0:
             break

@@ -391,8 +391,10 @@ def test_gnl_step_report_names_the_states_that_set_the_step(ci_rom, capsys):
      "must be speeds of one of the ranges")])
 def test_gnl_vs_linear_step_check_bad_input(tmp_path, args, says):
     """benchmarks/bench_gnl_vs_linear.py --step-check: without --step-outliers drop, or at speeds the map does not
-    run, one line on stderr naming the option, exit status 2, nothing written; and the sweeps a map reads are those
-    at its step or its retries' (halved), not those of the same map run earlier at another step."""
+    run, one line on stderr naming the option, exit status 2, nothing written; a check grid is valid when it is
+    speeds of any one range, also of a later one overlapping an earlier; and the sweeps a map reads are those at its
+    step or its retries' (halved), not those of the same map run earlier at another step."""
+    import argparse
     import subprocess
     import sys
     from pathlib import Path
@@ -405,9 +407,14 @@ def test_gnl_vs_linear_step_check_bad_input(tmp_path, args, says):
     assert not (tmp_path / "results").exists()
     sys.path.insert(0, str(root / "benchmarks"))
     try:
-        from bench_gnl_vs_linear import same_step
+        from bench_gnl_vs_linear import check_speeds_error, same_step
     finally:
         sys.path.remove(str(root / "benchmarks"))
+    ranges = [(1300.0, 1600.0, 4), (1200.0, 1600.0, 21)]      # 1,320 rad/s: the second's, not the first's
+    check = argparse.Namespace(step_outliers="drop", gnl="on", step_check=[1320.0, 1320.0, 1.0])
+    assert check_speeds_error(check, ranges) is None
+    check.step_check = [1330.0, 1330.0, 1.0]
+    assert "must be speeds of one of the ranges" in check_speeds_error(check, ranges)
     h = 3.96e-7
     assert same_step(h, h) and same_step(h, h / 2) and same_step(h, h / 4 * (1 + 1e-12))
     assert not same_step(h, 2.11e-8) and not same_step(h, 2 * h) and not same_step(h, h / 3)

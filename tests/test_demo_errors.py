@@ -24,7 +24,8 @@ CASES = {
     "contact_map": {"preset": (["--preset", "huge"], "--preset"), "model file": (["--model", "{text}"], "--model"),
                     "numbers": (["--revolutions", "-1"], "--revolutions"),
                     "patch": (["--contact-patch", "0.05"], "--contact-patch"),
-                    "step outliers": (["--step-outliers", "drop"], "--step-outliers")},   # needs --frequency-cap
+                    "step outliers": (["--step-outliers", "drop"], "--step-outliers"),   # needs --frequency-cap
+                    "perturbation": (["--perturbation", "0.02"], "--perturbation")},
     "report": {"preset": (["--preset", "huge"], "--preset"), "model file": (["--table", "{text}"], "--table"),
                "numbers": (["--speeds", "1600", "1200", "5"], "--speeds")},
     "bladed_disk": {"preset": (["--preset", "huge"], "--preset"), "model file": (["--table", "{text}"], "--table"),

@@ -24,6 +24,21 @@ def contact_map():
     return load_demo("contact_map")
 
 
+def test_contact_map_perturbation_keeps_the_step(contact_map, ci_rom, tmp_path):
+    """--perturbation EPS: the map's scheme runs the model with K q + g(q) scaled by 1 + EPS (perturbed_model) at
+    the step of the unperturbed map, GNL off (the step from the linear model's highest frequency, which the
+    perturbation raises by EPS / 2) and on, so that the two maps differ by the perturbation alone."""
+    path = save_reduced_model(ci_rom, tmp_path / "rom.npz")
+    for gnl in (False, True):
+        schemes = [contact_map.time_scheme(contact_map.ContactMapConfig(model=path, perturbation=eps, quiet=True,
+                                                                        out=tmp_path), ci_rom, gnl, None)
+                   for eps in (0.0, 1e-4)]
+        plain, pert = schemes
+        assert pert.h == plain.h and pert.nonlinear == plain.nonlinear == gnl
+        assert np.array_equal(pert.model.K, (1 + 1e-4) * ci_rom.K)
+        assert pert.model.metadata["perturbation"] == 1e-4 and "perturbation" not in plain.model.metadata
+
+
 def test_contact_map_runs_in_process(contact_map, ci_rom, tmp_path):
     """run_contact_map on 2 speeds x 0.3 revolutions (GNL off): the result object holds what summary.json says, its
     NFRC is the map of the sweep folder it wrote, and it lists the files it wrote."""

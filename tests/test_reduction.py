@@ -567,3 +567,35 @@ def test_nonlinear_newmark_is_second_order():
     _, Q1 = simulate_newmark(M, 0.1 * K / 100, K, f, 1e-3, 200)
     _, Q2 = simulate_linear_newmark(M, 0.1 * K / 100, K, f, 1e-3, 200)
     np.testing.assert_array_equal(Q1, Q2)
+
+
+def test_perturbed_model_scales_the_internal_force(ci_rom):
+    """perturbed_model(model, eps) is the model whose internal force K q + g(q) is (1 + eps) times the model's,
+    whichever evaluates g: exact tensors, a quadrature (its weights), a disk's sector forces (per-sector scales). To
+    round-off: sums of at most r(r+1)(r+2)/6 = 16,215 products, sqrt(n) u ~ 1.4e-14 of their size, so 1e-12 of the
+    largest component leaves two orders for cancellation. Its key differs (cached sweeps are not mixed up), eps = 0
+    is the model itself, a second perturbation composes, and |eps| >= 0.01 is refused (a model change, not a
+    perturbation)."""
+    import dataclasses
+
+    from rotor37_rom.disk import SectorForces
+    from rotor37_rom.reduction import perturbed_model
+
+    eps, rng, r = 1e-4, np.random.default_rng(11), ci_rom.r
+    quad = QuadratureForces(rng.standard_normal((20, r, 3, 3)), rng.random(20), 1.1e11, 4.4e10)
+    sectors = SectorForces(quad, np.arange(2 * r).reshape(2, r), 2 * r, np.array([1.0, 1.03]))
+    for forces in (ci_rom.forces, quad, sectors):
+        model = dataclasses.replace(ci_rom, forces=forces)
+        pert = perturbed_model(model, eps)
+        Q = rng.standard_normal((forces.r, 3)) * 1e-3
+        g, g_pert = model.nonlinear_force(Q), pert.nonlinear_force(Q)
+        assert np.abs(g_pert - (1 + eps) * g).max() <= 1e-12 * np.abs(g).max() > 0
+        assert np.array_equal(pert.K, (1 + eps) * ci_rom.K) and np.array_equal(pert.M, ci_rom.M)
+        assert pert.key != model.key and pert.metadata["perturbation"] == eps
+    twice = perturbed_model(perturbed_model(ci_rom, eps), -eps)
+    # (1 + eps)(1 - eps) - 1 in floating point: -eps^2 to a few units of round-off of 1
+    assert twice.metadata["perturbation"] == pytest.approx(-eps * eps, abs=4e-16) and twice.key != ci_rom.key
+    assert perturbed_model(ci_rom, 0.0) is ci_rom
+    for bad in (0.01, -0.5, float("nan")):
+        with pytest.raises(ValueError, match="perturbation"):
+            perturbed_model(ci_rom, bad)

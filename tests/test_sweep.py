@@ -699,3 +699,36 @@ def test_zero_initial_condition_sweep_misses_the_high_branch(ci_rom):
     print("zero IC (mm):", zero_ic * 1e3, "continued:", [(p.omega, p.amplitude * 1e3, p.steady) for p in points])
     for w, low in zip(speeds, zero_ic):
         assert continued[w].steady and continued[w].amplitude > 2 * low
+
+
+@pytest.mark.mpi
+def test_idle_barrier_waits_asleep(tmp_path):
+    """sweep.idle_barrier (run_sweep's barriers, the retries' and the continuation's hand-over): the rank that is done
+    first waits without holding its core. Under mpirun -n 2 rank 1 arrives 2 s after rank 0; rank 0 waits the 2 s
+    and spends < 0.5 s of CPU on it (polling every 50 ms: ~40 wake-ups), where OpenMPI's blocking barrier, the
+    control, spins the core for most of the 2 s (> 1 s of CPU)."""
+    script = tmp_path / "wait.py"
+    script.write_text(
+        "import sys, time\n"
+        "from mpi4py import MPI\n"
+        "from rotor37_rom.sweep import idle_barrier\n"
+        "comm = MPI.COMM_WORLD\n"
+        "wait = idle_barrier if sys.argv[1] == 'idle' else (lambda c: c.Barrier())\n"
+        "comm.Barrier()\n"
+        "if comm.rank == 1:\n"
+        "    time.sleep(2.0)\n"
+        "cpu, wall = time.process_time(), time.perf_counter()\n"
+        "wait(comm)\n"
+        "if comm.rank == 0:\n"
+        "    print(time.process_time() - cpu, time.perf_counter() - wall)\n")
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=str(ROOT))
+    measured = {}
+    for mode in ("idle", "blocking"):
+        run = subprocess.run(["mpirun", "-n", "2", sys.executable, str(script), mode], env=env, capture_output=True,
+                             text=True, timeout=120)
+        assert run.returncode == 0, run.stderr[-2000:]
+        measured[mode] = [float(x) for x in run.stdout.split()[-2:]]
+    (cpu_idle, wall_idle), (cpu_blocking, wall_blocking) = measured["idle"], measured["blocking"]
+    assert wall_idle >= 1.9 and wall_blocking >= 1.9
+    assert cpu_idle < 0.5 < 1.0 < cpu_blocking, measured
