@@ -14,12 +14,17 @@ wave; 6 = sqrt(36) when one blade carries all).
 
     python benchmarks/bench_disk_mistuning.py [--sigma 0 0.01 0.03 0.05] [--seeds 0] [--speeds 1256 1453 1554]
                                               [--revolutions 200] [--gnl --h 1.15e-6]
+    python benchmarks/bench_disk_mistuning.py --sigma 0.05 --seeds 1 2 3     # more disks of one scatter
 
-Results: results/bench_disk_mistuning[_gnl].json (machine stated); the sweeps in results/bench_disk_mistuning/.
+Results: results/bench_disk_mistuning[_gnl].json (machine stated), which keeps the rows of earlier runs with the same
+speeds, revolutions, friction, cap and step (another seed adds to the disks of its sigma); per sigma over its seeds
+(disks), the amplification's mean and largest and the localisation's, and where the largest blade sits in the
+ranking of the stiffness factors. The sweeps in results/bench_disk_mistuning/.
 """
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from pathlib import Path
@@ -43,6 +48,34 @@ OUT = Path("results/bench_disk_mistuning")
 def blade_amplitudes(folder: Path, speeds) -> np.ndarray:
     """(speeds, sectors): node LE's max over the last revolution per blade (NaN where the run blew up)."""
     return np.array([sweep.sector_maxima(sweep.load_speed(folder, float(w))) for w in speeds])
+
+
+def earlier_rows(path: Path, settings: dict, rows: list[dict]) -> list[dict]:
+    """The rows of ``path`` (an earlier run's JSON) with the same ``settings`` (speeds, revolutions, friction, cap,
+    GNL and its step) and another (sigma, seed) than ``rows``; none when the settings differ."""
+    if not path.is_file():
+        return []
+    stored = json.loads(path.read_text())
+    if any(stored.get(k) != v for k, v in settings.items()):
+        return []
+    new = {(r["sigma"], r["seed"]) for r in rows}
+    return [r for r in stored["rows"] if (r["sigma"], r["seed"]) not in new]
+
+
+def over_seeds(rows: list[dict]) -> list[dict]:
+    """Per sigma > 0 over its disks (seeds): the amplification's and localisation's mean and largest per speed, and
+    the largest blade's rank among the stiffness factors (0: the softest), per disk and speed."""
+    out = []
+    for sigma in sorted({r["sigma"] for r in rows if r["sigma"] > 0}):
+        disks = sorted((r for r in rows if r["sigma"] == sigma), key=lambda r: r["seed"])
+        amp = np.array([r["amplification"] for r in disks])
+        loc = np.array([r["localisation"] for r in disks])
+        ranks = [[int(np.argsort(np.argsort(r["factors"]))[b]) for b in r["largest_blade"]] for r in disks]
+        out.append({"sigma": sigma, "seeds": [r["seed"] for r in disks],
+                    "amplification_mean": amp.mean(axis=0).tolist(), "amplification_max": amp.max(axis=0).tolist(),
+                    "localisation_mean": loc.mean(axis=0).tolist(), "localisation_max": loc.max(axis=0).tolist(),
+                    "largest_blade_stiffness_rank": ranks})
+    return out
 
 
 def main(argv=None) -> int:
@@ -102,8 +135,20 @@ def main(argv=None) -> int:
               + " ".join(f"{x:.2f}" for x in row["amplification"]) + ", localisation "
               + " ".join(f"{x:.2f}" for x in row["localisation"]) + f"  ({wall:.0f} s)", flush=True)
     name = "bench_disk_mistuning" + ("_gnl" if args.gnl else "")
-    machine = write_results(name, rows, revolutions=args.revolutions, mu=args.mu, cap_khz=args.cap, gnl=args.gnl)
-    print(f"results/{name}.json ({machine})")
+    settings = dict(speeds=args.speeds, revolutions=args.revolutions, mu=args.mu, cap_khz=args.cap, gnl=args.gnl,
+                    h=args.h if args.gnl else None)
+    rows = sorted(earlier_rows(Path(f"results/{name}.json"), settings, rows) + rows,
+                  key=lambda r: (r["sigma"], r["seed"]))
+    stats = over_seeds(rows)
+    for st in stats:
+        print(f"sigma {st['sigma']:.3f} over {len(st['seeds'])} disks (seeds {st['seeds']}): amplification mean "
+              + " ".join(f"{x:.2f}" for x in st["amplification_mean"]) + ", largest "
+              + " ".join(f"{x:.2f}" for x in st["amplification_max"]) + "; localisation mean "
+              + " ".join(f"{x:.2f}" for x in st["localisation_mean"]) + ", largest "
+              + " ".join(f"{x:.2f}" for x in st["localisation_max"]) + "; the largest blade's stiffness rank (0: "
+              "softest of 36) " + "; ".join(" ".join(map(str, r)) for r in st["largest_blade_stiffness_rank"]))
+    machine = write_results(name, rows, over_seeds=stats, **settings)
+    print(f"results/{name}.json ({machine}); speeds {args.speeds} rad/s")
     return 0
 
 

@@ -185,3 +185,26 @@ def test_newmark_linear_conserves_energy(ci_blade, ci_ops):
     print(f"E_{n} = {E_n:.4e}, f.u_{n} = {work:.4e}, 1B lower bound {lower:.4e}, 2 f.u_s = {2 * f.array @ u_s:.4e}")
     assert abs(E_n - work) <= 1e-9 * E_n
     assert lower <= E_n <= 2 * f.array @ u_s
+
+
+def test_mistuning_bench_summarises_over_seeds():
+    """benchmarks/bench_disk_mistuning.py's statistic over disks: per sigma the amplification's and localisation's
+    mean and largest over the seeds, and each largest blade's rank among the stiffness factors (0: the softest)."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    try:
+        from bench_disk_mistuning import over_seeds
+    finally:
+        sys.path.pop(0)
+    rows = [{"sigma": 0.0, "seed": 0, "amplification": [1.0, 1.0], "localisation": [1.1, 1.2], "factors": None,
+             "largest_blade": [0, 1]},
+            {"sigma": 0.05, "seed": 1, "amplification": [1.2, 0.9], "localisation": [1.5, 1.3],
+             "factors": [1.0, 0.9, 1.1], "largest_blade": [0, 2]},
+            {"sigma": 0.05, "seed": 0, "amplification": [0.8, 1.1], "localisation": [1.3, 1.1],
+             "factors": [0.95, 1.05, 1.0], "largest_blade": [1, 0]}]
+    (st,) = over_seeds(rows)
+    assert st["sigma"] == 0.05 and st["seeds"] == [0, 1]
+    np.testing.assert_allclose(st["amplification_mean"], [1.0, 1.0], rtol=1e-15)
+    assert st["amplification_max"] == [1.2, 1.1] and st["localisation_max"] == [1.5, 1.3]
+    assert st["largest_blade_stiffness_rank"] == [[2, 0], [1, 2]]
