@@ -38,7 +38,10 @@ def write_results(name: str, rows: list, **extra) -> str:
     """results/<name>.json with the machine and rows; returns the machine description."""
     machine = machine_description()
     Path("results").mkdir(exist_ok=True)
-    Path(f"results/{name}.json").write_text(json.dumps({"machine": machine, "rows": rows, **extra}, indent=1))
+    path = Path(f"results/{name}.json")
+    tmp = path.with_suffix(f".{os.getpid()}.tmp")
+    tmp.write_text(json.dumps({"machine": machine, "rows": rows, **extra}, indent=1))
+    os.replace(tmp, path)                 # a reader never sees half a file
     return machine
 
 

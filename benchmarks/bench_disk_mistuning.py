@@ -17,13 +17,15 @@ wave; 6 = sqrt(36) when one blade carries all).
     python benchmarks/bench_disk_mistuning.py --sigma 0.05 --seeds 1 2 3     # more disks of one scatter
 
 Results: results/bench_disk_mistuning[_gnl].json (machine stated), which keeps the rows of earlier runs with the same
-speeds, revolutions, friction, cap and step (another seed adds to the disks of its sigma); per sigma over its seeds
+preset, speeds, revolutions, friction, cap and step (another seed adds to the disks of its sigma; runs of other seeds
+may go on side by side: the file is read and written under a lock); per sigma over its seeds
 (disks), the amplification's mean and largest and the localisation's, and where the largest blade sits in the
 ranking of the stiffness factors. The sweeps in results/bench_disk_mistuning/.
 """
 from __future__ import annotations
 
 import argparse
+import fcntl
 import json
 import sys
 import time
@@ -55,7 +57,7 @@ def earlier_rows(path: Path, settings: dict, rows: list[dict]) -> list[dict]:
     GNL and its step) and another (sigma, seed) than ``rows``; none when the settings differ."""
     if not path.is_file():
         return []
-    stored = json.loads(path.read_text())
+    stored = {"preset": "ci"} | json.loads(path.read_text())     # files from before the preset was recorded: ci
     if any(stored.get(k) != v for k, v in settings.items()):
         return []
     new = {(r["sigma"], r["seed"]) for r in rows}
@@ -68,12 +70,14 @@ def over_seeds(rows: list[dict]) -> list[dict]:
     out = []
     for sigma in sorted({r["sigma"] for r in rows if r["sigma"] > 0}):
         disks = sorted((r for r in rows if r["sigma"] == sigma), key=lambda r: r["seed"])
-        amp = np.array([r["amplification"] for r in disks])
-        loc = np.array([r["localisation"] for r in disks])
+        amp = np.array([r["amplification"] for r in disks], float)      # NaN: a run that blew up
+        loc = np.array([r["localisation"] for r in disks], float)
         ranks = [[int(np.argsort(np.argsort(r["factors"]))[b]) for b in r["largest_blade"]] for r in disks]
         out.append({"sigma": sigma, "seeds": [r["seed"] for r in disks],
-                    "amplification_mean": amp.mean(axis=0).tolist(), "amplification_max": amp.max(axis=0).tolist(),
-                    "localisation_mean": loc.mean(axis=0).tolist(), "localisation_max": loc.max(axis=0).tolist(),
+                    "amplification_mean": np.nanmean(amp, axis=0).tolist(),
+                    "amplification_max": np.nanmax(amp, axis=0).tolist(),
+                    "localisation_mean": np.nanmean(loc, axis=0).tolist(),
+                    "localisation_max": np.nanmax(loc, axis=0).tolist(),
                     "largest_blade_stiffness_rank": ranks})
     return out
 
@@ -135,11 +139,15 @@ def main(argv=None) -> int:
               + " ".join(f"{x:.2f}" for x in row["amplification"]) + ", localisation "
               + " ".join(f"{x:.2f}" for x in row["localisation"]) + f"  ({wall:.0f} s)", flush=True)
     name = "bench_disk_mistuning" + ("_gnl" if args.gnl else "")
-    settings = dict(speeds=args.speeds, revolutions=args.revolutions, mu=args.mu, cap_khz=args.cap, gnl=args.gnl,
-                    h=args.h if args.gnl else None)
-    rows = sorted(earlier_rows(Path(f"results/{name}.json"), settings, rows) + rows,
-                  key=lambda r: (r["sigma"], r["seed"]))
-    stats = over_seeds(rows)
+    settings = dict(preset=args.preset, speeds=args.speeds, revolutions=args.revolutions, mu=args.mu, cap_khz=args.cap,
+                    gnl=args.gnl, h=args.h if args.gnl else None)
+    Path("results").mkdir(exist_ok=True)
+    with open(f"results/{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)               # another seed's run may be writing the file
+        rows = sorted(earlier_rows(Path(f"results/{name}.json"), settings, rows) + rows,
+                      key=lambda r: (r["sigma"], r["seed"]))
+        stats = over_seeds(rows)
+        machine = write_results(name, rows, over_seeds=stats, **settings)
     for st in stats:
         print(f"sigma {st['sigma']:.3f} over {len(st['seeds'])} disks (seeds {st['seeds']}): amplification mean "
               + " ".join(f"{x:.2f}" for x in st["amplification_mean"]) + ", largest "
@@ -147,7 +155,6 @@ def main(argv=None) -> int:
               + " ".join(f"{x:.2f}" for x in st["localisation_mean"]) + ", largest "
               + " ".join(f"{x:.2f}" for x in st["localisation_max"]) + "; the largest blade's stiffness rank (0: "
               "softest of 36) " + "; ".join(" ".join(map(str, r)) for r in st["largest_blade_stiffness_rank"]))
-    machine = write_results(name, rows, over_seeds=stats, **settings)
     print(f"results/{name}.json ({machine}); speeds {args.speeds} rad/s")
     return 0
 

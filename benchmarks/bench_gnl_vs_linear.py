@@ -132,20 +132,24 @@ def contact_share(record: dict) -> float:
 
 
 @functools.lru_cache(maxsize=None)
-def setting_records(folder: Path, gnl: bool, revolutions: float, every: bool = False) -> tuple[dict, dict]:
+def setting_records(folder: Path, gnl: bool, revolutions: float, every: bool = False) -> tuple[dict, dict | None]:
     """({speed: per-speed record}, summary.json entry) of one setting (GNL off or on) of the map in ``folder``: the
     speeds of its last run, or with ``every`` all those its sweeps at that step hold (step checks run one after
-    another). Read once per process (``map_row`` and ``step_check`` both ask), after the maps have run; callers do
-    not modify what it returns."""
+    another); ({}, None) when the folder has no map of that setting. Only sweeps of the entry's model (a map run
+    again with another --perturbation writes beside it at the same step). Read once per process (``map_row`` and
+    ``step_check`` both ask), after the maps have run; callers do not modify what it returns."""
     from rotor37_rom.sweep import load_sweep
 
     summary = json.loads((folder / "summary.json").read_text())
-    entry = next(v for k, v in summary["runs"].items() if k.startswith("GNL") == gnl)
+    entry = next((v for k, v in summary["runs"].items() if k.startswith("GNL") == gnl), None)
+    if entry is None:
+        return {}, None
     records = {}
     for sweep in sorted((folder / "sweeps").iterdir()):
         spec = json.loads((sweep / "spec.json").read_text())
         if bool(spec["nonlinear"]) != gnl or float(spec["spec"]["revolutions"]) != revolutions \
-                or not same_step(entry["h"], float(spec["h"])):
+                or not same_step(entry["h"], float(spec["h"])) \
+                or ("model_key" in entry and spec.get("model") != entry["model_key"]):
             continue
         for rec in load_sweep(sweep):                  # the retries' records replace the first run's
             if int(rec["diverged_step"]) < 0 or float(rec["omega"]) not in records:
@@ -174,6 +178,8 @@ def step_check(folder: Path, revolutions: float) -> list[dict]:
     runs = [setting_records(folder, True, revolutions), setting_records(folder / "step_check", True, revolutions,
                                                                          every=True)]
     (dropped, entry), (kept, entry_kept) = runs
+    if entry is None or entry_kept is None:
+        return []
     grid = list(dropped)
     pairs = [(w, grid[i]) for w in kept if (i := grid_index(grid, w)) is not None]   # (check speed, map speed)
     if not pairs:
@@ -194,21 +200,23 @@ def step_check(folder: Path, revolutions: float) -> list[dict]:
 
 
 def floor_row(folders: list[Path], gnl: bool, revolutions: float) -> dict | None:
-    """The maps of ``folders`` run again perturbed (folder/floor): their perturbation, speeds and NFRC (mm), or None
-    when none was run."""
-    from rotor37_rom.sweep import interaction_map
+    """The maps of ``folders`` run again perturbed (folder/floor): their perturbation, speeds and NFRC (mm), and the
+    1B/EO4 resonance of the perturbed map (rad/s), or None when none was run."""
+    from rotor37_rom.sweep import engine_order_resonance, interaction_map
 
-    speeds, nfrc, eps = [], [], set()
+    records, eps = {}, set()
     for folder in folders:
         if not (folder / "floor" / "summary.json").is_file():
             continue
-        records, entry = setting_records(folder / "floor", gnl, revolutions)
-        eps.add(entry.get("perturbation"))
-        speeds += list(records)
-        nfrc += (interaction_map(list(records.values())).nfrc * 1e3).tolist()
-    if not speeds:
+        recs, entry = setting_records(folder / "floor", gnl, revolutions)
+        if entry is not None:
+            eps.add(entry.get("perturbation"))
+            records.update(recs)
+    if not records:
         return None
-    return {"perturbation": sorted(eps, key=str), "speeds": speeds, "nfrc_mm": nfrc}
+    imap = interaction_map([records[w] for w in sorted(records)])
+    return {"perturbation": sorted(eps, key=str), "speeds": sorted(records), "nfrc_mm": (imap.nfrc * 1e3).tolist(),
+            "resonance": engine_order_resonance(imap, 4, revolutions)}
 
 
 def map_row(folders: list[Path], mu: float, gnl: bool, revolutions: float, quarter_omega1: float) -> dict:
@@ -246,8 +254,10 @@ def map_row(folders: list[Path], mu: float, gnl: bool, revolutions: float, quart
 
 
 def in_range(check, speeds: tuple) -> bool:
-    """Whether the --step-check grid lies in the speed range (START, STOP, N)."""
-    return speeds[0] <= check[0] and check[1] <= speeds[1]
+    """Whether the --step-check grid (START, STOP, N) is speeds of the range (START, STOP, N), up to round-off."""
+    grid = np.linspace(speeds[0], speeds[1], int(speeds[2]))
+    return speeds[0] <= check[0] and check[1] <= speeds[1] and all(
+        grid_index(grid, w) is not None for w in np.linspace(check[0], check[1], int(check[2])))
 
 
 def check_speeds_error(args, ranges: list[tuple]) -> str | None:
@@ -258,9 +268,8 @@ def check_speeds_error(args, ranges: list[tuple]) -> str | None:
     start, stop, n = args.step_check
     if not (0 < start <= stop and n >= 1 and float(n).is_integer()):
         return f"need 0 < START <= STOP and an integer N >= 1, got {args.step_check}"
-    grid = np.linspace(start, stop, int(n))
-    if not any(in_range(args.step_check, r) and all(grid_index(np.linspace(r[0], r[1], int(r[2])), w) is not None
-                                                    for w in grid) for r in ranges):
+    if not any(in_range(args.step_check, r) for r in ranges):
+        grid = np.linspace(start, stop, int(n))
         return f"its speeds {grid.tolist()} must be speeds of one of the ranges {[list(r) for r in ranges]}"
     return None
 
@@ -324,8 +333,11 @@ def markdown(rows: list[dict], quarter_omega1: float) -> str:
         peak = np.nanmax(r["nfrc_mm"])
         moved = [f"{w:.0f}: {100 * abs(b - r['nfrc_mm'][i]) / peak:.1f} %"
                  for w, b in zip(fl["speeds"], fl["nfrc_mm"]) if (i := grid_index(r["speeds"], w)) is not None]
-        lines += ["", f"r = {r['r']}, μ = {r['mu']:g}, GNL {gnl_label(r)}: x (1 + {fl['perturbation']}) moves the "
-                      f"NFRC by (of its peak {peak:.3f} mm) " + ", ".join(moved)]
+        eps = ", ".join(f"{e:g}" for e in fl["perturbation"] if e is not None)
+        lines += ["", f"r = {r['r']}, μ = {r['mu']:g}, GNL {gnl_label(r)}: x (1 + {eps}) moves the "
+                      f"NFRC by (of its peak {peak:.3f} mm) " + ", ".join(moved)
+                  + f"; 1B/EO4 resonance {f(fl.get('resonance'), '.0f')} rad/s perturbed, "
+                    f"{f(r['resonance'], '.0f')} not"]
     return "\n".join(lines)
 
 

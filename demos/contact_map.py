@@ -351,7 +351,7 @@ class ContactMapConfig:
     def _normalise(self) -> None:
         """Floats, tuples and paths, as the command line gives them (same cache keys from Python and the shell)."""
         for name in ("revolutions", "safety", "h", "frequency_cap", "tangent_safety", "cubature", "mu", "c0", "hb",
-                     "continuation", "mistuning"):
+                     "continuation", "mistuning", "perturbation"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, float(getattr(self, name)))
         start, stop, n = self.speeds
@@ -779,7 +779,7 @@ def capped_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np
 def time_scheme(config: ContactMapConfig, model: ReducedModel, gnl: bool, comm: MPI.Comm | None
                 ) -> CentralDifference:
     """The central-difference scheme of one setting: its forces (exact or cubature), step and frequency cap; with a
-    perturbation, the perturbed model's at the unperturbed model's step."""
+    perturbation, the perturbed model run by the unperturbed scheme (its step, capped mass and damping)."""
     run_model, states, h = model, None, config.h
     if gnl and config.cubature is not None:
         run_model, states = cubature_model(config, model, comm)
@@ -788,10 +788,7 @@ def time_scheme(config: ContactMapConfig, model: ReducedModel, gnl: bool, comm: 
         h = capped_gnl_step(config, model, run_model, states, verbose=comm is None or comm.rank == 0)
     scheme = CentralDifference(run_model, nonlinear=gnl, h=h, safety=config.safety,
                                frequency_cap=config.frequency_cap_rad_s)
-    if config.perturbation == 0:
-        return scheme
-    return CentralDifference(perturbed_model(run_model, config.perturbation), nonlinear=gnl, h=scheme.h,
-                             frequency_cap=config.frequency_cap_rad_s)
+    return scheme.with_model(perturbed_model(run_model, config.perturbation)) if config.perturbation else scheme
 
 
 def setting_names(config: ContactMapConfig, gnl: bool) -> tuple[str, str]:
@@ -803,6 +800,8 @@ def setting_names(config: ContactMapConfig, gnl: bool) -> tuple[str, str]:
             parts.append(("single", "f32"))
     if config.frequency_cap is not None:
         parts.append((f"cap {config.frequency_cap:g} kHz", f"cap{config.frequency_cap:g}k"))
+    if config.perturbation:
+        parts.append((f"x (1 + {config.perturbation:g})", f"pert{config.perturbation:g}"))
     return ", ".join(p[0] for p in parts), "_".join(p[1] for p in parts)
 # -
 
@@ -896,7 +895,7 @@ def summary_entry(config: ContactMapConfig, scheme: CentralDifference, result: M
     works = np.array([np.asarray(r.get("work", np.full(4, np.nan)), float)[:2] for r in records])
     entry = {"h": scheme.h, "h_crit": scheme.h_crit, "frequency_cap_khz": config.frequency_cap,
              "step_outliers": config.step_outliers if scheme.nonlinear else None,
-             "perturbation": config.perturbation,
+             "perturbation": config.perturbation, "model_key": scheme.model.key,
              "cubature": scheme.model.metadata.get("hyper_reduction"),
              # from the metadata: a disk's sector forces wrap the quadrature forces that carry the precision
              "force_precision": scheme.model.metadata.get("force_precision", "double"), "peak_speed": result.peak_speed,

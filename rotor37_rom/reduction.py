@@ -8,6 +8,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import numbers
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -538,8 +539,9 @@ def perturbed_model(model: ReducedModel, eps: float) -> ReducedModel:
     perturbation as small as any force approximation's error: the speeds whose response it moves are those no
     approximation can be judged on (the floor, docs/results.md). The key changes with it (metadata 'perturbation',
     the product of the factors applied), so cached sweeps are not mixed up."""
-    if not (isinstance(eps, (int, float)) and np.isfinite(eps) and abs(eps) < 0.01):
+    if not (isinstance(eps, numbers.Real) and np.isfinite(eps) and abs(eps) < 0.01):
         raise ValueError(f"perturbation must be a number with |eps| < 0.01, got {eps!r}")
+    eps = float(eps)
     if eps == 0:
         return model
     scale, forces = 1.0 + eps, model.forces

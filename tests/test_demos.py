@@ -25,18 +25,28 @@ def contact_map():
 
 
 def test_contact_map_perturbation_keeps_the_step(contact_map, ci_rom, tmp_path):
-    """--perturbation EPS: the map's scheme runs the model with K q + g(q) scaled by 1 + EPS (perturbed_model) at
-    the step of the unperturbed map, GNL off (the step from the linear model's highest frequency, which the
-    perturbation raises by EPS / 2) and on, so that the two maps differ by the perturbation alone."""
+    """--perturbation EPS: the map's scheme runs the model with K q + g(q) scaled by 1 + EPS (perturbed_model) with
+    the unperturbed scheme's step, mass (capped: not recomputed from the perturbed K) and damping, GNL off and on and
+    with a cap, so that the two maps differ by the internal force alone; the force to round-off (1e-12, as in
+    test_perturbed_model_scales_the_internal_force). At the stability limit the stiffer model is refused (its
+    highest frequency is EPS / 2 higher)."""
     path = save_reduced_model(ci_rom, tmp_path / "rom.npz")
-    for gnl in (False, True):
+    for gnl, cap in ((False, None), (True, None), (False, 60.0)):
         schemes = [contact_map.time_scheme(contact_map.ContactMapConfig(model=path, perturbation=eps, quiet=True,
-                                                                        out=tmp_path), ci_rom, gnl, None)
-                   for eps in (0.0, 1e-4)]
+                                                                        frequency_cap=cap, out=tmp_path),
+                                           ci_rom, gnl, None) for eps in (0.0, 1e-4)]
         plain, pert = schemes
         assert pert.h == plain.h and pert.nonlinear == plain.nonlinear == gnl
-        assert np.array_equal(pert.model.K, (1 + 1e-4) * ci_rom.K)
+        assert pert.frequency_cap == plain.frequency_cap and np.array_equal(pert.M, plain.M)   # the capped mass kept
+        assert np.array_equal(pert.C, plain.C)
+        assert np.array_equal(pert.model.K, (1 + 1e-4) * ci_rom.K) and np.array_equal(pert.K, pert.model.K)
         assert pert.model.metadata["perturbation"] == 1e-4 and "perturbation" not in plain.model.metadata
+        if gnl:
+            Q = np.full((ci_rom.r, 1), 1e-4)
+            g, g_pert = plain.model.nonlinear_force(Q), pert.model.nonlinear_force(Q)
+            assert np.abs(g_pert - (1 + 1e-4) * g).max() <= 1e-12 * np.abs(g).max()
+    with pytest.raises(ValueError, match="stability limit"):         # at the limit, a stiffer model cannot run
+        plain.with_step(plain.h_crit).with_model(pert.model)
 
 
 def test_contact_map_runs_in_process(contact_map, ci_rom, tmp_path):

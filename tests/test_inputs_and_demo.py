@@ -1,5 +1,6 @@
 """Bad input stops with one line naming the culprit; the demo runs at the ci preset and draws real pictures;
 the implicit Newmark reference conserves energy (average acceleration, linear, undamped)."""
+import json
 import sys
 from pathlib import Path
 
@@ -187,14 +188,16 @@ def test_newmark_linear_conserves_energy(ci_blade, ci_ops):
     assert lower <= E_n <= 2 * f.array @ u_s
 
 
-def test_mistuning_bench_summarises_over_seeds():
+def test_mistuning_bench_summarises_over_seeds(tmp_path):
     """benchmarks/bench_disk_mistuning.py's statistic over disks: per sigma the amplification's and localisation's
-    mean and largest over the seeds, and each largest blade's rank among the stiffness factors (0: the softest)."""
+    mean and largest over the seeds (a blown-up run's NaN left out), and each largest blade's rank among the
+    stiffness factors (0: the softest); an earlier run's rows are kept when its settings are the same and the
+    (sigma, seed) is not run again, dropped when a setting differs."""
     import sys
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
     try:
-        from bench_disk_mistuning import over_seeds
+        from bench_disk_mistuning import earlier_rows, over_seeds
     finally:
         sys.path.pop(0)
     rows = [{"sigma": 0.0, "seed": 0, "amplification": [1.0, 1.0], "localisation": [1.1, 1.2], "factors": None,
@@ -208,3 +211,12 @@ def test_mistuning_bench_summarises_over_seeds():
     np.testing.assert_allclose(st["amplification_mean"], [1.0, 1.0], rtol=1e-15)
     assert st["amplification_max"] == [1.2, 1.1] and st["localisation_max"] == [1.5, 1.3]
     assert st["largest_blade_stiffness_rank"] == [[2, 0], [1, 2]]
+    rows[1]["amplification"] = [float("nan"), 0.9]
+    assert over_seeds(rows)[0]["amplification_max"] == [0.8, 1.1]
+    settings = {"preset": "ci", "speeds": [1453.0], "revolutions": 200.0}
+    stored = tmp_path / "stored.json"
+    stored.write_text(json.dumps({"rows": rows, "speeds": [1453.0], "revolutions": 200.0}, allow_nan=True))
+    kept = earlier_rows(stored, settings, [{"sigma": 0.0, "seed": 0}])
+    assert [(r["sigma"], r["seed"]) for r in kept] == [(0.05, 1), (0.05, 0)]
+    assert earlier_rows(stored, settings | {"revolutions": 100.0}, []) == []
+    assert earlier_rows(stored, settings | {"preset": "coarse"}, []) == []

@@ -706,7 +706,7 @@ def test_idle_barrier_waits_asleep(tmp_path):
     """sweep.idle_barrier (run_sweep's barriers, the retries' and the continuation's hand-over): the rank that is done
     first waits without holding its core. Under mpirun -n 2 rank 1 arrives 2 s after rank 0; rank 0 waits the 2 s
     and spends < 0.5 s of CPU on it (polling every 50 ms: ~40 wake-ups), where OpenMPI's blocking barrier, the
-    control, spins the core for most of the 2 s (> 1 s of CPU)."""
+    control, spins the core for most of the 2 s (> 1 s of CPU; checked when the machine is otherwise idle)."""
     script = tmp_path / "wait.py"
     script.write_text(
         "import sys, time\n"
@@ -731,4 +731,6 @@ def test_idle_barrier_waits_asleep(tmp_path):
         measured[mode] = [float(x) for x in run.stdout.split()[-2:]]
     (cpu_idle, wall_idle), (cpu_blocking, wall_blocking) = measured["idle"], measured["blocking"]
     assert wall_idle >= 1.9 and wall_blocking >= 1.9
-    assert cpu_idle < 0.5 < 1.0 < cpu_blocking, measured
+    assert cpu_idle < 0.5, measured
+    if os.getloadavg()[0] < 1.0:          # the control needs the core to itself: on a busy machine a spin gets less
+        assert cpu_blocking > 1.0, measured
