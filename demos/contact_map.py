@@ -124,9 +124,10 @@ class ContactMapConfig:
             state, and the demo then says so. A brief pass may not blow up, so benchmarks/bench_gnl_vs_linear.py
             --step-check measures the dropped step's error against runs at the kept one.
         perturbation: the internal force K q + g(q) of the runs scaled by 1 + this, |.| < 0.01 (0: none), after
-            the cubature is trained and the step set, so that the same runs differ by the perturbation alone
-            (``reduction.perturbed_model``): a map again with 1e-4 shows the speeds whose response any force
-            approximation's error moves (the floor; docs/results.md).
+            the cubature is trained and the step set (``reduction.perturbed_model``; the same cubature and step,
+            the cap applied to the perturbed model): a map again with 1e-4 shows the speeds whose response any
+            force approximation's error moves (the floor; docs/results.md). A step at the unperturbed limit is
+            refused, the perturbed model's being eps / 2 lower.
         cubature: GNL forces by point cubature trained to this relative tolerance, in (0, 1). None: exact tensors.
         precision: arithmetic of the cubature forces: 'double' or 'single' (float32; needs ``cubature``).
         cubature_speeds: the speeds (rad/s) of the exact GNL runs the cubature is trained on (needs ``cubature``).
@@ -779,7 +780,8 @@ def capped_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np
 def time_scheme(config: ContactMapConfig, model: ReducedModel, gnl: bool, comm: MPI.Comm | None
                 ) -> CentralDifference:
     """The central-difference scheme of one setting: its forces (exact or cubature), step and frequency cap; with a
-    perturbation, the perturbed model run by the unperturbed scheme (its step, capped mass and damping)."""
+    perturbation, the perturbed model's scheme with the same cap at the unperturbed model's step (the cap applies to
+    the perturbed model: its modes above the cap stay at the cap, their capped mass scaled with their stiffness)."""
     run_model, states, h = model, None, config.h
     if gnl and config.cubature is not None:
         run_model, states = cubature_model(config, model, comm)
@@ -788,7 +790,10 @@ def time_scheme(config: ContactMapConfig, model: ReducedModel, gnl: bool, comm: 
         h = capped_gnl_step(config, model, run_model, states, verbose=comm is None or comm.rank == 0)
     scheme = CentralDifference(run_model, nonlinear=gnl, h=h, safety=config.safety,
                                frequency_cap=config.frequency_cap_rad_s)
-    return scheme.with_model(perturbed_model(run_model, config.perturbation)) if config.perturbation else scheme
+    if not config.perturbation:
+        return scheme
+    return CentralDifference(perturbed_model(run_model, config.perturbation), nonlinear=gnl, h=scheme.h,
+                             frequency_cap=config.frequency_cap_rad_s)
 
 
 def setting_names(config: ContactMapConfig, gnl: bool) -> tuple[str, str]:

@@ -327,26 +327,6 @@ class CentralDifference:
         other._build()
         return other
 
-    def with_model(self, model) -> "CentralDifference":
-        """The same scheme (mass as scaled by the cap, damping, step) running another model of the same size: its
-        stiffness and nonlinear forces, e.g. ``reduction.perturbed_model``'s, so that the two runs differ by the
-        internal force alone (the capped mass is not recomputed from the new stiffness). The new stiffness may raise
-        the highest frequency: a step above its limit is refused (ValueError)."""
-        if self.massless:
-            raise ValueError("with_model: not for the massless-boundary variant (its condensation is the model's)")
-        if model.r != self.r:
-            raise ValueError(f"with_model: the model has r = {model.r}, the scheme r = {self.r}")
-        other = copy.copy(self)
-        other.model, other.K = model, np.asarray(model.K, float)
-        other.nonlinear = bool(self.nonlinear and model.forces is not None)
-        other.omega_max = highest_frequency(other.M, other.K)
-        other.h_crit = 2.0 / other.omega_max
-        if other.h > other.h_crit:
-            raise ValueError(f"time step h = {other.h:.4g} s exceeds the stability limit {other.h_crit:.4g} s of the "
-                             f"scheme with the new model's stiffness; take a smaller step")
-        other._build()
-        return other
-
     def _boundary_interior(self) -> tuple[np.ndarray, np.ndarray]:
         """The node-displacement entries of q and the others (the massless variant's boundary and interior)."""
         b = self.boundary_rows
