@@ -191,11 +191,11 @@ def step_check(folder: Path, revolutions: float) -> list[dict]:
     for name, key, ws in (("floor", "mm_dropped_perturbed", [p[1] for p in pairs]),
                           ("step_check_floor", "mm_kept_perturbed", [p[0] for p in pairs])):
         if (folder / name / "summary.json").is_file():
-            perturbed = {w: interaction_map([rec]).nfrc[0] * 1e3 for w, rec in
-                         setting_records(folder / name, True, revolutions, every=True)[0].items()}
+            records = setting_records(folder / name, True, revolutions, every=True)[0]
+            speeds = list(records)
             for check, w in zip(checks, ws):
-                hit = grid_index(list(perturbed), w)
-                check[key] = None if hit is None else float(list(perturbed.values())[hit])
+                hit = grid_index(speeds, w)
+                check[key] = None if hit is None else float(interaction_map([records[speeds[hit]]]).nfrc[0] * 1e3)
     return checks
 
 
