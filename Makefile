@@ -104,7 +104,7 @@ bench: $(STAMP)
 speed-accuracy: $(STAMP)
 	$(PY) benchmarks/speed_accuracy.py
 
-# its bladed-disk scenes (the disk's frequencies at every nodal diameter against r_c and r_cyclic); 25 min
+# its bladed-disk scenes (the disk's frequencies at every nodal diameter, its short map without GNL); about 1 h
 speed-accuracy-disk: $(STAMP)
 	$(PY) benchmarks/speed_accuracy.py --scene disk
 

@@ -26,6 +26,11 @@ Scenes (the report's settings):
   diameter against the sector's full-order cyclic modes; candidates: r_c x r_cyclic (8 tip nodes per sector, as the
   contact maps), with and without modal derivatives; cost: the linear contact run per simulated ms at the maps'
   60 kHz cap; held out: the 4th-6th modes of every nodal diameter.
+- ``disk-map-linear`` (bladed disk, not in ``all``): the disk's short map without GNL, 8 speeds in 1,200-1,650 rad/s
+  x 20 revolutions from rest on the disk maps' casing (cone normal, mu = 0.15); error on the robust speeds: the NFRC
+  of node LE of sector 0 and of the largest blade, and the speed and amplitude of the largest response; reference:
+  r_c 10, r_MD 10, r_cyclic 288 at a 240 kHz cap; candidates: r_c, r_MD, r_cyclic, frequency cap (the reference's
+  model at 120 kHz measures its cap's own error); held out: 7 other speeds.
 - ``cost-r``: the cost per simulation-step against r for each force method (no GNL, exact tensors, point cubature on
   all points and on 10 points per mode, float64 / float32), synthetic models of each size, and the trained cubatures.
 
@@ -53,7 +58,7 @@ ROOT = Path(__file__).resolve().parents[1]
 WORK = ROOT / "results" / "speed_accuracy"
 IMG = ROOT / "docs" / "img"
 SCENES = ("modes", "clearance", "map-linear", "map-gnl", "stability", "paper-speedup", "cost-r")
-DISK_SCENES = ("disk-modes",)        # not in 'all' (the single-blade study's hour): --scene disk-modes, or disk
+DISK_SCENES = ("disk-modes", "disk-map-linear")   # not in 'all' (the single-blade study's hour): --scene disk
 PAPER_R, PAPER_H = 189, 1e-7            # the paper's single-blade GNL setting: r = 189, exact tensors, h = 1e-7 s
 TOLERANCES = (0.01, 0.05, 0.2)
 PERTURBATION = 1e-4
@@ -261,30 +266,35 @@ def model_file(r_c: int) -> Path:
 RETRIES = ", retries"
 
 
-def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_path: Path | None = None) -> MapRun:
-    """One map of the scene (run_contact_map of demos/contact_map.py), cached in results/speed_accuracy/<name>.
+MODEL_OPTIONS = ("r_c", "r_md", "r_cyclic")     # a candidate's options that make its model, not its scheme
+
+
+def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_path: Path | None = None,
+            setup: dict = MAP, prefix: str = "") -> MapRun:
+    """One map of the scene (run_contact_map of demos/contact_map.py with ``setup``, MAP or DISK_MAP), cached in
+    results/speed_accuracy/<prefix><name>. The model is ``model_path`` (default: the blade's of ``options['r_c']``).
     A candidate '<base>, retries' is its base candidate's map with the speeds that blew up run again at a smaller
     step: it runs in the base's folder (the base's sweep is reused, only the retries run), and its cost is the base
     map's plus the retries'."""
     from rotor37_rom.sweep import load_sweep
 
     cm = load_demo("contact_map")
-    opts = dict(options)
-    r_c = opts.pop("r_c", 15)
-    model_path = model_path or model_file(r_c)
+    opts = {k: v for k, v in options.items() if k not in MODEL_OPTIONS}
+    model_path = model_path or model_file(options.get("r_c", 15))
     base = None
     if opts.get("retry_diverged"):
         if not name.endswith(RETRIES):
             raise ValueError(f"a candidate with retry_diverged is named '<base>{RETRIES}', got {name!r}")
         base = run_map(name.removesuffix(RETRIES), gnl, {k: v for k, v in options.items() if k != "retry_diverged"},
-                       speeds, model_path)
+                       speeds, model_path, setup, prefix)
         name = name.removesuffix(RETRIES)
-    tag = f"{'gnl' if gnl else 'linear'}_{name}_{int(speeds[0])}_{int(speeds[1])}_{int(speeds[2])}".replace(" ", "_")
+    tag = f"{prefix}{'gnl' if gnl else 'linear'}_{name}_{int(speeds[0])}_{int(speeds[1])}_{int(speeds[2])}"
+    tag = tag.replace(" ", "_")
     out = WORK / tag
     done = out / ("study_run.json" if base is None else f"study_run_retries{opts['retry_diverged']}.json")
-    config = cm.ContactMapConfig(**{**MAP, "speeds": speeds, "model": model_path, "gnl": "on" if gnl else "off",
+    config = cm.ContactMapConfig(**{**setup, "speeds": speeds, "model": model_path, "gnl": "on" if gnl else "off",
                                     "out": out, **opts})
-    setting = json.dumps([str(model_path), opts], sort_keys=True, default=str)
+    setting = json.dumps([str(model_path), opts] + ([] if setup is MAP else [setup]), sort_keys=True, default=str)
     if not done.is_file() or json.loads(done.read_text()).get("setting") != setting:
         shared = WORK / "cubature_cache"          # one cubature training per model and casing, shared by candidates
         shared.mkdir(parents=True, exist_ok=True)
@@ -439,13 +449,21 @@ def study_training_speeds() -> tuple[float, ...]:
 def held_out_map(scene: dict, gnl: bool, tolerances=TOLERANCES) -> None:
     """Run the models chosen at each tolerance on the held-out speeds; a miss is recorded on the candidate, and the
     chooser then passes it over for the next cheapest (the loop goes on until a choice holds on the held-out case)."""
-    from rotor37_rom.model_choice import choose_model
-
     ref_options = scene["reference"]["options"]
     ref = run_map("reference", gnl, ref_options, speeds=HELD_OUT_SPEEDS)
     pert_path = WORK / "models" / f"rom_rc{ref_options['r_c']}_perturbed_{'gnl' if gnl else 'linear'}.npz"
     pert = run_map("reference_perturbed", gnl, ref_options, speeds=HELD_OUT_SPEEDS, model_path=pert_path)
     robust = np.abs(pert.nfrc - ref.nfrc) <= ROBUST * np.nanmax(ref.nfrc)
+    held_out_choices(scene, tolerances, lambda name, options: map_errors(
+        run_map(name, gnl, held_out_options(options), speeds=HELD_OUT_SPEEDS), ref, robust)["map"])
+    scene["held_out_reference"] = dict(robust_speeds=ref.speeds[robust].tolist(), sweep_s=ref.sweep_wall)
+
+
+def held_out_choices(scene: dict, tolerances, error_of) -> None:
+    """For each tolerance, the chosen model's error on the held-out case (``error_of(name, options)``), recorded on
+    its candidate; a miss passes the choice to the next cheapest, which is run in turn, until one holds."""
+    from rotor37_rom.model_choice import choose_model
+
     study = {"schema": 1, "scenes": {"s": scene}}
     by_name = {c["name"]: c for c in scene["candidates"]}
     for tol in tolerances:
@@ -457,12 +475,148 @@ def held_out_map(scene: dict, gnl: bool, tolerances=TOLERANCES) -> None:
             cand = by_name[choice.name]
             if cand["held_out_error"] is not None:
                 break
-            run = run_map(choice.name, gnl, held_out_options(cand["options"]), speeds=HELD_OUT_SPEEDS)
-            cand["held_out_error"] = map_errors(run, ref, robust)["map"]
+            cand["held_out_error"] = error_of(choice.name, cand["options"])
             print(f"held out at {tol:g}: {choice.name}: {cand['held_out_error']:.3g}")
             if cand["held_out_error"] <= tol:
                 break
-    scene["held_out_reference"] = dict(robust_speeds=ref.speeds[robust].tolist(), sweep_s=ref.sweep_wall)
+
+
+# ## The bladed disk's interaction map without GNL: basis, interface modes and frequency cap
+
+DISK_MAP = dict(preset="ci", speeds=(1200.0, 1650.0, 8), revolutions=20.0, mu=0.15, direction="cone", quiet=True,
+                batch=8)                     # the disk maps' casing (cone normal, the paper's mu) and short map
+DISK_HELD_OUT_SPEEDS = (1230.0, 1620.0, 7)      # between the study's speeds (every 64.3 rad/s)
+DISK_MAP_REFERENCE = {"r_c": 10, "r_md": 10, "r_cyclic": 288, "frequency_cap": 240.0}
+DISK_MAP_CANDIDATES = [  # every sector's 8 tip nodes; r_md by MI 2b; the maps' model is r_c 10, 10 MD, r_cyclic 144
+    ("the maps' model, cap 30 kHz", {"r_c": 10, "r_md": 10, "r_cyclic": 144, "frequency_cap": 30.0}),
+    ("the maps' model, cap 60 kHz", {"r_c": 10, "r_md": 10, "r_cyclic": 144, "frequency_cap": 60.0}),
+    ("the maps' model, cap 120 kHz", {"r_c": 10, "r_md": 10, "r_cyclic": 144, "frequency_cap": 120.0}),
+    ("r_c 10, r_cyclic 144, cap 60 kHz", {"r_c": 10, "r_md": 0, "r_cyclic": 144, "frequency_cap": 60.0}),
+    ("r_c 10, r_cyclic 72, cap 60 kHz", {"r_c": 10, "r_md": 0, "r_cyclic": 72, "frequency_cap": 60.0}),
+    ("r_c 10, r_cyclic 72, cap 30 kHz", {"r_c": 10, "r_md": 0, "r_cyclic": 72, "frequency_cap": 30.0}),
+    ("r_c 5, r_cyclic 72, cap 60 kHz", {"r_c": 5, "r_md": 0, "r_cyclic": 72, "frequency_cap": 60.0}),
+    ("r_c 2, r_cyclic 144, cap 60 kHz", {"r_c": 2, "r_md": 0, "r_cyclic": 144, "frequency_cap": 60.0}),
+    ("the reference's model, cap 120 kHz", {**DISK_MAP_REFERENCE, "frequency_cap": 120.0}),   # its cap's own error
+]
+
+
+@functools.lru_cache(maxsize=None)
+def _disk_sector():
+    from rotor37_rom import fem
+
+    sector = fem.create_disk_sector(preset="ci")
+    return sector, fem.create_svk_operators(sector)
+
+
+def disk_model_file(options: dict, perturbation: float = 0.0) -> Path:
+    """The disk model of ``options`` (r_c, r_md by MI 2b, r_cyclic; every sector's 8 tip nodes; no GNL forces), built
+    once (the Craig-Bampton parts cached with scene disk-modes') and saved for the map command's --model; with a
+    ``perturbation``, that model's stiffness scaled by 1 + perturbation."""
+    from rotor37_rom.builder import mesh_signature
+    from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
+    from rotor37_rom.reduction import load_reduced_model, perturbed_model, save_reduced_model
+
+    sector, ops = _disk_sector()
+    stem = f"disk_{mesh_signature(sector)[:12]}_rc{options['r_c']}_md{options['r_md']}_cyc{options['r_cyclic']}"
+    path = WORK / "models" / f"{stem}.npz"
+    if not path.is_file():
+        model, _ = build_disk_model(sector, DiskReductionConfig(tip_nodes="all", r_c=options["r_c"],
+                                                                r_md=options["r_md"], criterion="MI2b",
+                                                                r_cyclic=options["r_cyclic"], forces="none"),
+                                    ops=ops, cache_dir=WORK / "disk_models")
+        save_reduced_model(model, path)
+    if perturbation == 0.0:
+        return path
+    pert = WORK / "models" / f"{stem}_perturbed_{perturbation:g}.npz"
+    if not pert.is_file():
+        save_reduced_model(perturbed_model(load_reduced_model(path), perturbation), pert)
+    return pert
+
+
+def run_disk_map(name: str, options: dict, speeds=DISK_MAP["speeds"], perturbation: float = 0.0) -> MapRun:
+    return run_map(name, False, options, speeds, disk_model_file(options, perturbation), DISK_MAP, "disk_")
+
+
+def largest_over_blades(run: MapRun) -> np.ndarray:
+    """Per speed, the largest over the 36 blades of node LE's max |u| over the last revolution."""
+    from rotor37_rom.sweep import sector_maxima
+
+    return np.array([np.nanmax(sector_maxima(r)) if int(r["diverged_step"]) < 0 else np.nan for r in run.records])
+
+
+def disk_robust(ref: MapRun, pert: MapRun) -> np.ndarray:
+    """The speeds where the reference's 1e-4 perturbation moves node LE of sector 0 and the largest blade by at most
+    1 % of their peaks."""
+    big, big_p = largest_over_blades(ref), largest_over_blades(pert)
+    return ((np.abs(pert.nfrc - ref.nfrc) <= ROBUST * np.nanmax(ref.nfrc))
+            & (np.abs(big_p - big) <= ROBUST * np.nanmax(big)))
+
+
+def disk_map_errors(run: MapRun, ref: MapRun, robust: np.ndarray) -> dict:
+    """On the robust speeds only: the NFRC errors of node LE of sector 0 and of the largest blade (relative to the
+    reference's peak there), and the resonance speed's and peak's relative errors at node LE of sector 0 (the largest
+    response over the robust speeds: on the disk's short map the reference's largest response overall sits in a band
+    where the contact selects the response, and the 1e-4 perturbation moves it by 11 %, docs/choosing-a-model.md);
+    ``map`` is the largest of the four."""
+    if not robust.any():
+        raise RuntimeError("no speed of the disk map is robust to the reference's 1e-4 perturbation: the map cannot "
+                           "judge a model (more revolutions or other speeds)")
+    if run.diverged.any():
+        return dict(nfrc=math.inf, largest=math.inf, speed=math.inf, peak=math.inf, map=math.inf)
+    sub = np.flatnonzero(robust)
+    big, big_ref = largest_over_blades(run), largest_over_blades(ref)
+    i_ref, i = sub[np.nanargmax(ref.nfrc[sub])], sub[np.nanargmax(run.nfrc[sub])]
+    err = dict(nfrc=float(np.abs(run.nfrc[sub] - ref.nfrc[sub]).max() / ref.nfrc[i_ref]),
+               largest=float(np.abs(big[sub] - big_ref[sub]).max() / np.nanmax(big_ref[sub])),
+               speed=float(abs(run.speeds[i] - ref.speeds[i_ref]) / ref.speeds[i_ref]),
+               peak=float(abs(run.nfrc[i] - ref.nfrc[i_ref]) / ref.nfrc[i_ref]))
+    err["map"] = max(err.values())
+    return err
+
+
+def scene_disk_map() -> dict:
+    """The disk's short interaction map without GNL (8 speeds in 1,200-1,650 rad/s x 20 revolutions from rest, the
+    disk maps' casing: cone normal, mu = 0.15) against the largest model at the highest cap; held out: 7 other
+    speeds."""
+    ref = run_disk_map("reference", DISK_MAP_REFERENCE)
+    pert = run_disk_map("reference_perturbed", DISK_MAP_REFERENCE, perturbation=PERTURBATION)
+    robust = disk_robust(ref, pert)
+    print(f"disk-map-linear: robust speeds {ref.speeds[robust].round(1).tolist()}")
+    cands = []
+    for name, options in DISK_MAP_CANDIDATES:
+        run = run_disk_map(name, options)
+        err = disk_map_errors(run, ref, robust)
+        cands.append(dict(name=name, options=options, us_per_step=1e6 * run.sweep_wall / run.sim_steps, h=run.h,
+                          wall_s=run.wall, sweep_s=run.sweep_wall, diverged=int(run.diverged.sum()),
+                          cost=run.sweep_wall, error=err["map"], held_out_error=None,
+                          errors={k: err[k] for k in ("nfrc", "largest", "speed", "peak")}))
+        print(f"disk-map-linear: {name}: {run.sweep_wall:.0f} s, error {err['map']:.3g} "
+              f"({', '.join(f'{k} {err[k]:.3g}' for k in ('nfrc', 'largest', 'speed', 'peak'))})")
+    big, top = largest_over_blades(ref), int(np.nanargmax(ref.nfrc))
+    i_rob = int(np.flatnonzero(robust)[np.nanargmax(ref.nfrc[robust])])
+    scene = dict(description="the bladed disk's short interaction map, GNL off, 8 speeds in 1,200-1,650 rad/s x 20 "
+                             "revolutions from rest, the disk maps' casing (cone normal, mu = 0.15), 36 ci sectors "
+                             "with 8 tip nodes each: on the robust speeds, the largest of the NFRC errors (node LE of "
+                             "sector 0 and the largest over the blades) and of the relative errors of the speed and "
+                             "the amplitude of the largest response at node LE of sector 0",
+                 cost_unit="s (sweep wall time of the map)",
+                 reference=dict(options=DISK_MAP_REFERENCE, h=ref.h, sweep_s=ref.sweep_wall, wall_s=ref.wall,
+                                us_per_step=1e6 * ref.sweep_wall / ref.sim_steps,
+                                peak_speed=float(ref.speeds[np.nanargmax(ref.nfrc)]), peak_m=float(np.nanmax(ref.nfrc)),
+                                largest_peak_m=float(np.nanmax(big)), robust_speeds=ref.speeds[robust].tolist(),
+                                peak_moved_by_perturbation=float(abs(pert.nfrc[top] - ref.nfrc[top]) / ref.nfrc[top]),
+                                robust_peak_speed=float(ref.speeds[i_rob]), robust_peak_m=float(ref.nfrc[i_rob]),
+                                perturbation=PERTURBATION, robust_threshold=ROBUST),
+                 candidates=cands, machine=machine_description(),
+                 held_out_case=f"{DISK_HELD_OUT_SPEEDS[2]} other speeds in {DISK_HELD_OUT_SPEEDS[0]:g}-"
+                               f"{DISK_HELD_OUT_SPEEDS[1]:g} rad/s")
+    ref_h = run_disk_map("reference", DISK_MAP_REFERENCE, DISK_HELD_OUT_SPEEDS)
+    pert_h = run_disk_map("reference_perturbed", DISK_MAP_REFERENCE, DISK_HELD_OUT_SPEEDS, PERTURBATION)
+    robust_h = disk_robust(ref_h, pert_h)
+    held_out_choices(scene, TOLERANCES, lambda name, options: disk_map_errors(
+        run_disk_map(name, options, DISK_HELD_OUT_SPEEDS), ref_h, robust_h)["map"])
+    scene["held_out_reference"] = dict(robust_speeds=ref_h.speeds[robust_h].tolist(), sweep_s=ref_h.sweep_wall)
+    return scene
 
 
 # ## von Mises at t_max
@@ -855,6 +1009,12 @@ def main(argv=None) -> int:
         elif name == "disk-modes":
             study["scenes"]["disk-modes"] = scene_disk_modes()
             FRESH.append(f"scene disk-modes {time.perf_counter() - t0:.0f} s")
+        elif name == "disk-map-linear":
+            before = len(FRESH)
+            study["scenes"]["disk-map-linear"] = scene_disk_map()
+            maps = len(FRESH) - before          # run_map notes each map it computed (not read from WORK)
+            FRESH.append(f"scene disk-map-linear {time.perf_counter() - t0:.0f} s ({maps} maps computed, the "
+                         f"others read from results/speed_accuracy)")
         elif name in ("map-linear", "map-gnl"):
             gnl = name == "map-gnl"
             maps, history = scene_map(gnl)

@@ -70,13 +70,18 @@ N_SECTORS = 36                                     # rotor 37's blades (the disk
 # files of the same run from the shell.
 
 # +
-def map_model(tolerance: float, gnl: bool, fallback: bool = False):
-    """The speed-accuracy study's model of a map (scene 'map-gnl' or 'map-linear') within ``tolerance``; with
-    ``fallback`` the study's reference where no measured model meets it. Errors name --tolerance."""
+def map_model(tolerance: float, gnl: bool, fallback: bool = False, disk: bool = False):
+    """The speed-accuracy study's model of a map (scene 'map-gnl' or 'map-linear'; a disk's: 'disk-map-linear')
+    within ``tolerance``; with ``fallback`` the study's reference where no measured model meets it. Errors name
+    --tolerance."""
     from rotor37_rom.model_choice import choose_model
 
+    if disk and gnl:
+        raise ValueError("--tolerance with --disk: the speed-accuracy study measured the disk's map without GNL only "
+                         "(scene disk-map-linear): give --gnl off, or the options")
     try:
-        return choose_model("map-gnl" if gnl else "map-linear", tolerance, fallback=fallback)
+        return choose_model("disk-map-linear" if disk else "map-gnl" if gnl else "map-linear", tolerance,
+                            fallback=fallback)
     except ValueError as exc:
         raise ValueError(f"--tolerance: {exc}") from None
 
@@ -141,7 +146,8 @@ class ContactMapConfig:
         tolerance: choose r_c, the frequency cap, the step and the force evaluation of each setting (GNL off, on) as
             the cheapest model of the speed-accuracy study within this relative error (``model_choice.choose_model``
             on the scenes 'map-linear' and 'map-gnl', read from rotor37_rom/data/speed_accuracy.json), in (0, 1);
-            the options it sets must not be given with it. None: the options as given.
+            with ``disk`` (GNL off only) r_c, r_md, r_cyclic and the cap from the scene 'disk-map-linear'. The
+            options it sets must not be given with it. None: the options as given.
         retry_diverged: runs that blew up run again with the step halved, up to this many times (0..4).
         mu: Coulomb friction coefficient of the casing contact (paper 0.15).
         c0: clearance at rest (m).
@@ -242,15 +248,23 @@ class ContactMapConfig:
     def modes(self) -> tuple[int, int]:
         """(r_c, r_md) of the model built: the options, or 15, 0 for the blade and 10, 10 for the disk; with
         ``tolerance`` the largest r_c the settings' choices need."""
+        r_c, r_md = (self.r_c if self.r_c is not None else (10 if self.disk else 15),
+                     self.r_md if self.r_md is not None else (10 if self.disk else 0))
         if self.tolerance is not None and self.r_c is None:
-            return (max(self.choice(gnl).options.get("r_c", 15) for gnl in GNL_SETTINGS[self.gnl]),
-                    self.r_md if self.r_md is not None else 0)
-        return (self.r_c if self.r_c is not None else (10 if self.disk else 15),
-                self.r_md if self.r_md is not None else (10 if self.disk else 0))
+            chosen = [self.choice(gnl).options for gnl in GNL_SETTINGS[self.gnl]]
+            return max(c.get("r_c", r_c) for c in chosen), max(c.get("r_md", r_md) for c in chosen)
+        return r_c, r_md
+
+    @property
+    def interface_modes(self) -> int:
+        """r_cyclic of the disk model built: the option, or with ``tolerance`` the study's choice."""
+        if self.tolerance is not None and self.disk:
+            return self.choice(False).options.get("r_cyclic", self.r_cyclic)
+        return self.r_cyclic
 
     def choice(self, gnl: bool):
         """The speed-accuracy study's cheapest model within ``tolerance`` for one setting (a ModelChoice)."""
-        return map_model(self.tolerance, gnl)
+        return map_model(self.tolerance, gnl, disk=self.disk)
 
     def setting(self, gnl: bool) -> "ContactMapConfig":
         """The configuration one setting (GNL off or on) runs with: with ``tolerance``, its chosen options."""
@@ -322,9 +336,6 @@ class ContactMapConfig:
         if self.tolerance is not None:
             if not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
                 raise ValueError(f"--tolerance must be in (0, 1) (a relative error: 0.05 = 5 %), got {self.tolerance}")
-            if self.disk:
-                raise ValueError("--tolerance: the speed-accuracy study has no bladed-disk map yet (only the disk's "
-                                 "frequencies, scene disk-modes); give the options")
             chosen = set().union(*(self.choice(gnl).options for gnl in GNL_SETTINGS[self.gnl]))
             defaults = {f.name: f.default for f in dataclasses.fields(self)}
             given = [name for name in sorted(chosen - {"r_c"}) if getattr(self, name) != defaults[name]]
@@ -551,7 +562,7 @@ def build_model(config: ContactMapConfig) -> ReducedModel:
         factors = None if config.mistuning == 0 else tuple(mistuning_factors(N_SECTORS, config.mistuning,
                                                                               config.seed).tolist())
         reduction = DiskReductionConfig(tip_nodes="all", r_c=r_c, r_md=r_md, criterion="MI2b",
-                                        r_cyclic=config.r_cyclic, mistuning=factors)
+                                        r_cyclic=config.interface_modes, mistuning=factors)
         model, _ = build_disk_model(sector, reduction, cache_dir=config.cache_dir)
     else:
         from rotor37_rom.builder import ReductionConfig, build_reduced_model
@@ -1182,8 +1193,9 @@ def build_parser() -> ArgumentParser:
                              "capped (a disk's always do), for bases whose unscaled GNL step makes the exact runs "
                              "hours long (--global-md 10)")
     parser.add_argument("--tolerance", type=float, metavar="TOL",
-                        help="choose r_c, the frequency cap, the step and the GNL forces as the cheapest model within "
-                             "this relative error in the speed-accuracy study (docs/choosing-a-model.md), in (0, 1)")
+                        help="choose r_c, the frequency cap, the step and the GNL forces (with --disk --gnl off: "
+                             "r_c, r_md, r_cyclic and the cap) as the cheapest model within this relative error in "
+                             "the speed-accuracy study (docs/choosing-a-model.md), in (0, 1)")
     parser.add_argument("--retry-diverged", type=int, metavar="N",
                         help="run the speeds that blew up again with the step halved, up to N times (0..4, default 0)")
     parser.add_argument("--mu", type=float, help="friction coefficient (default 0.15)")

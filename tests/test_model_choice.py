@@ -116,7 +116,10 @@ def test_refusals(tmp_path):
     ("contact_map", ["--tolerance", "0.2", "--gnl", "off", "--frequency-cap", "60"],
      "--tolerance chooses --frequency-cap"),
     ("contact_map", ["--tolerance", "1e-9"], "--tolerance: tolerance 1e-09 is below every measured model"),
-    ("contact_map", ["--tolerance", "0.05", "--disk"], "--tolerance: the speed-accuracy study has no bladed-disk map"),
+    ("contact_map", ["--tolerance", "0.05", "--disk"], "--tolerance with --disk: the speed-accuracy study measured "
+                                                       "the disk's map without GNL only"),
+    ("contact_map", ["--tolerance", "0.2", "--disk", "--gnl", "off", "--r-cyclic", "72"],
+     "--tolerance chooses --r-cyclic"),
     ("reduced_blade", ["--tolerance", "0"], "--tolerance must be in (0, 1)"),
     ("reduced_blade", ["--tolerance", "0.5", "--r-c", "25"], "--tolerance chooses --r-c"),
     ("reduced_blade", ["--tolerance", "0.5", "--r-md", "10", "--global-md", "0"],
@@ -156,6 +159,31 @@ def test_contact_map_takes_the_chosen_options():
             setting = config.setting(settings[scene])
             assert all(getattr(setting, k) == v for k, v in choice.options.items() if k != "r_c")
         assert config.modes[0] == max(choose_model(s, tol).options.get("r_c", 15) for s in used)
+
+
+def test_contact_map_takes_the_disk_choice():
+    """With --disk --gnl off, --tolerance builds the disk model (r_c, r_md, r_cyclic) and sets the cap of the scene
+    'disk-map-linear''s choice, read from the study file; GNL is refused (the study has no GNL disk map)."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from conftest import load_demo
+
+    cm = load_demo("contact_map")
+    study = load_study()
+    scene = study["scenes"]["disk-map-linear"]
+    for tol in (0.01, 0.05, 0.2):
+        within = [c for c in scene["candidates"] if expected_error(c) <= tol]
+        if not within:
+            with pytest.raises(ValueError, match="--tolerance: tolerance"):
+                cm.ContactMapConfig(disk=True, gnl="off", tolerance=tol)
+            continue
+        best = min(within, key=lambda c: c["cost"])
+        config = cm.ContactMapConfig(disk=True, gnl="off", tolerance=tol)
+        assert config.choice(False).name == best["name"]
+        opts = best["options"]
+        assert config.modes == (opts["r_c"], opts["r_md"]) and config.interface_modes == opts["r_cyclic"]
+        assert config.setting(False).frequency_cap == opts["frequency_cap"]
+    with pytest.raises(ValueError, match="without GNL only"):
+        cm.ContactMapConfig(disk=True, gnl="on", tolerance=0.2)
 
 
 def test_reduced_blade_builds_the_chosen_model():
