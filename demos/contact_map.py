@@ -146,8 +146,9 @@ class ContactMapConfig:
         tolerance: choose r_c, the frequency cap, the step and the force evaluation of each setting (GNL off, on) as
             the cheapest model of the speed-accuracy study within this relative error (``model_choice.choose_model``
             on the scenes 'map-linear' and 'map-gnl', read from rotor37_rom/data/speed_accuracy.json), in (0, 1);
-            with ``disk`` (GNL off only) r_c, r_md, r_cyclic and the cap from the scene 'disk-map-linear'. The
-            options it sets must not be given with it. None: the options as given.
+            with ``disk`` (GNL off, tuned) r_c, r_md, r_cyclic and the cap from the scene 'disk-map-linear'
+            (measured with the cone normal and mu = 0.15). The options it sets must not be given with it. None: the
+            options as given.
         retry_diverged: runs that blew up run again with the step halved, up to this many times (0..4).
         mu: Coulomb friction coefficient of the casing contact (paper 0.15).
         c0: clearance at rest (m).
@@ -336,6 +337,9 @@ class ContactMapConfig:
         if self.tolerance is not None:
             if not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
                 raise ValueError(f"--tolerance must be in (0, 1) (a relative error: 0.05 = 5 %), got {self.tolerance}")
+            if self.disk and self.mistuning > 0:
+                raise ValueError("--tolerance with --mistuning: the speed-accuracy study measured the tuned disk; "
+                                 "give the options")
             chosen = set().union(*(self.choice(gnl).options for gnl in GNL_SETTINGS[self.gnl]))
             defaults = {f.name: f.default for f in dataclasses.fields(self)}
             given = [name for name in sorted(chosen - {"r_c"}) if getattr(self, name) != defaults[name]]

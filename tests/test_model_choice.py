@@ -120,6 +120,8 @@ def test_refusals(tmp_path):
                                                        "the disk's map without GNL only"),
     ("contact_map", ["--tolerance", "0.2", "--disk", "--gnl", "off", "--r-cyclic", "72"],
      "--tolerance chooses --r-cyclic"),
+    ("contact_map", ["--tolerance", "0.2", "--disk", "--gnl", "off", "--mistuning", "0.05"],
+     "--tolerance with --mistuning: the speed-accuracy study measured the tuned disk"),
     ("reduced_blade", ["--tolerance", "0"], "--tolerance must be in (0, 1)"),
     ("reduced_blade", ["--tolerance", "0.5", "--r-c", "25"], "--tolerance chooses --r-c"),
     ("reduced_blade", ["--tolerance", "0.5", "--r-md", "10", "--global-md", "0"],
