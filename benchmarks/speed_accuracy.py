@@ -251,15 +251,19 @@ class MapRun:
     record_h: list = dataclasses.field(default_factory=list)     # the step each record ran at (retries: smaller)
 
 
+@functools.lru_cache(maxsize=None)
 def model_file(r_c: int) -> Path:
-    """The ci blade's r_c model (24 tip DOFs + r_c modes + the 6 MDs of 1B/1T/2B), exact tensors, built once."""
-    from rotor37_rom.reduction import save_reduced_model
+    """The ci blade's r_c model (24 tip DOFs + r_c modes + the 6 MDs of 1B/1T/2B), exact tensors, built once (checked
+    once per process against the builder's cache)."""
+    from rotor37_rom.reduction import load_reduced_model, save_reduced_model
 
     path = WORK / "models" / f"rom_rc{r_c}.npz"
-    if not path.is_file():
-        cm = load_demo("contact_map")
-        config = cm.ContactMapConfig(**{**MAP, "r_c": r_c, "out": WORK / "models"})
-        save_reduced_model(cm.build_model(config), path)
+    cm = load_demo("contact_map")
+    # built through the builder's cache (keyed by the reduction's parameters): a file saved by an earlier builder is
+    # replaced, and run_map then sees its maps ran another model
+    model = cm.build_model(cm.ContactMapConfig(**{**MAP, "r_c": r_c, "out": WORK / "models"}))
+    if not path.is_file() or load_reduced_model(path).key != model.key:
+        save_reduced_model(model, path)
     return path
 
 
@@ -403,11 +407,11 @@ def scene_map(gnl: bool) -> tuple[dict, dict]:
     ref_options = {"r_c": 15} if gnl else {"r_c": 40}
     ref = run_map("reference", gnl, ref_options)
     pert_path = WORK / "models" / f"rom_rc{ref_options['r_c']}_perturbed_{'gnl' if gnl else 'linear'}.npz"
-    if not pert_path.is_file():
-        from rotor37_rom.reduction import load_reduced_model, perturbed_model, save_reduced_model
+    from rotor37_rom.reduction import load_reduced_model, perturbed_model, save_reduced_model
 
-        save_reduced_model(perturbed_model(load_reduced_model(model_file(ref_options["r_c"])), PERTURBATION),
-                           pert_path)
+    perturbed = perturbed_model(load_reduced_model(model_file(ref_options["r_c"])), PERTURBATION)
+    if not pert_path.is_file() or load_reduced_model(pert_path).key != perturbed.key:
+        save_reduced_model(perturbed, pert_path)
     pert = run_map("reference_perturbed", gnl, ref_options, model_path=pert_path)
     peak = np.nanmax(ref.nfrc)
     robust = np.abs(pert.nfrc - ref.nfrc) <= ROBUST * peak
