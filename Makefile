@@ -104,7 +104,8 @@ bench: $(STAMP)
 speed-accuracy: $(STAMP)
 	$(PY) benchmarks/speed_accuracy.py
 
-# its bladed-disk scenes (the disk's frequencies at every nodal diameter, its short map without GNL); about 1 h
+# its bladed-disk scenes (the disk's frequencies at every nodal diameter, its short map without GNL and the
+# stress in it); about 1 h
 speed-accuracy-disk: $(STAMP)
 	$(PY) benchmarks/speed_accuracy.py --scene disk
 

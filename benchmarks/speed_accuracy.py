@@ -30,7 +30,9 @@ Scenes (the report's settings):
   x 20 revolutions from rest on the disk maps' casing (cone normal, mu = 0.15); error on the robust speeds: the NFRC
   of node LE of sector 0 and of the largest blade, and the speed and amplitude of the largest response; reference:
   r_c 10, r_MD 10, r_cyclic 288 at a 240 kHz cap; candidates: r_c, r_MD, r_cyclic, frequency cap (the reference's
-  model at 120 kHz measures its cap's own error); held out: 7 other speeds.
+  model at 120 kHz measures its cap's own error); held out: 7 other speeds. With it, ``disk-stress-linear``: the von
+  Mises stress in the disk at t_max of one revolution carried on from each of its maps at the reference's largest
+  robust response, off the root corner, in sector 0 and over the sectors.
 - ``cost-r``: the cost per simulation-step against r for each force method (no GNL, exact tensors, point cubature on
   all points and on 10 points per mode, float64 / float32), synthetic models of each size, and the trained cubatures.
 
@@ -592,6 +594,59 @@ def disk_map_errors(run: MapRun, ref: MapRun, robust: np.ndarray) -> dict:
     return err
 
 
+def disk_stress_at_tmax(run: MapRun, model_path: Path, speed: float) -> dict:
+    """The disk's von Mises stress at t_max (largest |u| of node LE of sector 0) of one revolution carried on from
+    ``run``'s final state at ``speed`` (what ``contact_map.py --stress`` does at the map's largest response), every
+    sector rebuilt from q: the largest off the root corner and outside the tip band in sector 0 and over the sectors
+    (``analysis.disk_stress_summary``: the numbers that converge with the mesh), with the wall time."""
+    from rotor37_rom.analysis import disk_stress, disk_stress_summary
+    from rotor37_rom.reduction import load_reduced_model
+
+    cm = load_demo("contact_map")
+    sector, _ = _disk_sector()
+    model = load_reduced_model(model_path)
+    k = int(np.argmin(np.abs(run.speeds - speed)))
+    scheme = cm.time_scheme(dataclasses.replace(run.config, h=run.record_h[k]), model, False, None)
+    t0 = time.perf_counter()
+    res, _ = cm.carry_on_record(run.config, scheme, run.records[k], speed, [model.nodes.label_row(run.config.node)])
+    if res.diverged_step[0] >= 0:
+        return dict(vm=math.inf, vm_all=math.inf, seconds=time.perf_counter() - t0)
+    u = res.u_r[0][0]
+    i = int(np.nanargmax(np.abs(u)))
+    _, values = disk_stress(sector, model, res.records_q[0][:, i], nonlinear=False)
+    numbers = disk_stress_summary(sector, model, values, 0)
+    return dict(vm=numbers["vm_max_off_root"], vm_all=numbers["vm_max_off_root_all_sectors"],
+                sector_of_max=numbers["sector_of_max_off_root"], u_le=float(u[i]),
+                seconds=time.perf_counter() - t0)
+
+
+def scene_disk_stress(maps: dict) -> dict:
+    """von Mises at t_max in the disk, GNL off, at the reference's largest robust response of the disk map scene, for
+    its reference and candidates (the same runs: the stress needs a map's final state); error: the larger of the
+    relative errors in sector 0 and over the sectors, off the root corner."""
+    ref_opts, speed = maps["reference"]["options"], maps["reference"]["robust_peak_speed"]
+    ref = disk_stress_at_tmax(run_disk_map("reference", ref_opts), disk_model_file(ref_opts), speed)
+    cands = []
+    for c in maps["candidates"]:
+        out = disk_stress_at_tmax(run_disk_map(c["name"], c["options"]), disk_model_file(c["options"]), speed)
+        err = max(abs(out["vm"] - ref["vm"]) / ref["vm"], abs(out["vm_all"] - ref["vm_all"]) / ref["vm_all"])
+        err = err if np.isfinite(err) else math.inf
+        print(f"disk-stress-linear: {c['name']}: sector 0 {out['vm'] / 1e6:.4g} MPa, over the sectors "
+              f"{out['vm_all'] / 1e6:.4g} MPa ({_pct(err)}), {out['seconds']:.0f} s")
+        cands.append(dict(name=c["name"], options=c["options"], us_per_step=c["us_per_step"], h=c["h"],
+                          cost=c["cost"] + out["seconds"], error=err, vm_max=out["vm"], vm_max_all=out["vm_all"],
+                          held_out_error=None))
+    return dict(description=f"the bladed disk's largest von Mises stress off the root corner and outside the tip band "
+                            f"at t_max of one revolution carried on from the disk map scene's final states at the "
+                            f"reference's largest robust response ({speed:.0f} rad/s), GNL off, ci sectors: the larger "
+                            f"of the relative errors in sector 0 and over the 36 sectors against the reference's "
+                            f"{ref['vm'] / 1e6:.4g} and {ref['vm_all'] / 1e6:.4g} MPa (sector {ref['sector_of_max']})",
+                cost_unit="s (sweep wall time of the map + the revolution carried on and the recovery)",
+                reference=dict(options=ref_opts, speed=speed, vm_max=ref["vm"], vm_max_all=ref["vm_all"],
+                               sector_of_max=ref["sector_of_max"], u_le=ref["u_le"], seconds=ref["seconds"]),
+                candidates=cands, machine=machine_description(), held_out_case=None)
+
+
 def scene_disk_map() -> dict:
     """The disk's short interaction map without GNL (8 speeds in 1,200-1,650 rad/s x 20 revolutions from rest, the
     disk maps' casing: cone normal, mu = 0.15) against the largest model at the highest cap; held out: 7 other
@@ -1030,6 +1085,7 @@ def main(argv=None) -> int:
         elif name == "disk-map-linear":
             before = len(FRESH)
             study["scenes"]["disk-map-linear"] = scene_disk_map()
+            study["scenes"]["disk-stress-linear"] = scene_disk_stress(study["scenes"]["disk-map-linear"])
             maps = len(FRESH) - before          # run_map notes each map it computed (not read from WORK)
             FRESH.append(f"scene disk-map-linear {time.perf_counter() - t0:.0f} s ({maps} maps computed, the "
                          f"others read from results/speed_accuracy)")
