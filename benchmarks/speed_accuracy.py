@@ -278,10 +278,12 @@ MODEL_OPTIONS = ("r_c", "r_md", "r_cyclic")     # a candidate's options that mak
 def ran_model(folder: str, model_path: Path) -> bool:
     """Whether the cached sweep in ``folder`` ran the model now saved at ``model_path`` (its key): a model file
     rewritten since (another builder) makes the map stale."""
-    from rotor37_rom.reduction import load_reduced_model
-
     spec = Path(folder) / "spec.json"
-    return spec.is_file() and json.loads(spec.read_text()).get("model") == load_reduced_model(model_path).key
+    if not spec.is_file():
+        return False
+    with np.load(model_path) as saved:                  # the key only (reduction.save_reduced_model's 'meta')
+        key = json.loads(str(saved["meta"]))["key"]
+    return json.loads(spec.read_text()).get("model") == key
 
 
 def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_path: Path | None = None,

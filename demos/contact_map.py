@@ -248,7 +248,7 @@ class ContactMapConfig:
     @property
     def modes(self) -> tuple[int, int]:
         """(r_c, r_md) of the model built: the options, or 15, 0 for the blade and 10, 10 for the disk; with
-        ``tolerance`` the largest r_c the settings' choices need."""
+        ``tolerance`` the largest r_c (and r_md, a disk's) the settings' choices need."""
         r_c, r_md = (self.r_c if self.r_c is not None else (10 if self.disk else 15),
                      self.r_md if self.r_md is not None else (10 if self.disk else 0))
         if self.tolerance is not None and self.r_c is None:
