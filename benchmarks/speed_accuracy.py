@@ -629,12 +629,12 @@ def disk_stress_at_tmax(run: MapRun, model_path: Path, speed: float) -> dict:
                 seconds=time.perf_counter() - t0)
 
 
-def scene_disk_stress(maps: dict) -> dict:
+def scene_disk_stress(maps: dict, runs: dict) -> dict:
     """von Mises at t_max in the disk, GNL off, at the reference's largest robust response of the disk map scene, for
-    its reference and candidates (the same runs: the stress needs a map's final state); error: the larger of the
-    relative errors in sector 0 and over the sectors, off the root corner."""
+    its reference and candidates (``runs``: the map scene's MapRuns by name, the stress needs a map's final state);
+    error: the larger of the relative errors in sector 0 and over the sectors, off the root corner."""
     ref_opts, speed = maps["reference"]["options"], maps["reference"]["robust_peak_speed"]
-    ref = disk_stress_at_tmax(run_disk_map("reference", ref_opts), disk_model_file(ref_opts), speed)
+    ref = disk_stress_at_tmax(runs["reference"], disk_model_file(ref_opts), speed)
     if not np.isfinite(ref["vm"]):
         raise RuntimeError(f"disk-stress-linear: the reference's run at {speed:g} rad/s diverged")
     cands = []
@@ -642,7 +642,7 @@ def scene_disk_stress(maps: dict) -> dict:
         if not np.isfinite(c["error"]):              # a map that lost a speed: no model for the scene
             out = dict(vm=math.inf, vm_all=math.inf, sector_of_max=None, u_le=math.nan, seconds=0.0)
         else:
-            out = disk_stress_at_tmax(run_disk_map(c["name"], c["options"]), disk_model_file(c["options"]), speed)
+            out = disk_stress_at_tmax(runs[c["name"]], disk_model_file(c["options"]), speed)
         err = max(abs(out["vm"] - ref["vm"]) / ref["vm"], abs(out["vm_all"] - ref["vm_all"]) / ref["vm_all"])
         err = err if np.isfinite(err) else math.inf
         print(f"disk-stress-linear: {c['name']}: sector 0 {out['vm'] / 1e6:.4g} MPa, over the sectors "
@@ -664,17 +664,18 @@ def scene_disk_stress(maps: dict) -> dict:
                 candidates=cands, machine=machine_description(), held_out_case=None)
 
 
-def scene_disk_map() -> dict:
+def scene_disk_map() -> tuple[dict, dict]:
     """The disk's short interaction map without GNL (8 speeds in 1,200-1,650 rad/s x 20 revolutions from rest, the
     disk maps' casing: cone normal, mu = 0.15) against the largest model at the highest cap; held out: 7 other
     speeds."""
     ref = run_disk_map("reference", DISK_MAP_REFERENCE)
+    runs = {"reference": ref}                  # for the stress scene: its maps' final states, read once
     pert = run_disk_map("reference_perturbed", DISK_MAP_REFERENCE, perturbation=PERTURBATION)
     robust = disk_robust(ref, pert)
     print(f"disk-map-linear: robust speeds {ref.speeds[robust].round(1).tolist()}")
     cands = []
     for name, options in DISK_MAP_CANDIDATES:
-        run = run_disk_map(name, options)
+        run = runs[name] = run_disk_map(name, options)
         err = disk_map_errors(run, ref, robust)
         cands.append(dict(name=name, options=options, us_per_step=1e6 * run.sweep_wall / run.sim_steps, h=run.h,
                           wall_s=run.wall, sweep_s=run.sweep_wall, diverged=int(run.diverged.sum()),
@@ -706,7 +707,7 @@ def scene_disk_map() -> dict:
     held_out_choices(scene, TOLERANCES, lambda name, options: disk_map_errors(
         run_disk_map(name, options, DISK_HELD_OUT_SPEEDS), ref_h, robust_h)["map"])
     scene["held_out_reference"] = dict(robust_speeds=ref_h.speeds[robust_h].tolist(), sweep_s=ref_h.sweep_wall)
-    return scene
+    return scene, runs
 
 
 # ## von Mises at t_max
@@ -1101,8 +1102,8 @@ def main(argv=None) -> int:
             FRESH.append(f"scene disk-modes {time.perf_counter() - t0:.0f} s")
         elif name == "disk-map-linear":
             before = len(FRESH)
-            study["scenes"]["disk-map-linear"] = scene_disk_map()
-            study["scenes"]["disk-stress-linear"] = scene_disk_stress(study["scenes"]["disk-map-linear"])
+            study["scenes"]["disk-map-linear"], runs = scene_disk_map()
+            study["scenes"]["disk-stress-linear"] = scene_disk_stress(study["scenes"]["disk-map-linear"], runs)
             maps = len(FRESH) - before          # run_map notes each map it computed (not read from WORK)
             FRESH.append(f"scenes disk-map-linear and disk-stress-linear {time.perf_counter() - t0:.0f} s ("
                          + (f"{maps} maps computed, the others" if maps else "every map") +
