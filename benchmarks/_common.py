@@ -3,11 +3,12 @@ from __future__ import annotations
 
 import functools
 import importlib.util
-import json
 import os
 import platform
 import sys
 from pathlib import Path
+
+from rotor37_rom.npz import save_json
 
 DEMOS = Path(__file__).resolve().parents[1] / "demos"
 
@@ -37,11 +38,7 @@ def mpirun_env(**extra: str) -> dict:
 def write_results(name: str, rows: list, **extra) -> str:
     """results/<name>.json with the machine and rows; returns the machine description."""
     machine = machine_description()
-    Path("results").mkdir(exist_ok=True)
-    path = Path(f"results/{name}.json")
-    tmp = path.with_suffix(f".{os.getpid()}.tmp")
-    tmp.write_text(json.dumps({"machine": machine, "rows": rows, **extra}, indent=1))
-    os.replace(tmp, path)                 # a reader never sees half a file
+    save_json(f"results/{name}.json", {"machine": machine, "rows": rows, **extra}, indent=1)   # never half a file
     return machine
 
 

@@ -31,6 +31,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import machine_description  # noqa: E402
+from rotor37_rom.npz import save_json  # noqa: E402
 
 RESULTS = Path("results/bench_contact_convergence.json")
 
@@ -111,8 +112,7 @@ def main(argv=None) -> int:
     def cached(label, fn):
         if label not in store["runs"]:
             store["runs"][label] = fn()
-            RESULTS.parent.mkdir(exist_ok=True)
-            RESULTS.write_text(json.dumps(store, indent=1))
+            save_json(RESULTS, store, indent=1)
         return store["runs"][label]
 
     summary = {}
@@ -176,7 +176,7 @@ def main(argv=None) -> int:
         else:
             print(f"no cap meets p90 <= {args.tol} ({tag})")
     store["summary"] = summary
-    RESULTS.write_text(json.dumps(store, indent=1))
+    save_json(RESULTS, store, indent=1)
     print(f"machine: {store['machine']}")
     return 0
 

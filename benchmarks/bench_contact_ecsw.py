@@ -38,6 +38,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import machine_description  # noqa: E402
 from bench_contact_convergence import compare, nfrc_run, speed_errors  # noqa: E402
+from rotor37_rom.npz import save_json  # noqa: E402
 
 RESULTS = Path("results/bench_contact_ecsw.json")
 
@@ -133,8 +134,7 @@ def main(argv=None) -> int:
     store["machine"] = machine_description()
 
     def save():
-        RESULTS.parent.mkdir(exist_ok=True)
-        RESULTS.write_text(json.dumps(store, indent=1))
+        save_json(RESULTS, store, indent=1)
 
     def cached(section, label, fn):
         if label not in store[section]:

@@ -27,6 +27,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import machine_description  # noqa: E402
 from bench_contact_convergence import compare, nfrc_run, speed_errors  # noqa: E402
+from rotor37_rom.npz import save_json  # noqa: E402
 
 RESULTS = Path("results/bench_contact_rom_size.json")
 ROBUST = [1200.0, 1240.0, 1280.0, 1520.0]      # bench_contact_ecsw: h/2 and forces x (1 + 1e-4) move these < 1 %
@@ -69,8 +70,7 @@ def main(argv=None) -> int:
             run = nfrc_run(model, args.gnl, speeds, casing, args.revolutions, 0.5, cap if capped else None)
             run["r"] = model.r
             store["runs"][label] = run
-            results.parent.mkdir(exist_ok=True)
-            results.write_text(json.dumps(store, indent=1))
+            save_json(results, store, indent=1)
     ref = store["runs"][f"r_c {max(args.r_c)}"]
     robust = np.isin(speeds, ROBUST)
     print(f"{kind}, mu = 0, {int(n)} speeds {start:g}-{stop:g} rad/s, {args.revolutions:g} rev; reference r_c = "
@@ -98,7 +98,7 @@ def main(argv=None) -> int:
     else:
         print(f"no basis below the reference has a p90 error <= {args.tol:g} ({kind}, {what})")
     store["summary"] = {"smallest_r_c_capped" if not args.gnl else "smallest_r_c": best and best[0]}
-    results.write_text(json.dumps(store, indent=1))
+    save_json(results, store, indent=1)
     print(f"machine: {store['machine']}")
     return 0
 

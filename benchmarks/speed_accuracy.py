@@ -55,6 +55,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import load_demo, machine_description  # noqa: E402
+from rotor37_rom.npz import save_json  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 WORK = ROOT / "results" / "speed_accuracy"
@@ -326,8 +327,8 @@ def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_pat
         run = next(iter(result.runs.values()))
         sweep_wall = run.wall_s if base is None else base.sweep_wall + run.wall_s
         wall = wall if base is None else base.wall + wall
-        done.write_text(json.dumps({"wall": wall, "sweep_wall": sweep_wall, "h": run.h, "folder": str(run.folder),
-                                    "setting": setting}))
+        save_json(done, {"wall": wall, "sweep_wall": sweep_wall, "h": run.h, "folder": str(run.folder),
+                         "setting": setting})
     info = json.loads(done.read_text())
     grid = config.speed_grid
     # each speed's record: the map's, or the bounded one of its retries at a smaller step (their own sweep folders)
@@ -602,7 +603,6 @@ def disk_stress_at_tmax(run: MapRun, model_path: Path, speed: float) -> dict:
     ``run``'s final state at ``speed`` (what ``contact_map.py --stress`` does at the map's largest response), every
     sector rebuilt from q: the largest off the root corner and outside the tip band in sector 0 and over the sectors
     (``analysis.disk_stress_summary``: the numbers that converge with the mesh), with the wall time."""
-    from rotor37_rom.analysis import disk_stress, disk_stress_summary
     from rotor37_rom.reduction import load_reduced_model
 
     cm = load_demo("contact_map")
@@ -620,12 +620,9 @@ def disk_stress_at_tmax(run: MapRun, model_path: Path, speed: float) -> dict:
                                 [model.nodes.label_row(run.config.node)])
     if res.diverged_step[0] >= 0:
         return dict(gone, seconds=time.perf_counter() - t0)
-    u = res.u_r[0][0]
-    i = int(np.nanargmax(np.abs(u)))
-    _, values = disk_stress(sector, model, res.records_q[0][:, i], nonlinear=False)
-    numbers = disk_stress_summary(sector, model, values, 0)
+    _, numbers, _ = cm.disk_stress_of(sector, model, res, False, 0)
     return dict(vm=numbers["vm_max_off_root"], vm_all=numbers["vm_max_off_root_all_sectors"],
-                sector_of_max=numbers["sector_of_max_off_root"], u_le=float(u[i]),
+                sector_of_max=numbers["sector_of_max_off_root"], u_le=numbers["u_le"],
                 seconds=time.perf_counter() - t0)
 
 
@@ -1127,8 +1124,7 @@ def main(argv=None) -> int:
         study.update(schema=1, machine=study.get("machine") if not fresh and "machine" in study
                      else machine_description(), command="python benchmarks/speed_accuracy.py",
                      tolerances=list(TOLERANCES))
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(study, indent=1, default=_finite))
+        save_json(args.json, study, indent=1, default=_finite)
     for name, scene in study["scenes"].items():
         chart(name, scene)
     if "stability" in study:
@@ -1139,7 +1135,7 @@ def main(argv=None) -> int:
     if FRESH and not fresh:
         run["note"] = PREFIX + ", ".join(FRESH)
     study.setdefault("runs", []).append(run)
-    args.json.write_text(json.dumps(study, indent=1, default=_finite))
+    save_json(args.json, study, indent=1, default=_finite)
     write_docs(study)
     for name, scene in study["scenes"].items():
         print(name, {k: v.get("name") for k, v in scene["choices"].items()})

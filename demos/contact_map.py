@@ -44,7 +44,7 @@ from rotor37_rom.friction import sprag_slip_friction
 from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.integrator import (CentralDifference, gnl_step_report, largest_states, probe_states, simulate,
                                     training_speeds)
-from rotor37_rom.npz import load_npz, save_npz
+from rotor37_rom.npz import load_npz, save_json, save_npz
 from rotor37_rom.reduction import (GLOBAL_MD_MAX, ReducedModel, load_reduced_model, perturbed_model,
                                    save_reduced_model, with_force_precision)
 from rotor37_rom.sweep import (ContinuationPoint, InteractionMap, SweepSpec, continuation, interaction_map,
@@ -981,13 +981,30 @@ def stress_mesh(config: ContactMapConfig, model: ReducedModel):
     return sector
 
 
+def disk_stress_of(sector, model: ReducedModel, res, nonlinear: bool, monitor: int
+                   ) -> tuple[np.ndarray, dict, int]:
+    """The disk's von Mises stress at t_max of a carried-on run ``res`` (one speed; its first recorded row is the
+    monitored node): every sector's field rebuilt from q at the record of largest |u| (no reassembly) on the disk
+    ``sector`` (``stress_mesh``), summarised for sector ``monitor`` and over the sectors
+    (``analysis.disk_stress_summary``). Returns (the sectors' displacement fields, the numbers with ``u_le``, the
+    record's index)."""
+    from rotor37_rom.analysis import disk_stress, disk_stress_summary
+
+    u = res.u_r[0][0]
+    k = int(np.nanargmax(np.abs(u)))
+    fields, values = disk_stress(sector, model, res.records_q[0][:, k], nonlinear=nonlinear)
+    numbers = disk_stress_summary(sector, model, values, monitor)
+    numbers.update(u_le=float(u[k]), vm_sectors=values.max(axis=2))
+    return fields, numbers, k
+
+
 def disk_peak_stress(config: ContactMapConfig, scheme: CentralDifference, result: MapResult, tag: str, sector
                      ) -> tuple[dict, list[Path]]:
     """The whole bladed disk's von Mises stress at t_max (largest |u| of node LE of ``config.sector``) of the map's
     largest bounded response: that run carried on one revolution from its final state (as the report does for the
     blade), every sector's field rebuilt from q (no reassembly) on the disk ``sector`` (``stress_mesh``). Returns
     (numbers, [picture])."""
-    from rotor37_rom.analysis import describe_location, disk_stress, disk_stress_summary
+    from rotor37_rom.analysis import describe_location
     from rotor37_rom.plotting import render_stress
 
     model, speed = scheme.model, result.peak_speed
@@ -996,14 +1013,12 @@ def disk_peak_stress(config: ContactMapConfig, scheme: CentralDifference, result
     res, run_scheme, t_start = carry_on(config, scheme, result, speed, [model.nodes.label_row(config.node)])
     if res.diverged_step[0] >= 0:
         return {"speed": speed, "diverged": True}, []
-    u = res.u_r[0][0]
-    k = int(np.nanargmax(np.abs(u)))
-    fields, values = disk_stress(sector, model, res.records_q[0][:, k], nonlinear=run_scheme.nonlinear)
-    numbers = disk_stress_summary(sector, model, values, config.sector)
-    numbers.update(speed=speed, t_max=t_start + float(res.t[0][k]), u_le=float(u[k]))
+    fields, numbers, k = disk_stress_of(sector, model, res, run_scheme.nonlinear, config.sector)
+    vm_sectors = numbers.pop("vm_sectors")
+    numbers.update(speed=speed, t_max=t_start + float(res.t[0][k]))
     factor = 0.1 * 0.074 / max(np.abs(fields).max(), 1e-12)     # largest motion drawn at 10 % of the blade's span
     title = (f"{result.label}: von Mises at t_max, Omega = {speed:.0f} rad/s, node {config.node} (x{factor:.0f})")
-    picture = render_stress(sector, fields[config.sector], values.max(axis=2), config.out / f"stress_disk_{tag}.png",
+    picture = render_stress(sector, fields[config.sector], vm_sectors, config.out / f"stress_disk_{tag}.png",
                             title, n_sectors=model.nodes.n_sectors, factor=factor, clim=numbers["clim"],
                             sector_displacements=fields)
     print(f"         stress at t_max ({speed:.0f} rad/s): sector {config.sector} {numbers['vm_max'] / 1e6:.0f} MPa "
@@ -1061,10 +1076,7 @@ def write_summary(out: Path, summary: dict) -> list[Path]:
             curves[f"{label}: largest over the blades"] = (np.array(run["speeds"]), largest,
                                                            "-." if label.startswith("GNL") else ":")
     chart = plot_nfrc(curves, out / "nfrc.png", summary["linear_resonance"], PAPER)
-    out.mkdir(parents=True, exist_ok=True)
-    path = out / "summary.json"
-    path.write_text(json.dumps(summary, indent=1, default=float))
-    return [chart, path]
+    return [chart, save_json(out / "summary.json", summary, indent=1, default=float)]
 # -
 
 

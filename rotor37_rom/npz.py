@@ -1,11 +1,13 @@
 """Array files that are complete or absent: the one way the project writes its caches, checkpoints and records
 (``save_npz``: written under a hidden temporary name, then renamed, so a reader never opens half a file, ranks
 writing the same file side by side do not clash, and a writer killed half-way leaves nothing a glob of the real
-names picks up), and reads a cache that may be damaged (``load_npz``: a damaged or
+names picks up; ``save_json`` does the same for the JSON stores and summaries that later calls read back), and
+reads a cache that may be damaged (``load_npz``: a damaged or
 mismatched file is reported and treated as absent, so the caller computes it again)."""
 from __future__ import annotations
 
 import glob
+import json
 import logging
 import os
 import zipfile
@@ -14,7 +16,7 @@ from typing import Callable, Iterable
 
 import numpy as np
 
-__all__ = ["save_npz", "load_npz", "DAMAGED"]
+__all__ = ["save_npz", "save_json", "load_npz", "DAMAGED"]
 
 LOG = logging.getLogger(__name__)
 
@@ -31,25 +33,37 @@ def _alive(pid: int) -> bool:
     return True
 
 
-def save_npz(path: str | Path, **arrays) -> Path:
-    """Write ``arrays`` to ``path`` (.npz, its folder created) complete or not at all; returns the path.
-
-    The temporary file is ``.<name>.tmp<pid>.npz`` beside it (hidden: ``omega_*.npz`` does not match it). Those a
-    killed writer left (its pid no longer running; a checkpoint's can be GBs) are removed first."""
-    path = Path(path)
+def _write_whole(path: Path, suffix: str, write: Callable[[Path], None]) -> Path:
+    """``write(tmp)`` to ``.<name>.tmp<pid><suffix>`` beside ``path``, then rename it to ``path`` (its folder
+    created). Temporary files a killed writer left (its pid no longer running; a checkpoint's can be GBs) are removed
+    first."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    for stale in path.parent.glob(f".{glob.escape(path.name)}.tmp*.npz"):
-        pid = stale.name[len(path.name) + 5:-4]
+    for stale in path.parent.glob(f".{glob.escape(path.name)}.tmp*{suffix}"):
+        pid = stale.name[len(path.name) + 5:len(stale.name) - len(suffix)]
         if pid.isdigit() and int(pid) != os.getpid() and not _alive(int(pid)):
             LOG.info("removing %s (its writer, pid %s, was stopped)", stale, pid)
             stale.unlink(missing_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}.npz")
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}{suffix}")
     try:
-        np.savez(tmp, **arrays)
+        write(tmp)
         tmp.replace(path)
     finally:
         tmp.unlink(missing_ok=True)
     return path
+
+
+def save_npz(path: str | Path, **arrays) -> Path:
+    """Write ``arrays`` to ``path`` (.npz, its folder created) complete or not at all; returns the path.
+
+    The temporary file is ``.<name>.tmp<pid>.npz`` beside it (hidden: ``omega_*.npz`` does not match it)."""
+    return _write_whole(Path(path), ".npz", lambda tmp: np.savez(tmp, **arrays))
+
+
+def save_json(path: str | Path, obj, **dumps) -> Path:
+    """Write ``json.dumps(obj, **dumps)`` to ``path`` complete or not at all (as ``save_npz``): a study's store or a
+    run's summary read back by the next call is never half a file. Returns the path."""
+    text = json.dumps(obj, **dumps)              # before any file is touched: an object JSON cannot hold raises here
+    return _write_whole(Path(path), ".json", lambda tmp: tmp.write_text(text))
 
 
 def load_npz(path: str | Path | None, names: Iterable[str] | None = None,

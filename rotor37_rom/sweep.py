@@ -20,7 +20,7 @@ import numpy as np
 
 from rotor37_rom.casing import Casing
 from rotor37_rom.integrator import CentralDifference, loop_state, save_loop_state, simulate
-from rotor37_rom.npz import save_npz
+from rotor37_rom.npz import save_json, save_npz
 
 __all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "load_speed", "sweep_folder", "interaction_map",
            "InteractionMap", "engine_order_resonance", "record_row", "last_revolution_max", "sector_maxima",
@@ -162,9 +162,8 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
     if rank == 0:
         folder.mkdir(parents=True, exist_ok=True)
         if not (folder / "spec.json").exists():          # a folder found by round-off keeps its own step
-            (folder / "spec.json").write_text(json.dumps({"h": scheme.h, "nonlinear": scheme.nonlinear,
-                                                          "model": scheme.model.key, "r": scheme.r,
-                                                          "spec": dataclasses.asdict(spec)}, default=str, indent=1))
+            save_json(folder / "spec.json", {"h": scheme.h, "nonlinear": scheme.nonlinear, "model": scheme.model.key,
+                                             "r": scheme.r, "spec": dataclasses.asdict(spec)}, default=str, indent=1)
     if comm is not None:
         idle_barrier(comm)
     # batches interrupted earlier resume first (their speeds stay together); then the speeds not done yet

@@ -18,7 +18,7 @@ from rotor37_rom.builder import (ReductionConfig, build_reduced_model, cached_mo
                                  training_states)
 from rotor37_rom.ecsw import state_errors, train_ecsw
 from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces
-from rotor37_rom.npz import load_npz, save_npz
+from rotor37_rom.npz import load_npz, save_json, save_npz
 from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, craig_bampton, fixed_interface_correction,
                                    interface_transform, load_reduced_model, save_reduced_model, select_pairs,
                                    selection_weights)
@@ -489,6 +489,26 @@ def test_cache_files_are_whole_or_ignored(tmp_path):
     save_npz(path, a=a, b=b)
     assert sorted(p.name for p in path.parent.iterdir()) == [f".c.npz.tmp{running}.npz", "c.npz"]
 
+
+
+def test_json_stores_are_whole(tmp_path):
+    """``save_json`` writes the whole text or leaves the earlier file: an object JSON cannot hold raises before any
+    file is touched, and a dead writer's temporary is removed by the next write (as ``save_npz``'s)."""
+    import json
+    import subprocess
+    import sys
+
+    path = save_json(tmp_path / "sub" / "store.json", {"a": [1, 2.5], "b": "x"}, indent=1)
+    assert json.loads(path.read_text()) == {"a": [1, 2.5], "b": "x"}
+    assert sorted(p.name for p in path.parent.iterdir()) == ["store.json"]
+    with pytest.raises(TypeError):
+        save_json(path, {"a": object()})
+    assert json.loads(path.read_text()) == {"a": [1, 2.5], "b": "x"}       # the earlier store, untouched
+    done = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    (path.parent / f".store.json.tmp{int(done.stdout)}.json").write_text('{"a": [1,')
+    save_json(path, {"a": 3}, default=float)
+    assert sorted(p.name for p in path.parent.iterdir()) == ["store.json"]
+    assert json.loads(path.read_text()) == {"a": 3}
 
 def test_bad_reduction_input(ci_blade, ci_ops, free_operators):
     from rotor37_rom.fem.sector import _locate_point_dofs
