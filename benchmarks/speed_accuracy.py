@@ -282,9 +282,9 @@ def ran_model(folder: str, model_path: Path) -> bool:
     spec = Path(folder) / "spec.json"
     if not spec.is_file():
         return False
-    with np.load(model_path) as saved:                  # the key only (reduction.save_reduced_model's 'meta')
-        key = json.loads(str(saved["meta"]))["key"]
-    return json.loads(spec.read_text()).get("model") == key
+    from rotor37_rom.reduction import saved_model_key
+
+    return json.loads(spec.read_text()).get("model") == saved_model_key(model_path)
 
 
 def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_path: Path | None = None,
@@ -620,7 +620,7 @@ def disk_stress_at_tmax(run: MapRun, model_path: Path, speed: float) -> dict:
                                 [model.nodes.label_row(run.config.node)])
     if res.diverged_step[0] >= 0:
         return dict(gone, seconds=time.perf_counter() - t0)
-    _, numbers, _ = cm.disk_stress_of(sector, model, res, False, 0)
+    *_, numbers, _ = cm.disk_stress_of(sector, model, res, False, 0)
     return dict(vm=numbers["vm_max_off_root"], vm_all=numbers["vm_max_off_root_all_sectors"],
                 sector_of_max=numbers["sector_of_max_off_root"], u_le=numbers["u_le"],
                 seconds=time.perf_counter() - t0)

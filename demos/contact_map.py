@@ -565,8 +565,10 @@ def build_model(config: ContactMapConfig) -> ReducedModel:
         sector = fem.create_disk_sector(MPI.COMM_SELF, preset=config.preset)
         factors = None if config.mistuning == 0 else tuple(mistuning_factors(N_SECTORS, config.mistuning,
                                                                               config.seed).tolist())
+        # without GNL no sector force is evaluated: the exact tensors (most of a build) are not built
         reduction = DiskReductionConfig(tip_nodes="all", r_c=r_c, r_md=r_md, criterion="MI2b",
-                                        r_cyclic=config.interface_modes, mistuning=factors)
+                                        r_cyclic=config.interface_modes, mistuning=factors,
+                                        forces="none" if config.gnl == "off" else "intrusive")
         model, _ = build_disk_model(sector, reduction, cache_dir=config.cache_dir)
     else:
         from rotor37_rom.builder import ReductionConfig, build_reduced_model
@@ -982,20 +984,20 @@ def stress_mesh(config: ContactMapConfig, model: ReducedModel):
 
 
 def disk_stress_of(sector, model: ReducedModel, res, nonlinear: bool, monitor: int
-                   ) -> tuple[np.ndarray, dict, int]:
+                   ) -> tuple[np.ndarray, np.ndarray, dict, int]:
     """The disk's von Mises stress at t_max of a carried-on run ``res`` (one speed; its first recorded row is the
     monitored node): every sector's field rebuilt from q at the record of largest |u| (no reassembly) on the disk
     ``sector`` (``stress_mesh``), summarised for sector ``monitor`` and over the sectors
-    (``analysis.disk_stress_summary``). Returns (the sectors' displacement fields, the numbers with ``u_le``, the
-    record's index)."""
+    (``analysis.disk_stress_summary``). Returns (the sectors' displacement fields, each sector's largest von Mises
+    per cell, the numbers with ``u_le``, the record's index)."""
     from rotor37_rom.analysis import disk_stress, disk_stress_summary
 
     u = res.u_r[0][0]
     k = int(np.nanargmax(np.abs(u)))
     fields, values = disk_stress(sector, model, res.records_q[0][:, k], nonlinear=nonlinear)
     numbers = disk_stress_summary(sector, model, values, monitor)
-    numbers.update(u_le=float(u[k]), vm_sectors=values.max(axis=2))
-    return fields, numbers, k
+    numbers["u_le"] = float(u[k])
+    return fields, values.max(axis=2), numbers, k
 
 
 def disk_peak_stress(config: ContactMapConfig, scheme: CentralDifference, result: MapResult, tag: str, sector
@@ -1013,8 +1015,7 @@ def disk_peak_stress(config: ContactMapConfig, scheme: CentralDifference, result
     res, run_scheme, t_start = carry_on(config, scheme, result, speed, [model.nodes.label_row(config.node)])
     if res.diverged_step[0] >= 0:
         return {"speed": speed, "diverged": True}, []
-    fields, numbers, k = disk_stress_of(sector, model, res, run_scheme.nonlinear, config.sector)
-    vm_sectors = numbers.pop("vm_sectors")
+    fields, vm_sectors, numbers, k = disk_stress_of(sector, model, res, run_scheme.nonlinear, config.sector)
     numbers.update(speed=speed, t_max=t_start + float(res.t[0][k]))
     factor = 0.1 * 0.074 / max(np.abs(fields).max(), 1e-12)     # largest motion drawn at 10 % of the blade's span
     title = (f"{result.label}: von Mises at t_max, Omega = {speed:.0f} rad/s, node {config.node} (x{factor:.0f})")

@@ -594,6 +594,25 @@ def save_reduced_model(model: ReducedModel, path: str | Path) -> Path:
     return save_npz(path, **arrays)
 
 
+def saved_model_key(path: str | Path) -> str:
+    """The key of the reduced model saved at ``path`` (``save_reduced_model``), read from its 'meta' entry alone
+    (np.load reads an .npz's arrays lazily: the matrices are not read); refuses a missing or corrupted file, or one
+    whose stored key does not match its metadata, as ``load_reduced_model`` does."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"reduced model file {path} does not exist")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            info = json.loads(str(data["meta"]))
+        key = info["key"]
+    except Exception as exc:
+        raise ValueError(f"reduced model file {path} is corrupted or not a reduced model ({exc.__class__.__name__})"
+                         ) from None
+    if reduced_model_key(info["metadata"]) != key:
+        raise ValueError(f"reduced model file {path}: stored key does not match its metadata (corrupted)")
+    return key
+
+
 def load_reduced_model(path: str | Path, expected_key: str | None = None) -> ReducedModel:
     """Read a reduced model; refuse a corrupted file or one whose key differs from ``expected_key``."""
     path = Path(path)

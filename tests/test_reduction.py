@@ -20,8 +20,8 @@ from rotor37_rom.ecsw import state_errors, train_ecsw
 from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces
 from rotor37_rom.npz import load_npz, save_json, save_npz
 from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, craig_bampton, fixed_interface_correction,
-                                   interface_transform, load_reduced_model, save_reduced_model, select_pairs,
-                                   selection_weights)
+                                   interface_transform, load_reduced_model, save_reduced_model, saved_model_key,
+                                   select_pairs, selection_weights)
 from rotor37_rom.step import identify_step
 
 U = np.finfo(float).eps / 2  # unit round-off of float64
@@ -442,6 +442,19 @@ def test_save_load_and_refusals(rom, tmp_path):
     bad.write_bytes(path.read_bytes()[:1000])
     with pytest.raises(ValueError, match="corrupted"):
         load_reduced_model(bad)
+    # the key alone (a cached sweep's check that it ran this model), with the same refusals
+    assert saved_model_key(path) == model.key
+    with pytest.raises(ValueError, match="corrupted"):
+        saved_model_key(bad)
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files}
+    info = json.loads(str(arrays["meta"]))
+    info["metadata"]["version"] = "another"                  # metadata edited, the key left as it was
+    arrays["meta"] = np.array(json.dumps(info))
+    np.savez(tmp_path / "edited.npz", **arrays)
+    for read in (saved_model_key, load_reduced_model):
+        with pytest.raises(ValueError, match="does not match its metadata"):
+            read(tmp_path / "edited.npz")
     # as a cache, a damaged file or another model's is built again, never trusted
     metadata = json.loads(str(np.load(path)["meta"]))["metadata"]
     cache, cached = cached_model(metadata, tmp_path, "rom")
