@@ -604,11 +604,17 @@ def saved_model_key(path: str | Path) -> str:
     try:
         with np.load(path, allow_pickle=False) as data:
             info = json.loads(str(data["meta"]))
-        key = info["key"]
+        info["metadata"], info["key"]                       # a 'meta' without them: not a reduced model
     except Exception as exc:
         raise ValueError(f"reduced model file {path} is corrupted or not a reduced model ({exc.__class__.__name__})"
                          ) from None
-    if reduced_model_key(info["metadata"]) != key:
+    return _checked_key(info, path)
+
+
+def _checked_key(info: dict, path: Path) -> str:
+    """The key stored in a saved model's 'meta' entry ``info``, refused if it does not match its metadata."""
+    key = reduced_model_key(info["metadata"])
+    if key != info["key"]:
         raise ValueError(f"reduced model file {path}: stored key does not match its metadata (corrupted)")
     return key
 
@@ -626,9 +632,7 @@ def load_reduced_model(path: str | Path, expected_key: str | None = None) -> Red
     except Exception as exc:
         raise ValueError(f"reduced model file {path} is corrupted or not a reduced model ({exc.__class__.__name__})"
                          ) from None
-    key = reduced_model_key(info["metadata"])
-    if key != info["key"]:
-        raise ValueError(f"reduced model file {path}: stored key does not match its metadata (corrupted)")
+    key = _checked_key(info, path)
     if expected_key is not None and key != expected_key:
         raise ValueError(f"reduced model file {path} was built for other parameters or another mesh "
                          f"(key {key}, expected {expected_key}); it is stale: rebuild it")
