@@ -1226,7 +1226,9 @@ def build_parser() -> ArgumentParser:
                              "default); under mpirun the two branches run on ranks 0 and 1; resumable")
     parser.add_argument("--continuation-range", type=float, nargs=2, metavar=("LOW", "HIGH"),
                         help="run the continuation over this speed range (rad/s) instead of the map's: up from LOW, "
-                             "down from HIGH (each first run as long as the map's, 15 %% of it after)")
+                             "down from HIGH (each first run as long as the map's, 15 %% of it after); a higher "
+                             "HIGH with the same LOW extends the saved up branch from its last point (a lower LOW "
+                             "with the same HIGH, the down branch)")
     parser.add_argument("--steady-window", type=int, metavar="N",
                         help="a continued run is steady when its max over the last N revolutions and the N before "
                              "agree to 2 %% (1, the paper's and the default: periodic with the rotor; N: periods up to "

@@ -484,6 +484,27 @@ class ContinuationPoint:
                                # (record too short, or the run diverged)
 
 
+def _shorter_branch(path: Path, info: dict) -> SavedRecord | None:
+    """A saved branch that the branch of ``info`` (to be written at ``path``) extends: the same sweep key, start,
+    step and settings, going the same way but stopping short of this one's stop (the farthest such). None if there is
+    none. Branches written before their settings were saved with them (``branch_info``) are not considered."""
+    start, stop, *rest = info["branch"]
+    sign, best, best_stop = (1.0 if stop >= start else -1.0), None, None
+    for other in sorted(path.parent.glob("continuation_*.npz")):
+        if other == path:
+            continue
+        saved = _load_result(other)
+        if saved is None or "branch_info" not in saved:
+            continue
+        theirs = json.loads(str(saved["branch_info"]))
+        o_start, o_stop, *o_rest = theirs["branch"]
+        if (theirs["sweep"] == info["sweep"] and o_start == start and o_rest == rest
+                and 0 < sign * (o_stop - start) < sign * (stop - start)
+                and (best_stop is None or sign * (o_stop - best_stop) > 0)):
+            best, best_stop = saved, o_stop
+    return best
+
+
 def continuation(scheme: CentralDifference, start: float, stop: float, step: float, casing: Casing = Casing(),
                  first_revolutions: float = 200.0, revolutions: float = 30.0, max_halvings: int = 3,
                  record_dt: float = 1e-5, tol: float = 0.02, progress: bool = False,
@@ -508,8 +529,10 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
 
     The casing is fully ovalized from the start of every continued run (the ramp only applies to the first). A run
     that diverges ends the branch (its point has amplitude NaN). With ``out`` the branch is written after every
-    accepted point (``<out>/continuation_<key>.npz``: the points, the state and the rotor angle), so a killed
-    continuation resumes from its last accepted speed and a finished one is read back."""
+    accepted point (``<out>/continuation_<key>.npz``: the points, the state, the rotor angle and the branch's
+    settings), so a killed continuation resumes from its last accepted speed and a finished one is read back. A branch
+    with a farther stop than a saved one (same start, step and settings, same direction) extends it from its last
+    point instead of starting from rest again; it passes through the shorter branch's stop."""
     if step <= 0:
         raise ValueError(f"continuation step must be > 0 rad/s, got {step}")
     if max_halvings < 0:
@@ -529,21 +552,27 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
         digest = hashlib.sha256(json.dumps(info, sort_keys=True).encode()).hexdigest()[:16]
         path = Path(out) / f"continuation_{digest}.npz"
     saved = _load_result(path) if path is not None and path.exists() else None
+    extended = False
+    if saved is None and path is not None:               # a farther stop than a saved branch: extend that one
+        saved = _shorter_branch(path, info)
+        extended = saved is not None
 
     def save(finished: bool) -> None:
         if path is not None:
             path.parent.mkdir(parents=True, exist_ok=True)
             save_npz(path, points=np.array([[p.omega, p.amplitude, p.steady, p.halvings, p.period]
                                             for p in points]),
-                     q=state[0], q_prev=state[1], phase=phase, omega=omega, finished=finished)
+                     q=state[0], q_prev=state[1], phase=phase, omega=omega, finished=finished,
+                     branch_info=np.array(json.dumps(info, sort_keys=True)))
 
     if saved is not None:
         points = [ContinuationPoint(float(w), float(a), bool(s), int(k), *(int(x) for x in rest))
                   for w, a, s, k, *rest in saved["points"]]             # branches saved before the period: 4 columns
         state, phase, omega = (saved["q"], saved["q_prev"]), float(saved["phase"]), float(saved["omega"])
-        if bool(saved["finished"]):
+        if bool(saved["finished"]) and not extended:
             return points
-        LOG.info("continuation resumes at %.1f rad/s from %s", omega, path)
+        LOG.info("continuation %s at %.1f rad/s from %s", "extends a shorter branch" if extended else "resumes",
+                 omega, saved.path)
     else:
         res = simulate(scheme, start, casing, revolutions=first_revolutions, record_every=record_every,
                        on_blowup="flag")

@@ -457,6 +457,25 @@ def test_sector_rows_and_maxima_follow_the_sector_index():
         sweep_mod.sector_rows(dict(record, labels=np.array(["0:LE", "2:LE", "3:LE", "0:TE"])), "LE", every=True)
 
 
+class _Calls(list):
+    """The first speed of each ``sweep.simulate`` call; the call numbered ``kill_at`` (from 1) raises _Killed."""
+    kill_at = 0
+
+
+def _counted_simulate(monkeypatch) -> _Calls:
+    """Wrap ``sweep.simulate`` (the continuation's runs) to count its calls; returns the list they go to."""
+    real, calls = sweep_mod.simulate, _Calls()
+
+    def counted(*a, **k):
+        calls.append(float(np.atleast_1d(a[1])[0]))
+        if len(calls) == calls.kill_at:
+            raise _Killed
+        return real(*a, **k)
+
+    monkeypatch.setattr(sweep_mod, "simulate", counted)
+    return calls
+
+
 def test_killed_continuation_resumes_where_it_stopped(ci_rom, tmp_path, monkeypatch):
     """A continuation killed at its third run resumes from the last accepted speed (the first run is not redone) and
     gives the points of an uninterrupted branch bit for bit; a finished branch is read back without running
@@ -464,22 +483,13 @@ def test_killed_continuation_resumes_where_it_stopped(ci_rom, tmp_path, monkeypa
     sweep = sweep_mod
     scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
     kwargs = dict(casing=Casing(mu=0.0), first_revolutions=1.0, revolutions=1.0, max_halvings=1)
-    real, calls = sweep.simulate, []
-
-    def counted(*a, **k):
-        calls.append(float(np.atleast_1d(a[1])[0]))
-        if len(calls) == kill_at:
-            raise _Killed
-        return real(*a, **k)
-
-    monkeypatch.setattr(sweep, "simulate", counted)
-    kill_at = 0
+    calls = _counted_simulate(monkeypatch)
     whole = sweep.continuation(scheme, 1200.0, 1275.0, 25.0, **kwargs)
     n_whole, calls[:] = len(calls), []
-    kill_at = 3
+    calls.kill_at = 3
     with pytest.raises(_Killed):
         sweep.continuation(scheme, 1200.0, 1275.0, 25.0, out=tmp_path, **kwargs)
-    kill_at, calls[:] = 0, []
+    calls.kill_at, calls[:] = 0, []
     resumed = sweep.continuation(scheme, 1200.0, 1275.0, 25.0, out=tmp_path, **kwargs)
     # the first, long run is not redone; only the runs since the last accepted speed are (here at most 2)
     assert calls[0] != 1200.0 and n_whole - 2 <= len(calls) < n_whole
@@ -487,6 +497,32 @@ def test_killed_continuation_resumes_where_it_stopped(ci_rom, tmp_path, monkeypa
     calls[:] = []
     again = sweep.continuation(scheme, 1200.0, 1275.0, 25.0, out=tmp_path, **kwargs)
     assert not calls and [dataclasses.astuple(p) for p in again] == [dataclasses.astuple(p) for p in whole]
+
+
+def test_continuation_extends_a_shorter_branch(ci_rom, tmp_path, monkeypatch):
+    """A branch with a farther stop extends the saved one with the same start and settings from its last point (the
+    first, long run is not redone): with the shorter stop on the step grid it gives the uninterrupted branch's points
+    (amplitudes to round-off). A branch with another step or start, or going the other way, starts from rest."""
+    sweep = sweep_mod
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
+    kwargs = dict(casing=Casing(mu=0.0), first_revolutions=1.0, revolutions=1.0, max_halvings=1)
+    calls = _counted_simulate(monkeypatch)
+    whole = sweep.continuation(scheme, 1200.0, 1275.0, 25.0, **kwargs)
+    short = sweep.continuation(scheme, 1200.0, 1225.0, 25.0, out=tmp_path, **kwargs)
+    assert short[-1].omega == 1225.0
+    calls[:] = []
+    longer = sweep.continuation(scheme, 1200.0, 1275.0, 25.0, out=tmp_path, **kwargs)
+    assert calls and 1200.0 not in calls and min(calls) > 1225.0           # only the runs past the shorter stop
+    # the same speeds, steadiness and periods; amplitudes to round-off (the shorter branch ran its last halved
+    # candidates as a smaller batch, the uninterrupted one as a larger: another BLAS summation order)
+    assert [(p.omega, p.steady, p.halvings, p.period) for p in longer] == \
+        [(p.omega, p.steady, p.halvings, p.period) for p in whole]
+    np.testing.assert_allclose([p.amplitude for p in longer], [p.amplitude for p in whole], rtol=1e-9)
+    assert len(list(tmp_path.glob("continuation_*.npz"))) == 2              # the shorter branch is left as it was
+    for start, stop, step in [(1200.0, 1300.0, 50.0), (1210.0, 1300.0, 25.0), (1275.0, 1200.0, 25.0)]:
+        calls[:] = []
+        sweep.continuation(scheme, start, stop, step, out=tmp_path, **kwargs)
+        assert calls[0] == start                                            # from rest: nothing to extend
 
 
 def test_contact_map_frequency_cap_flag(ci_rom, tmp_path):
