@@ -532,7 +532,8 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
     accepted point (``<out>/continuation_<key>.npz``: the points, the state, the rotor angle and the branch's
     settings), so a killed continuation resumes from its last accepted speed and a finished one is read back. A branch
     with a farther stop than a saved one (same start, step and settings, same direction) extends it from its last
-    point instead of starting from rest again; it passes through the shorter branch's stop."""
+    point instead of starting from rest again; it passes through the shorter branch's stop (a branch that ended where
+    a run diverged is returned as it is)."""
     if step <= 0:
         raise ValueError(f"continuation step must be > 0 rad/s, got {step}")
     if max_halvings < 0:
@@ -569,8 +570,8 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
         points = [ContinuationPoint(float(w), float(a), bool(s), int(k), *(int(x) for x in rest))
                   for w, a, s, k, *rest in saved["points"]]             # branches saved before the period: 4 columns
         state, phase, omega = (saved["q"], saved["q_prev"]), float(saved["phase"]), float(saved["omega"])
-        if bool(saved["finished"]) and not extended:
-            return points
+        if bool(saved["finished"]) and (not extended or np.isnan(points[-1].amplitude)):
+            return points                        # done, or ended where a run diverged: going farther ends there too
         LOG.info("continuation %s at %.1f rad/s from %s", "extends a shorter branch" if extended else "resumes",
                  omega, saved.path)
     else:

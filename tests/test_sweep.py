@@ -502,7 +502,8 @@ def test_killed_continuation_resumes_where_it_stopped(ci_rom, tmp_path, monkeypa
 def test_continuation_extends_a_shorter_branch(ci_rom, tmp_path, monkeypatch):
     """A branch with a farther stop extends the saved one with the same start and settings from its last point (the
     first, long run is not redone): with the shorter stop on the step grid it gives the uninterrupted branch's points
-    (amplitudes to round-off). A branch with another step or start, or going the other way, starts from rest."""
+    (amplitudes to round-off). A branch with another step or start, or going the other way, starts from rest; one
+    that ended where a run blew up is given back as it is."""
     sweep = sweep_mod
     scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
     kwargs = dict(casing=Casing(mu=0.0), first_revolutions=1.0, revolutions=1.0, max_halvings=1)
@@ -523,6 +524,14 @@ def test_continuation_extends_a_shorter_branch(ci_rom, tmp_path, monkeypatch):
         calls[:] = []
         sweep.continuation(scheme, start, stop, step, out=tmp_path, **kwargs)
         assert calls[0] == start                                            # from rest: nothing to extend
+    # a branch that ended where its run blew up (1.05 h_crit, as in test_blown_up_speeds_run_again_with_half_the_step)
+    # ends there however far it is asked to go
+    fast = CentralDifference(ci_rom, nonlinear=False, h=1.05 * scheme.h_crit, force=True)
+    ended = sweep.continuation(fast, 1200.0, 1225.0, 25.0, out=tmp_path, **{**kwargs, "first_revolutions": 0.3})
+    assert len(ended) == 1 and np.isnan(ended[0].amplitude)
+    calls[:] = []
+    farther = sweep.continuation(fast, 1200.0, 1275.0, 25.0, out=tmp_path, **{**kwargs, "first_revolutions": 0.3})
+    assert not calls and repr(farther) == repr(ended)                      # (NaN != NaN: compared as text)
 
 
 def test_contact_map_frequency_cap_flag(ci_rom, tmp_path):
