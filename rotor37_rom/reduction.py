@@ -604,7 +604,8 @@ def saved_model_key(path: str | Path) -> str:
     try:
         with np.load(path, allow_pickle=False) as data:
             info = json.loads(str(data["meta"]))
-        info["metadata"], info["key"]                       # a 'meta' without them: not a reduced model
+        if not {"metadata", "key"} <= info.keys():          # a 'meta' without them: not a reduced model
+            raise KeyError("metadata, key")
     except Exception as exc:
         raise ValueError(f"reduced model file {path} is corrupted or not a reduced model ({exc.__class__.__name__})"
                          ) from None

@@ -550,8 +550,8 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
             + ([node] if node != LE else []) + ([unsteady] if unsteady != "smallest" else [])
         info = {"sweep": _key(scheme, SweepSpec(revolutions=first_revolutions, casing=casing, record_dt=record_dt)),
                 "branch": branch}
-        digest = hashlib.sha256(json.dumps(info, sort_keys=True).encode()).hexdigest()[:16]
-        path = Path(out) / f"continuation_{digest}.npz"
+        info_json = json.dumps(info, sort_keys=True)     # the key's digest, and saved with the branch
+        path = Path(out) / f"continuation_{hashlib.sha256(info_json.encode()).hexdigest()[:16]}.npz"
     saved = _load_result(path) if path is not None and path.exists() else None
     extended = False
     if saved is None and path is not None:               # a farther stop than a saved branch: extend that one
@@ -564,7 +564,7 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
             save_npz(path, points=np.array([[p.omega, p.amplitude, p.steady, p.halvings, p.period]
                                             for p in points]),
                      q=state[0], q_prev=state[1], phase=phase, omega=omega, finished=finished,
-                     branch_info=np.array(json.dumps(info, sort_keys=True)))
+                     branch_info=np.array(info_json))
 
     if saved is not None:
         points = [ContinuationPoint(float(w), float(a), bool(s), int(k), *(int(x) for x in rest))
