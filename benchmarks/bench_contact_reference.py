@@ -16,8 +16,10 @@ Error measures on the LE normal displacement u(t) (m), recorded every --record s
 made of) relative to the reference's. Completed runs are kept per model and speed in
 results/bench_contact_reference[_gnl][_rom].json and not repeated when the script is started again with the same
 case (revolutions, bump, mu), so a later command can add speeds, models or steps; the report compares the runs the
-command names. With --rom-cap the reduced models run at the given steps with the frequency cap (the maps' setting);
-several steps give the step's own error, and the reference is the largest model at the smallest step.
+command names. Runs under way, full order and reduced, save their state every few minutes in the folder
+results/bench_contact_reference[_gnl][_rom].ckpt, and the same command resumes them. With --rom-cap the reduced
+models run at the given steps with the frequency cap (the maps' setting); several steps give the step's own error,
+and the reference is the largest model at the smallest step.
 
     python benchmarks/bench_contact_reference.py --r-c 10 25 40 80        # linear: ~20 min
     python benchmarks/bench_contact_reference.py --gnl --no-full-order --speeds 1280 1520 --r-md 0 20 50 \
@@ -72,18 +74,48 @@ def reference_run(sector, ops, casing, omega, duration, h, gnl, checkpoint, rho_
             "max_multiplier": float(res.lam.max()), "contact_steps": int(on.any(axis=1).sum())}
 
 
-def rom_runs(model, casing, speeds, duration, gnl, record, cap=None, h=None, damping=False):
+def rom_runs(model, casing, speeds, duration, gnl, record, cap=None, h=None, damping=False, checkpoint=None,
+             checkpoint_seconds=300.0):
     """LE normal displacement of the reduced model at every speed (one batch): unscaled at 0.5 h_crit, or with the
-    frequency cap ``cap`` (rad/s) at step h; undamped unless ``damping``."""
-    from rotor37_rom.integrator import CentralDifference, simulate
+    frequency cap ``cap`` (rad/s) at step h; undamped unless ``damping``. With ``checkpoint`` (a path) the loop state
+    is saved there every ``checkpoint_seconds``, and a run of the same model, speeds, step, length and record interval
+    resumes from it (the r = 169 GNL model at 2e-7 s runs for over an hour); its wall time counts the time run before
+    the restart."""
+    from rotor37_rom.integrator import CentralDifference, loop_state, save_loop_state, simulate
 
     scheme = CentralDifference(model, nonlinear=gnl, safety=0.5, damping=damping, frequency_cap=cap, h=h,
                                force=True)
     every = max(1, int(round(record / scheme.h)))
-    res = simulate(scheme, speeds, casing, n_steps=int(np.ceil(duration / scheme.h)), duration=duration,
-                   record_every=every, on_blowup="flag")
+    n_steps = int(np.ceil(duration / scheme.h))
+    speeds = np.asarray(speeds, float)
+    ident = {"h": scheme.h, "n_steps": n_steps, "record_every": every}
+    state, before = None, 0.0
+    if checkpoint is not None and Path(checkpoint).exists():
+        with np.load(checkpoint, allow_pickle=False) as data:
+            # (the first checkpoints of this kind carry no model key: their file name, the label, names the model)
+            if (str(data["model"]) == model.key if "model" in data.files else True) \
+                    and np.array_equal(data["speeds"], speeds) \
+                    and all(float(data[k]) == v for k, v in ident.items()):
+                state, before = loop_state(data, speeds.size), float(data["elapsed"])
+                print(f"  resuming at step {state['n']} of {n_steps} ({before:.0f} s run before)", flush=True)
+    t0 = time.perf_counter()
+    save = None if checkpoint is None else (
+        lambda st: save_loop_state(checkpoint, st, speeds, elapsed=before + time.perf_counter() - t0,
+                                   model=np.array(model.key), **ident))
+    bar = None
+    try:
+        from tqdm import tqdm
+        bar = tqdm(total=n_steps * speeds.size, initial=0 if state is None else state["n"] * speeds.size,
+                   unit="sim-step", unit_scale=True, mininterval=30, desc=f"r = {model.r}, h = {scheme.h:.3g} s")
+    except ImportError:
+        pass
+    res = simulate(scheme, speeds, casing, n_steps=n_steps, duration=duration, record_every=every, on_blowup="flag",
+                   state=state, checkpoint=save, checkpoint_seconds=checkpoint_seconds,
+                   progress=None if bar is None else bar.update)
+    if bar is not None:
+        bar.close()
     row = res.row("0:LE")
-    return [{"t": res.t[p].tolist(), "u_le": res.u_r[p][row].tolist(), "h": scheme.h, "wall_s": res.wall,
+    return [{"t": res.t[p].tolist(), "u_le": res.u_r[p][row].tolist(), "h": scheme.h, "wall_s": before + res.wall,
              "diverged": bool(res.diverged_step[p] >= 0), "max_penetration": float(res.max_penetration[p]),
              "diverged_t": float(res.diverged_step[p] * scheme.h) if res.diverged_step[p] >= 0 else None}
             for p in range(len(speeds))]
@@ -197,12 +229,16 @@ def main(argv=None) -> int:
     settings = {"revolutions": args.revolutions, "bump_mm": args.bump, "mu": args.mu}
     rom_settings = {"record": args.record}
     store = json.loads(results.read_text()) if results.exists() else {}
+    checkpoints = results.with_suffix(".ckpt")     # the runs under way: full_<key>.npz, rom_<label>_<speed>.npz
     if store.get("settings") != settings:
-        for stale in results.parent.glob(f"{results.stem}_*.ckpt.npz"):
+        for stale in checkpoints.glob("*.npz"):
             stale.unlink()
         store = {"settings": settings, "reference": {}, "roms": {}}
     if store.get("rom_settings") != rom_settings:
+        for stale in checkpoints.glob("rom_*.npz"):
+            stale.unlink()
         store["rom_settings"], store["roms"] = rom_settings, {}
+    checkpoints.mkdir(parents=True, exist_ok=True)
     store["machine"] = machine_description()
     results.parent.mkdir(exist_ok=True)
     durations = {float(w): args.revolutions * 2 * np.pi / w for w in speeds}
@@ -224,7 +260,7 @@ def main(argv=None) -> int:
         for h in sorted(args.h_full, reverse=True):
             key = ref_key(w, h)
             if key not in store["reference"]:
-                ckpt = results.with_name(f"{results.stem}_{key.replace(' ', '_')}.ckpt.npz")
+                ckpt = checkpoints / f"full_{key.replace(' ', '_')}.npz"
                 store["reference"][key] = reference_run(sector, ops, casing, w, durations[float(w)], h, args.gnl,
                                                         ckpt, args.rho_inf, interface)
                 save()
@@ -251,11 +287,13 @@ def main(argv=None) -> int:
             model, _ = build_reduced_model(sector, config, ops=ops, cache_dir="results/cache")
             store["roms"].setdefault(label, {"r": model.r, "runs": {}})
             for w in todo:                         # one speed at a time: each has its own run length
+                ckpt = checkpoints / f"rom_{label.replace(' ', '_')}_{w:g}.npz"
                 run, = rom_runs(model, casing, [w], durations[float(w)], args.gnl, args.record,
                                 None if args.rom_cap is None else 2e3 * np.pi * args.rom_cap, h,
-                                damping=args.no_full_order)
+                                damping=args.no_full_order, checkpoint=ckpt)
                 store["roms"][label]["runs"][f"{w:g}"] = run
                 save()
+                ckpt.unlink(missing_ok=True)
     kind = "GNL" if args.gnl else "linear"
     labels = [rom_label(*combo) for combo in combos]
     print(f"\n{kind}, mu = {args.mu:g}, h_b = {args.bump:g} mm, {args.revolutions:g} revolutions from rest; errors "
