@@ -92,10 +92,8 @@ def rom_runs(model, casing, speeds, duration, gnl, record, cap=None, h=None, dam
     state, before = None, 0.0
     if checkpoint is not None and Path(checkpoint).exists():
         with np.load(checkpoint, allow_pickle=False) as data:
-            # (the first checkpoints of this kind carry no model key: their file name, the label, names the model)
-            if (str(data["model"]) == model.key if "model" in data.files else True) \
-                    and np.array_equal(data["speeds"], speeds) \
-                    and all(float(data[k]) == v for k, v in ident.items()):
+            if (str(data["model"]) == model.key and np.array_equal(data["speeds"], speeds)
+                    and all(float(data[k]) == v for k, v in ident.items())):
                 state, before = loop_state(data, speeds.size), float(data["elapsed"])
                 print(f"  resuming at step {state['n']} of {n_steps} ({before:.0f} s run before)", flush=True)
     t0 = time.perf_counter()
