@@ -33,6 +33,13 @@ Scenes (the report's settings):
   model at 120 kHz measures its cap's own error); held out: 7 other speeds. With it, ``disk-stress-linear``: the von
   Mises stress in the disk at t_max of one revolution carried on from each of its maps at the reference's largest
   robust response, off the root corner, in sector 0 and over the sectors.
+- ``disk-map-gnl`` (bladed disk, by name only: not in ``disk`` until it is measured): the same map with GNL over 12
+  revolutions; reference: r_c 10, r_MD 10, r_cyclic 288 with the exact sector tensors at a 120 kHz cap (the GNL
+  step's probe sets the step); the 1e-4 perturbation is the map's own option (the internal force scaled, the same
+  probe and step); candidates: the maps' model (r_cyclic 144) at 60 kHz with exact tensors and with point cubature
+  at 1e-2 / 3e-3 / 1e-3 in float32 (the full-disk GNL map's model is 3e-3), no modal derivatives, the reference's
+  basis at 60 kHz; held out: the 7 other speeds, a cubature as trained on the study's speeds. With it,
+  ``disk-stress-gnl``: the stress at t_max with GNL, as ``disk-stress-linear``.
 - ``cost-r``: the cost per simulation-step against r for each force method (no GNL, exact tensors, point cubature on
   all points and on 10 points per mode, float64 / float32), synthetic models of each size, and the trained cubatures.
 
@@ -450,19 +457,19 @@ def scene_map(gnl: bool) -> tuple[dict, dict]:
     return maps, history
 
 
-def held_out_options(options: dict) -> dict:
-    """A candidate's options on the held-out speeds: a cubature stays the one trained on the study's speeds (the
-    model chosen is run, not one retrained on runs at the held-out speeds)."""
+def held_out_options(options: dict, setup: dict = MAP) -> dict:
+    """A candidate's options on the held-out speeds: a cubature stays the one trained on the study's speeds of the
+    scene's ``setup`` (the model chosen is run, not one retrained on runs at the held-out speeds)."""
     if options.get("cubature") is None:
         return options
-    return {**options, "cubature_speeds": study_training_speeds()}
+    return {**options, "cubature_speeds": study_training_speeds(setup)}
 
 
-def study_training_speeds() -> tuple[float, ...]:
-    """The speeds a cubature of the map scenes is trained at (6 of the study's, as contact_map picks them)."""
+def study_training_speeds(setup: dict = MAP) -> tuple[float, ...]:
+    """The speeds a cubature of a map scene is trained at (those of the study's that contact_map picks)."""
     from rotor37_rom.integrator import training_speeds
 
-    return tuple(training_speeds(load_demo("contact_map").ContactMapConfig(**MAP).speed_grid).tolist())
+    return tuple(training_speeds(load_demo("contact_map").ContactMapConfig(**setup).speed_grid).tolist())
 
 
 def held_out_map(scene: dict, gnl: bool, tolerances=TOLERANCES) -> None:
@@ -506,6 +513,8 @@ DISK_MAP = dict(preset="ci", speeds=(1200.0, 1650.0, 8), revolutions=20.0, mu=0.
                 batch=8)                     # the disk maps' casing (cone normal, the paper's mu) and short map
 DISK_HELD_OUT_SPEEDS = (1230.0, 1620.0, 7)      # between the study's speeds (every 64.3 rad/s)
 DISK_MAP_REFERENCE = {"r_c": 10, "r_md": 10, "r_cyclic": 288, "frequency_cap": 240.0}
+DISK_GNL_MAP = {**DISK_MAP, "revolutions": 12.0}     # GNL: the sectors' forces batched, 12 revolutions
+DISK_GNL_REFERENCE = {"r_c": 10, "r_md": 10, "r_cyclic": 288, "frequency_cap": 120.0}     # exact sector tensors
 DISK_MAP_CANDIDATES = [  # every sector's 8 tip nodes; r_md by MI 2b; the maps' model is r_c 10, 10 MD, r_cyclic 144
     ("the maps' model, cap 30 kHz", {"r_c": 10, "r_md": 10, "r_cyclic": 144, "frequency_cap": 30.0}),
     ("the maps' model, cap 60 kHz", {"r_c": 10, "r_md": 10, "r_cyclic": 144, "frequency_cap": 60.0}),
@@ -517,6 +526,15 @@ DISK_MAP_CANDIDATES = [  # every sector's 8 tip nodes; r_md by MI 2b; the maps' 
     ("r_c 2, r_cyclic 144, cap 60 kHz", {"r_c": 2, "r_md": 0, "r_cyclic": 144, "frequency_cap": 60.0}),
     ("the reference's model, cap 120 kHz", {**DISK_MAP_REFERENCE, "frequency_cap": 120.0}),   # its cap's own error
 ]
+_MAPS_MODEL = {"r_c": 10, "r_md": 10, "r_cyclic": 144, "frequency_cap": 60.0}
+DISK_GNL_CANDIDATES = [  # with GNL: exact sector tensors unless a cubature (trained, capped, at the study's speeds)
+    ("the maps' model, exact, cap 60 kHz", _MAPS_MODEL),
+    ("the maps' model, cubature 1e-2 float32, cap 60 kHz", {**_MAPS_MODEL, "cubature": 1e-2, "precision": "single"}),
+    ("the maps' model, cubature 3e-3 float32, cap 60 kHz", {**_MAPS_MODEL, "cubature": 3e-3, "precision": "single"}),
+    ("the maps' model, cubature 1e-3 float32, cap 60 kHz", {**_MAPS_MODEL, "cubature": 1e-3, "precision": "single"}),
+    ("r_c 10, r_cyclic 144, exact, cap 60 kHz", {**_MAPS_MODEL, "r_md": 0}),
+    ("the reference's model, exact, cap 60 kHz", {**DISK_GNL_REFERENCE, "frequency_cap": 60.0}),
+]
 
 
 @functools.lru_cache(maxsize=None)
@@ -527,25 +545,30 @@ def _disk_sector():
     return sector, fem.create_svk_operators(sector)
 
 
-def disk_model_file(options: dict, perturbation: float = 0.0) -> Path:
-    """The disk model of ``options`` (r_c, r_md by MI 2b, r_cyclic; every sector's 8 tip nodes; no GNL forces), built
-    once (the Craig-Bampton parts cached with scene disk-modes') and saved for the map command's --model; with a
-    ``perturbation``, that model's stiffness scaled by 1 + perturbation. Checked once per process."""
-    return _disk_model_file(options["r_c"], options["r_md"], options["r_cyclic"], float(perturbation))
+def disk_model_file(options: dict, perturbation: float = 0.0, gnl: bool = False) -> Path:
+    """The disk model of ``options`` (r_c, r_md by MI 2b, r_cyclic; every sector's 8 tip nodes; with ``gnl`` the
+    sector's exact GNL tensors, else no GNL forces), built once (the Craig-Bampton parts cached with scene
+    disk-modes') and saved for the map command's --model; with a ``perturbation`` (GNL off), that model's stiffness
+    scaled by 1 + perturbation. Checked once per process."""
+    if gnl and perturbation:
+        raise ValueError("a GNL disk map is perturbed by the map's own option 'perturbation' (the same probe and "
+                         "step), not by a perturbed model file")
+    return _disk_model_file(options["r_c"], options["r_md"], options["r_cyclic"], float(perturbation), bool(gnl))
 
 
 @functools.lru_cache(maxsize=None)
-def _disk_model_file(r_c: int, r_md: int, r_cyclic: int, perturbation: float) -> Path:
+def _disk_model_file(r_c: int, r_md: int, r_cyclic: int, perturbation: float, gnl: bool) -> Path:
     from rotor37_rom.builder import mesh_signature
     from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
     from rotor37_rom.reduction import load_reduced_model, perturbed_model, save_reduced_model
 
     sector, ops = _disk_sector()
-    stem = f"disk_{mesh_signature(sector)[:12]}_rc{r_c}_md{r_md}_cyc{r_cyclic}"
+    stem = f"disk_{mesh_signature(sector)[:12]}_rc{r_c}_md{r_md}_cyc{r_cyclic}" + ("_gnl" if gnl else "")
     # the builder's cache (keyed by every parameter of the reduction) decides: a file saved by an earlier builder is
     # replaced, and so is a perturbed copy of another model (run_map then sees the key change and runs its maps again)
     model, _ = build_disk_model(sector, DiskReductionConfig(tip_nodes="all", r_c=r_c, r_md=r_md, criterion="MI2b",
-                                                            r_cyclic=r_cyclic, forces="none"),
+                                                            r_cyclic=r_cyclic,
+                                                            forces="intrusive" if gnl else "none"),
                                 ops=ops, cache_dir=WORK / "disk_models")
     if perturbation != 0.0:
         model = perturbed_model(model, perturbation)
@@ -556,8 +579,11 @@ def _disk_model_file(r_c: int, r_md: int, r_cyclic: int, perturbation: float) ->
     return path
 
 
-def run_disk_map(name: str, options: dict, speeds=DISK_MAP["speeds"], perturbation: float = 0.0) -> MapRun:
-    return run_map(name, False, options, speeds, disk_model_file(options, perturbation), DISK_MAP, "disk_")
+def run_disk_map(name: str, options: dict, speeds=None, perturbation: float = 0.0, gnl: bool = False) -> MapRun:
+    """A map of the disk scenes: DISK_MAP (GNL off) or DISK_GNL_MAP at ``speeds`` (default: the scene's)."""
+    setup = DISK_GNL_MAP if gnl else DISK_MAP
+    return run_map(name, gnl, options, speeds or setup["speeds"], disk_model_file(options, perturbation, gnl),
+                   setup, "disk_")
 
 
 def largest_over_blades(run: MapRun) -> np.ndarray:
@@ -598,7 +624,7 @@ def disk_map_errors(run: MapRun, ref: MapRun, robust: np.ndarray) -> dict:
     return err
 
 
-def disk_stress_at_tmax(run: MapRun, model_path: Path, speed: float) -> dict:
+def disk_stress_at_tmax(run: MapRun, model_path: Path, speed: float, gnl: bool = False) -> dict:
     """The disk's von Mises stress at t_max (largest |u| of node LE of sector 0) of one revolution carried on from
     ``run``'s final state at ``speed`` (what ``contact_map.py --stress`` does at the map's largest response), every
     sector rebuilt from q: the largest off the root corner and outside the tip band in sector 0 and over the sectors
@@ -614,35 +640,36 @@ def disk_stress_at_tmax(run: MapRun, model_path: Path, speed: float) -> dict:
     gone = dict(vm=math.inf, vm_all=math.inf, sector_of_max=None, u_le=math.nan)
     if int(run.records[k]["diverged_step"]) >= 0:          # nothing to carry on
         return dict(gone, seconds=0.0)
-    scheme = cm.time_scheme(dataclasses.replace(run.config, h=run.record_h[k]), model, False, None)
+    scheme = cm.time_scheme(dataclasses.replace(run.config, h=run.record_h[k]), model, gnl, None)   # cached cubature
     t0 = time.perf_counter()
     res, _ = cm.carry_on_record(run.config, scheme, run.records[k], float(run.records[k]["omega"]),
                                 [model.nodes.label_row(run.config.node)])
     if res.diverged_step[0] >= 0:
         return dict(gone, seconds=time.perf_counter() - t0)
-    *_, numbers, _ = cm.disk_stress_of(sector, model, res, False, 0)
+    *_, numbers, _ = cm.disk_stress_of(sector, model, res, gnl, 0)
     return dict(vm=numbers["vm_max_off_root"], vm_all=numbers["vm_max_off_root_all_sectors"],
                 sector_of_max=numbers["sector_of_max_off_root"], u_le=numbers["u_le"],
                 seconds=time.perf_counter() - t0)
 
 
-def scene_disk_stress(maps: dict, runs: dict) -> dict:
-    """von Mises at t_max in the disk, GNL off, at the reference's largest robust response of the disk map scene, for
-    its reference and candidates (``runs``: the map scene's MapRuns by name, the stress needs a map's final state);
-    error: the larger of the relative errors in sector 0 and over the sectors, off the root corner."""
+def scene_disk_stress(maps: dict, runs: dict, gnl: bool = False) -> dict:
+    """von Mises at t_max in the disk, GNL off or on, at the reference's largest robust response of the disk map
+    scene, for its reference and candidates (``runs``: the map scene's MapRuns by name, the stress needs a map's final
+    state); error: the larger of the relative errors in sector 0 and over the sectors, off the root corner."""
+    scene = "disk-stress-gnl" if gnl else "disk-stress-linear"
     ref_opts, speed = maps["reference"]["options"], maps["reference"]["robust_peak_speed"]
-    ref = disk_stress_at_tmax(runs["reference"], disk_model_file(ref_opts), speed)
+    ref = disk_stress_at_tmax(runs["reference"], disk_model_file(ref_opts, gnl=gnl), speed, gnl)
     if not np.isfinite(ref["vm"]):
-        raise RuntimeError(f"disk-stress-linear: the reference's run at {speed:g} rad/s diverged")
+        raise RuntimeError(f"{scene}: the reference's run at {speed:g} rad/s diverged")
     cands = []
     for c in maps["candidates"]:
         if not np.isfinite(c["error"]):              # a map that lost a speed: no model for the scene
             out = dict(vm=math.inf, vm_all=math.inf, sector_of_max=None, u_le=math.nan, seconds=0.0)
         else:
-            out = disk_stress_at_tmax(runs[c["name"]], disk_model_file(c["options"]), speed)
+            out = disk_stress_at_tmax(runs[c["name"]], disk_model_file(c["options"], gnl=gnl), speed, gnl)
         err = max(abs(out["vm"] - ref["vm"]) / ref["vm"], abs(out["vm_all"] - ref["vm_all"]) / ref["vm_all"])
         err = err if np.isfinite(err) else math.inf
-        print(f"disk-stress-linear: {c['name']}: sector 0 {out['vm'] / 1e6:.4g} MPa, over the sectors "
+        print(f"{scene}: {c['name']}: sector 0 {out['vm'] / 1e6:.4g} MPa, over the sectors "
               f"{out['vm_all'] / 1e6:.4g} MPa ({_pct(err)}), {out['seconds']:.1f} s")
         cands.append(dict(name=c["name"], options=c["options"], us_per_step=c["us_per_step"], h=c["h"],
                           cost=c["cost"] + out["seconds"], error=err, vm_max=out["vm"], vm_max_all=out["vm_all"],
@@ -650,7 +677,8 @@ def scene_disk_stress(maps: dict, runs: dict) -> dict:
                           held_out_error=None))
     return dict(description=f"the bladed disk's largest von Mises stress off the root corner and outside the tip band "
                             f"at t_max of one revolution carried on from the disk map scene's final states at the "
-                            f"reference's largest robust response ({speed:.0f} rad/s), GNL off, ci sectors: the larger "
+                            f"reference's largest robust response ({speed:.0f} rad/s), GNL {'on' if gnl else 'off'}, "
+                            f"ci sectors: the larger "
                             f"of the relative errors in sector 0 and over the 36 sectors against the reference's "
                             f"{ref['vm'] / 1e6:.4g} MPa in sector 0 and {ref['vm_all'] / 1e6:.4g} MPa over the "
                             f"sectors (in sector {ref['sector_of_max']})",
@@ -661,34 +689,46 @@ def scene_disk_stress(maps: dict, runs: dict) -> dict:
                 candidates=cands, machine=machine_description(), held_out_case=None)
 
 
-def scene_disk_map() -> tuple[dict, dict]:
-    """The disk's short interaction map without GNL (8 speeds in 1,200-1,650 rad/s x 20 revolutions from rest, the
-    disk maps' casing: cone normal, mu = 0.15) against the largest model at the highest cap; held out: 7 other
-    speeds."""
-    ref = run_disk_map("reference", DISK_MAP_REFERENCE)
+def scene_disk_map(gnl: bool = False) -> tuple[dict, dict]:
+    """The disk's short interaction map (8 speeds in 1,200-1,650 rad/s from rest, the disk maps' casing: cone normal,
+    mu = 0.15), GNL off (20 revolutions) or on (12), against the largest model at the highest cap; held out: 7 other
+    speeds. With GNL the reference's 1e-4 perturbation is the map's own option (the same probe and step)."""
+    scene_name = "disk-map-gnl" if gnl else "disk-map-linear"
+    ref_opts = DISK_GNL_REFERENCE if gnl else DISK_MAP_REFERENCE
+    setup = DISK_GNL_MAP if gnl else DISK_MAP
+
+    def reference_maps(speeds=None) -> tuple[MapRun, MapRun]:
+        ref = run_disk_map("reference", ref_opts, speeds, gnl=gnl)
+        pert = (run_disk_map("reference_perturbed", {**ref_opts, "perturbation": PERTURBATION}, speeds, gnl=True)
+                if gnl else run_disk_map("reference_perturbed", ref_opts, speeds, PERTURBATION))
+        return ref, pert
+
+    ref, pert = reference_maps()
     runs = {"reference": ref}                  # for the stress scene: its maps' final states, read once
-    pert = run_disk_map("reference_perturbed", DISK_MAP_REFERENCE, perturbation=PERTURBATION)
     robust = disk_robust(ref, pert)
-    print(f"disk-map-linear: robust speeds {ref.speeds[robust].round(1).tolist()}")
+    print(f"{scene_name}: robust speeds {ref.speeds[robust].round(1).tolist()}")
     cands = []
-    for name, options in DISK_MAP_CANDIDATES:
-        run = runs[name] = run_disk_map(name, options)
+    for name, options in (DISK_GNL_CANDIDATES if gnl else DISK_MAP_CANDIDATES):
+        run = runs[name] = run_disk_map(name, options, gnl=gnl)
         err = disk_map_errors(run, ref, robust)
         cands.append(dict(name=name, options=options, us_per_step=1e6 * run.sweep_wall / run.sim_steps, h=run.h,
                           wall_s=run.wall, sweep_s=run.sweep_wall, diverged=int(run.diverged.sum()),
                           cost=run.sweep_wall, error=err["map"], held_out_error=None,
                           errors={k: err[k] for k in ("nfrc", "largest", "speed", "peak")}))
-        print(f"disk-map-linear: {name}: {run.sweep_wall:.0f} s, error {err['map']:.3g} "
+        print(f"{scene_name}: {name}: {run.sweep_wall:.0f} s, error {err['map']:.3g} "
               f"({', '.join(f'{k} {err[k]:.3g}' for k in ('nfrc', 'largest', 'speed', 'peak'))})")
     big, top = largest_over_blades(ref), int(np.nanargmax(ref.nfrc))
     i_rob = int(np.flatnonzero(robust)[np.nanargmax(ref.nfrc[robust])])
-    scene = dict(description="the bladed disk's short interaction map, GNL off, 8 speeds in 1,200-1,650 rad/s x 20 "
-                             "revolutions from rest, the disk maps' casing (cone normal, mu = 0.15), 36 ci sectors "
-                             "with 8 tip nodes each: on the robust speeds, the largest of the NFRC errors (node LE of "
-                             "sector 0 and the largest over the blades) and of the relative errors of the speed and "
-                             "the amplitude of the largest response at node LE of sector 0",
+    forces = ("; GNL forces: the sectors' exact tensors, or a point cubature trained with the cap on the study's "
+              "speeds" if gnl else "")
+    scene = dict(description=f"the bladed disk's short interaction map, GNL {'on' if gnl else 'off'}, 8 speeds in "
+                             f"1,200-1,650 rad/s x {setup['revolutions']:g} revolutions from rest, the disk maps' "
+                             f"casing (cone normal, mu = 0.15), 36 ci sectors with 8 tip nodes each{forces}: on the "
+                             "robust speeds, the largest of the NFRC errors (node LE of sector 0 and the largest over "
+                             "the blades) and of the relative errors of the speed and the amplitude of the largest "
+                             "response at node LE of sector 0",
                  cost_unit="s (sweep wall time of the map)",
-                 reference=dict(options=DISK_MAP_REFERENCE, h=ref.h, sweep_s=ref.sweep_wall, wall_s=ref.wall,
+                 reference=dict(options=ref_opts, h=ref.h, sweep_s=ref.sweep_wall, wall_s=ref.wall,
                                 us_per_step=1e6 * ref.sweep_wall / ref.sim_steps,
                                 peak_speed=float(ref.speeds[np.nanargmax(ref.nfrc)]), peak_m=float(np.nanmax(ref.nfrc)),
                                 largest_peak_m=float(np.nanmax(big)), robust_speeds=ref.speeds[robust].tolist(),
@@ -697,12 +737,13 @@ def scene_disk_map() -> tuple[dict, dict]:
                                 perturbation=PERTURBATION, robust_threshold=ROBUST),
                  candidates=cands, machine=machine_description(),
                  held_out_case=f"{DISK_HELD_OUT_SPEEDS[2]} other speeds in {DISK_HELD_OUT_SPEEDS[0]:g}-"
-                               f"{DISK_HELD_OUT_SPEEDS[1]:g} rad/s")
-    ref_h = run_disk_map("reference", DISK_MAP_REFERENCE, DISK_HELD_OUT_SPEEDS)
-    pert_h = run_disk_map("reference_perturbed", DISK_MAP_REFERENCE, DISK_HELD_OUT_SPEEDS, PERTURBATION)
+                               f"{DISK_HELD_OUT_SPEEDS[1]:g} rad/s" + (
+                                   "; a cubature as trained on the study's speeds (its capped training step from the "
+                                   "held-out map's probe)" if gnl else ""))
+    ref_h, pert_h = reference_maps(DISK_HELD_OUT_SPEEDS)
     robust_h = disk_robust(ref_h, pert_h)
     held_out_choices(scene, TOLERANCES, lambda name, options: disk_map_errors(
-        run_disk_map(name, options, DISK_HELD_OUT_SPEEDS), ref_h, robust_h)["map"])
+        run_disk_map(name, held_out_options(options, setup), DISK_HELD_OUT_SPEEDS, gnl=gnl), ref_h, robust_h)["map"])
     scene["held_out_reference"] = dict(robust_speeds=ref_h.speeds[robust_h].tolist(), sweep_s=ref_h.sweep_wall)
     return scene, runs
 
@@ -1077,7 +1118,8 @@ def record_choices(study: dict) -> None:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scene", nargs="+", choices=SCENES + DISK_SCENES + ("all", "disk"), default=["all"],
+    parser.add_argument("--scene", nargs="+", choices=SCENES + DISK_SCENES + ("disk-map-gnl", "all", "disk"),
+                        default=["all"],
                         help="scenes to run: all (the single blade's), disk (the bladed disk's) or names")
     parser.add_argument("--json", type=Path, default=ROOT / "rotor37_rom" / "data" / "speed_accuracy.json")
     args = parser.parse_args(argv)
@@ -1097,12 +1139,12 @@ def main(argv=None) -> int:
         elif name == "disk-modes":
             study["scenes"]["disk-modes"] = scene_disk_modes()
             FRESH.append(f"scene disk-modes {time.perf_counter() - t0:.0f} s")
-        elif name == "disk-map-linear":
-            before = len(FRESH)
-            study["scenes"]["disk-map-linear"], runs = scene_disk_map()
-            study["scenes"]["disk-stress-linear"] = scene_disk_stress(study["scenes"]["disk-map-linear"], runs)
+        elif name in ("disk-map-linear", "disk-map-gnl"):
+            before, gnl, stress = len(FRESH), name.endswith("gnl"), name.replace("map", "stress")
+            study["scenes"][name], runs = scene_disk_map(gnl)
+            study["scenes"][stress] = scene_disk_stress(study["scenes"][name], runs, gnl)
             maps = len(FRESH) - before          # run_map notes each map it computed (not read from WORK)
-            FRESH.append(f"scenes disk-map-linear and disk-stress-linear {time.perf_counter() - t0:.0f} s ("
+            FRESH.append(f"scenes {name} and {stress} {time.perf_counter() - t0:.0f} s ("
                          + (f"{maps} maps computed, the others" if maps else "every map") +
                          " read from results/speed_accuracy)")
         elif name in ("map-linear", "map-gnl"):

@@ -71,17 +71,17 @@ N_SECTORS = 36                                     # rotor 37's blades (the disk
 
 # +
 def map_model(tolerance: float, gnl: bool, fallback: bool = False, disk: bool = False):
-    """The speed-accuracy study's model of a map (scene 'map-gnl' or 'map-linear'; a disk's: 'disk-map-linear')
-    within ``tolerance``; with ``fallback`` the study's reference where no measured model meets it. Errors name
-    --tolerance."""
-    from rotor37_rom.model_choice import choose_model
+    """The speed-accuracy study's model of a map (scene 'map-gnl' or 'map-linear'; a disk's: 'disk-map-gnl' or
+    'disk-map-linear') within ``tolerance``; with ``fallback`` the study's reference where no measured model meets it.
+    Errors name --tolerance."""
+    from rotor37_rom.model_choice import choose_model, load_study
 
-    if disk and gnl:
+    scene = ("disk-map-gnl" if gnl else "disk-map-linear") if disk else "map-gnl" if gnl else "map-linear"
+    if scene == "disk-map-gnl" and scene not in load_study()["scenes"]:
         raise ValueError("--tolerance with --disk: the speed-accuracy study measured the disk's map without GNL only "
                          "(scene disk-map-linear): give --gnl off, or the options")
     try:
-        return choose_model("disk-map-linear" if disk else "map-gnl" if gnl else "map-linear", tolerance,
-                            fallback=fallback)
+        return choose_model(scene, tolerance, fallback=fallback)
     except ValueError as exc:
         raise ValueError(f"--tolerance: {exc}") from None
 
@@ -146,8 +146,9 @@ class ContactMapConfig:
         tolerance: choose r_c, the frequency cap, the step and the force evaluation of each setting (GNL off, on) as
             the cheapest model of the speed-accuracy study within this relative error (``model_choice.choose_model``
             on the scenes 'map-linear' and 'map-gnl', read from rotor37_rom/data/speed_accuracy.json), in (0, 1);
-            with ``disk`` (GNL off, tuned) r_c, r_md, r_cyclic and the cap from the scene 'disk-map-linear'
-            (measured with the cone normal and mu = 0.15). The options it sets must not be given with it. None: the
+            with ``disk`` (tuned) r_c, r_md, r_cyclic, the cap and the force evaluation from the scenes
+            'disk-map-linear' and 'disk-map-gnl' (measured with the cone normal and mu = 0.15; GNL on only once the
+            study file has the scene 'disk-map-gnl'). The options it sets must not be given with it. None: the
             options as given.
         retry_diverged: runs that blew up run again with the step halved, up to this many times (0..4).
         mu: Coulomb friction coefficient of the casing contact (paper 0.15).
@@ -258,9 +259,10 @@ class ContactMapConfig:
 
     @property
     def interface_modes(self) -> int:
-        """r_cyclic of the disk model built: the option, or with ``tolerance`` the study's choice."""
+        """r_cyclic of the disk model built: the option, or with ``tolerance`` the largest the settings' choices
+        need (one model serves GNL off and on)."""
         if self.tolerance is not None and self.disk:
-            return self.choice(False).options.get("r_cyclic", self.r_cyclic)
+            return max(self.choice(gnl).options.get("r_cyclic", self.r_cyclic) for gnl in GNL_SETTINGS[self.gnl])
         return self.r_cyclic
 
     def choice(self, gnl: bool):
@@ -1210,8 +1212,9 @@ def build_parser() -> ArgumentParser:
                              "capped (a disk's always do), for bases whose unscaled GNL step makes the exact runs "
                              "hours long (--global-md 10)")
     parser.add_argument("--tolerance", type=float, metavar="TOL",
-                        help="choose r_c, the frequency cap, the step and the GNL forces (with --disk --gnl off: "
-                             "r_c, r_md, r_cyclic and the cap) as the cheapest model within this relative error in "
+                        help="choose r_c, the frequency cap, the step and the GNL forces (with --disk: r_c, r_md, "
+                             "r_cyclic, the cap and the GNL forces; GNL once the study has measured the disk's GNL "
+                             "map) as the cheapest model within this relative error in "
                              "the speed-accuracy study (docs/choosing-a-model.md), in (0, 1)")
     parser.add_argument("--retry-diverged", type=int, metavar="N",
                         help="run the speeds that blew up again with the step halved, up to N times (0..4, default 0)")

@@ -164,28 +164,35 @@ def test_contact_map_takes_the_chosen_options():
 
 
 def test_contact_map_takes_the_disk_choice():
-    """With --disk --gnl off, --tolerance builds the disk model (r_c, r_md, r_cyclic) and sets the cap of the scene
-    'disk-map-linear''s choice, read from the study file; GNL is refused (the study has no GNL disk map)."""
+    """With --disk, --tolerance builds the disk model (r_c, r_md, r_cyclic) and sets the cap (and with GNL the force
+    evaluation) of the choice of the scene 'disk-map-linear' (GNL off) or 'disk-map-gnl' (on), read from the study
+    file; GNL is refused while the study has no GNL disk map."""
     sys.path.insert(0, str(ROOT / "tests"))
     from conftest import load_demo
 
     cm = load_demo("contact_map")
     study = load_study()
-    scene = study["scenes"]["disk-map-linear"]
-    for tol in (0.01, 0.05, 0.2):
-        within = [c for c in scene["candidates"] if expected_error(c) <= tol]
-        if not within:
-            with pytest.raises(ValueError, match="--tolerance: tolerance"):
-                cm.ContactMapConfig(disk=True, gnl="off", tolerance=tol)
+    for gnl, name in ((False, "disk-map-linear"), (True, "disk-map-gnl")):
+        setting = "on" if gnl else "off"
+        if name not in study["scenes"]:
+            assert gnl, "the study file has no scene disk-map-linear"
+            with pytest.raises(ValueError, match="without GNL only"):
+                cm.ContactMapConfig(disk=True, gnl=setting, tolerance=0.2)
             continue
-        best = min(within, key=lambda c: c["cost"])
-        config = cm.ContactMapConfig(disk=True, gnl="off", tolerance=tol)
-        assert config.choice(False).name == best["name"]
-        opts = best["options"]
-        assert config.modes == (opts["r_c"], opts["r_md"]) and config.interface_modes == opts["r_cyclic"]
-        assert config.setting(False).frequency_cap == opts["frequency_cap"]
-    with pytest.raises(ValueError, match="without GNL only"):
-        cm.ContactMapConfig(disk=True, gnl="on", tolerance=0.2)
+        scene = study["scenes"][name]
+        for tol in (0.01, 0.05, 0.2):
+            within = [c for c in scene["candidates"] if expected_error(c) <= tol]
+            if not within:
+                with pytest.raises(ValueError, match="--tolerance: tolerance"):
+                    cm.ContactMapConfig(disk=True, gnl=setting, tolerance=tol)
+                continue
+            best = min(within, key=lambda c: c["cost"])
+            config = cm.ContactMapConfig(disk=True, gnl=setting, tolerance=tol)
+            assert config.choice(gnl).name == best["name"]
+            opts = best["options"]
+            assert config.modes == (opts["r_c"], opts["r_md"]) and config.interface_modes == opts["r_cyclic"]
+            chosen = config.setting(gnl)
+            assert all(getattr(chosen, k) == v for k, v in opts.items() if k != "r_c")
 
 
 def test_reduced_blade_builds_the_chosen_model():
