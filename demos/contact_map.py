@@ -77,11 +77,12 @@ def map_model(tolerance: float, gnl: bool, fallback: bool = False, disk: bool = 
     from rotor37_rom.model_choice import choose_model, load_study
 
     scene = ("disk-map-gnl" if gnl else "disk-map-linear") if disk else "map-gnl" if gnl else "map-linear"
-    if scene == "disk-map-gnl" and scene not in load_study()["scenes"]:
+    study = load_study()
+    if scene == "disk-map-gnl" and scene not in study["scenes"]:
         raise ValueError("--tolerance with --disk: the speed-accuracy study measured the disk's map without GNL only "
                          "(scene disk-map-linear): give --gnl off, or the options")
     try:
-        return choose_model(scene, tolerance, fallback=fallback)
+        return choose_model(scene, tolerance, study, fallback=fallback)
     except ValueError as exc:
         raise ValueError(f"--tolerance: {exc}") from None
 
