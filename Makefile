@@ -104,8 +104,8 @@ bench: $(STAMP)
 speed-accuracy: $(STAMP)
 	$(PY) benchmarks/speed_accuracy.py
 
-# its bladed-disk scenes (the disk's frequencies at every nodal diameter, its short map without GNL and the
-# stress in it); about 1 h
+# its bladed-disk scenes (the disk's frequencies at every nodal diameter, its short maps without and with GNL and
+# the stress in them); about 3 h, the GNL map scene 2 h 15 min of it (AMD EPYC, 2 cores)
 speed-accuracy-disk: $(STAMP)
 	$(PY) benchmarks/speed_accuracy.py --scene disk
 

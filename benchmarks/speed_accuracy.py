@@ -33,13 +33,13 @@ Scenes (the report's settings):
   model at 120 kHz measures its cap's own error); held out: 7 other speeds. With it, ``disk-stress-linear``: the von
   Mises stress in the disk at t_max of one revolution carried on from each of its maps at the reference's largest
   robust response, off the root corner, in sector 0 and over the sectors.
-- ``disk-map-gnl`` (bladed disk, by name only: not in ``disk`` until it is measured): the same map with GNL over 12
-  revolutions; reference: r_c 10, r_MD 10, r_cyclic 288 with the exact sector tensors at a 120 kHz cap (the GNL
-  step's probe sets the step); the 1e-4 perturbation is the map's own option (the internal force scaled, the same
-  probe and step); candidates: the maps' model (r_cyclic 144) at 60 kHz with exact tensors and with point cubature
-  at 1e-2 / 3e-3 / 1e-3 in float32 (the full-disk GNL map's model is 3e-3), no modal derivatives, the reference's
-  basis at 60 kHz; held out: the 7 other speeds, a cubature as trained on the study's speeds. With it,
-  ``disk-stress-gnl``: the stress at t_max with GNL, as ``disk-stress-linear``.
+- ``disk-map-gnl`` (bladed disk, not in ``all``): the same map with GNL over 12 revolutions; reference: r_c 10,
+  r_MD 10, r_cyclic 288 with the exact sector tensors at a 120 kHz cap (the GNL step's probe sets the step); the
+  1e-4 perturbation is the map's own option (the internal force scaled, the same probe and step); candidates:
+  the maps' model (r_cyclic 144) at 60 kHz with exact tensors and with point cubature at 1e-2 / 3e-3 / 1e-3 in
+  float32 (the full-disk GNL map's model is 3e-3), no modal derivatives, the reference's basis at 60 kHz; held out:
+  the 7 other speeds, a cubature as trained on the study's speeds. With it, ``disk-stress-gnl``: the stress at t_max
+  with GNL, as ``disk-stress-linear`` (a cubature candidate carried on with its map's own cubature).
 - ``cost-r``: the cost per simulation-step against r for each force method (no GNL, exact tensors, point cubature on
   all points and on 10 points per mode, float64 / float32), synthetic models of each size, and the trained cubatures.
 
@@ -68,8 +68,7 @@ ROOT = Path(__file__).resolve().parents[1]
 WORK = ROOT / "results" / "speed_accuracy"
 IMG = ROOT / "docs" / "img"
 SCENES = ("modes", "clearance", "map-linear", "map-gnl", "stability", "paper-speedup", "cost-r")
-DISK_SCENES = ("disk-modes", "disk-map-linear")   # not in 'all' (the single-blade study's hour): --scene disk
-UNMEASURED_SCENES = ("disk-map-gnl",)              # by name only: joins DISK_SCENES once measured
+DISK_SCENES = ("disk-modes", "disk-map-linear", "disk-map-gnl")   # not in 'all' (the single-blade study's hour)
 PAPER_R, PAPER_H = 189, 1e-7            # the paper's single-blade GNL setting: r = 189, exact tensors, h = 1e-7 s
 TOLERANCES = (0.01, 0.05, 0.2)
 PERTURBATION = 1e-4
@@ -284,20 +283,6 @@ RETRIES = ", retries"
 MODEL_OPTIONS = ("r_c", "r_md", "r_cyclic")     # a candidate's options that make its model, not its scheme
 
 
-def ran_model(info: dict, model_path: Path) -> bool:
-    """Whether the cached map ``info`` (its study_run.json) ran the model now saved at ``model_path``: a model file
-    rewritten since (another builder) makes the map stale. The map records the key of the file it was given (its
-    sweep's spec holds the key of the model the map derived from it, another one with a cubature or a perturbation);
-    a map recorded without it is checked against its sweep's spec."""
-    from rotor37_rom.reduction import saved_model_key
-
-    key = saved_model_key(model_path)
-    if "model_file_key" in info:
-        return info["model_file_key"] == key
-    spec = Path(info["folder"]) / "spec.json"
-    return spec.is_file() and json.loads(spec.read_text()).get("model") == key
-
-
 def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_path: Path | None = None,
             setup: dict = MAP, prefix: str = "") -> MapRun:
     """One map of the scene (run_contact_map of demos/contact_map.py with ``setup``, MAP or DISK_MAP), cached in
@@ -325,8 +310,12 @@ def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_pat
     config = cm.ContactMapConfig(**{**setup, "speeds": speeds, "model": model_path, "gnl": "on" if gnl else "off",
                                     "out": out, **opts})
     setting = json.dumps([str(model_path), opts] + ([] if setup is MAP else [setup]), sort_keys=True, default=str)
-    if not done.is_file() or json.loads(done.read_text()).get("setting") != setting \
-            or not ran_model(json.loads(done.read_text()), model_path):
+    key = saved_model_key(model_path)
+    info = json.loads(done.read_text()) if done.is_file() else {}
+    # stale: another setting, or the model file rewritten since (another builder). The map records the key of the
+    # file it was given: its sweep's spec holds the key of the model the map derived from it (a cubature, a
+    # perturbation)
+    if info.get("setting") != setting or info.get("model_file_key") != key:
         shared = WORK / "cubature_cache"          # one cubature training per model and casing, shared by candidates
         shared.mkdir(parents=True, exist_ok=True)
         out.mkdir(parents=True, exist_ok=True)
@@ -339,9 +328,9 @@ def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_pat
         run = next(iter(result.runs.values()))
         sweep_wall = run.wall_s if base is None else base.sweep_wall + run.wall_s
         wall = wall if base is None else base.wall + wall
-        save_json(done, {"wall": wall, "sweep_wall": sweep_wall, "h": run.h, "folder": str(run.folder),
-                         "setting": setting, "model_file_key": saved_model_key(model_path)})
-    info = json.loads(done.read_text())
+        info = {"wall": wall, "sweep_wall": sweep_wall, "h": run.h, "folder": str(run.folder), "setting": setting,
+                "model_file_key": key}
+        save_json(done, info)
     grid = config.speed_grid
     # each speed's record: the map's, or the bounded one of its retries at a smaller step (their own sweep folders)
     records = {}
@@ -645,7 +634,7 @@ def disk_stress_at_tmax(run: MapRun, model_path: Path, speed: float, gnl: bool =
     gone = dict(vm=math.inf, vm_all=math.inf, sector_of_max=None, u_le=math.nan)
     if int(run.records[k]["diverged_step"]) >= 0:          # nothing to carry on
         return dict(gone, seconds=0.0)
-    scheme = cm.time_scheme(dataclasses.replace(run.config, h=run.record_h[k]), model, gnl, None)   # cached cubature
+    scheme = cm.time_scheme(run.config, model, gnl, None, h=run.record_h[k])      # the map's forces (its cubature)
     t0 = time.perf_counter()
     res, _ = cm.carry_on_record(run.config, scheme, run.records[k], float(run.records[k]["omega"]),
                                 [model.nodes.label_row(run.config.node)])
@@ -657,6 +646,23 @@ def disk_stress_at_tmax(run: MapRun, model_path: Path, speed: float, gnl: bool =
                 seconds=time.perf_counter() - t0)
 
 
+def cap_floor(ref_opts: dict, cands: list[dict]) -> dict | None:
+    """What the reference's own frequency cap is worth: the error of the candidate that is the reference's model at
+    the nearest lower cap (None if no such candidate, or if it lost a speed). Models that differ from the reference
+    by less cannot be told apart by the scene: its floor (``model_choice.scene_floor``)."""
+    def model(options: dict) -> dict:
+        return {k: v for k, v in options.items() if k != "frequency_cap"}
+
+    lower = [c for c in cands if model(c["options"]) == model(ref_opts)
+             and c["options"].get("frequency_cap", math.inf) < ref_opts["frequency_cap"]]
+    if not lower:
+        return None
+    c = max(lower, key=lambda c: c["options"]["frequency_cap"])
+    if not np.isfinite(c["error"]):
+        return None
+    return dict(error=c["error"], candidate=c["name"], cap_khz=c["options"]["frequency_cap"])
+
+
 def scene_disk_stress(maps: dict, runs: dict, gnl: bool = False) -> dict:
     """von Mises at t_max in the disk, GNL off or on, at the reference's largest robust response of the disk map
     scene, for its reference and candidates (``runs``: the map scene's MapRuns by name, the stress needs a map's final
@@ -666,6 +672,12 @@ def scene_disk_stress(maps: dict, runs: dict, gnl: bool = False) -> dict:
     ref = disk_stress_at_tmax(runs["reference"], disk_model_file(ref_opts, gnl=gnl), speed, gnl)
     if not np.isfinite(ref["vm"]):
         raise RuntimeError(f"{scene}: the reference's run at {speed:g} rad/s diverged")
+    # the perturbed reference's map carried on alike (GNL: the map's own perturbation option; off: its model file)
+    pert = disk_stress_at_tmax(runs["reference_perturbed"], disk_model_file(ref_opts, 0.0 if gnl else PERTURBATION,
+                                                                            gnl=gnl), speed, gnl)
+    moved = max(abs(pert["vm"] - ref["vm"]) / ref["vm"], abs(pert["vm_all"] - ref["vm_all"]) / ref["vm_all"])
+    print(f"{scene}: the reference {ref['vm'] / 1e6:.4g} / {ref['vm_all'] / 1e6:.4g} MPa, perturbed by "
+          f"{PERTURBATION:g}: {pert['vm'] / 1e6:.4g} / {pert['vm_all'] / 1e6:.4g} MPa ({_pct(moved)})")
     cands = []
     for c in maps["candidates"]:
         if not np.isfinite(c["error"]):              # a map that lost a speed: no model for the scene
@@ -691,7 +703,20 @@ def scene_disk_stress(maps: dict, runs: dict, gnl: bool = False) -> dict:
                           "recovery, timed in this run; µs/sim-step and h are the map's)",
                 reference=dict(options=ref_opts, speed=speed, vm_max=ref["vm"], vm_max_all=ref["vm_all"],
                                sector_of_max=ref["sector_of_max"], u_le=ref["u_le"], seconds=ref["seconds"]),
-                candidates=cands, machine=machine_description(), held_out_case=None)
+                candidates=cands, machine=machine_description(), held_out_case=None,
+                floor=stress_floor(ref_opts, cands, moved))
+
+
+def stress_floor(ref_opts: dict, cands: list[dict], moved: float) -> dict:
+    """The stress scene's floor: the larger of what the reference's cap is worth (``cap_floor``) and how far the
+    reference's 1e-4 perturbation moves the stress (``moved``; inf if the perturbed run diverged)."""
+    cap = cap_floor(ref_opts, cands)
+    moved = moved if np.isfinite(moved) else math.inf
+    error = max(moved, 0.0 if cap is None else cap["error"])
+    why = f"the reference's {PERTURBATION:g} perturbation moves the stress by {_pct(moved)}"
+    if cap is not None:
+        why = (f"the reference's own model at {cap['cap_khz']:g} kHz is {_pct(cap['error'])} off it and " + why)
+    return dict(error=error, cap=cap, perturbation=moved, why=why)
 
 
 def scene_disk_map(gnl: bool = False) -> tuple[dict, dict]:
@@ -709,7 +734,7 @@ def scene_disk_map(gnl: bool = False) -> tuple[dict, dict]:
         return ref, pert
 
     ref, pert = reference_maps()
-    runs = {"reference": ref}                  # for the stress scene: its maps' final states, read once
+    runs = {"reference": ref, "reference_perturbed": pert}     # for the stress scene: the maps' final states
     robust = disk_robust(ref, pert)
     print(f"{scene_name}: robust speeds {ref.speeds[robust].round(1).tolist()}")
     cands = []
@@ -745,6 +770,10 @@ def scene_disk_map(gnl: bool = False) -> tuple[dict, dict]:
                                f"{DISK_HELD_OUT_SPEEDS[1]:g} rad/s" + (
                                    "; a cubature as trained on the study's speeds (its capped training step from the "
                                    "held-out map's probe)" if gnl else ""))
+    cap = cap_floor(ref_opts, cands)
+    if cap is not None:
+        scene["floor"] = dict(error=cap["error"], cap=cap, why=f"the reference's own model at {cap['cap_khz']:g} kHz "
+                                                               f"is {_pct(cap['error'])} off it")
     ref_h, pert_h = reference_maps(DISK_HELD_OUT_SPEEDS)
     robust_h = disk_robust(ref_h, pert_h)
     scene["held_out_reference"] = dict(robust_speeds=ref_h.speeds[robust_h].tolist(), sweep_s=ref_h.sweep_wall)
@@ -784,7 +813,7 @@ def stress_at_tmax(run: MapRun, options: dict, gnl: bool, speed: float) -> dict:
     sector, model, recovery = _recovery(int(options.get("r_c", 15)))     # made once per basis, not timed
     k = int(np.argmin(np.abs(run.speeds - speed)))
     record, h = run.records[k], run.record_h[k]
-    scheme = cm.time_scheme(dataclasses.replace(run.config, h=h), model, gnl, None)    # the map's (cached cubature)
+    scheme = cm.time_scheme(run.config, model, gnl, None, h=h)                     # the map's forces (its cubature)
     t0 = time.perf_counter()
     res, _ = cm.carry_on_record(run.config, scheme, record, speed)
     if res.diverged_step[0] >= 0:
@@ -990,7 +1019,8 @@ def chart(name: str, scene: dict) -> Path:
     rows = [(c["name"], c["cost"], c["error"]) for c in scene["candidates"] if c["cost"] > 0]
     return plot_speed_accuracy(rows, IMG / f"speed_accuracy_{name}.png",
                                title=f"{name}: error against cost (Pareto front joined)",
-                               cost_label=scene["cost_unit"], tolerances=TOLERANCES)
+                               cost_label=scene["cost_unit"], tolerances=TOLERANCES,
+                               floor=(scene.get("floor") or {}).get("error"))
 
 
 def chart_stability(stab: dict) -> Path:
@@ -1024,7 +1054,7 @@ def _options(options: dict) -> str:
 def render_markdown(study: dict) -> str:
     """The generated part of docs/choosing-a-model.md: per scene, the candidates (cost, error, held-out error,
     Pareto-optimal or not) and the models chosen at each tolerance, every number from the study file."""
-    from rotor37_rom.model_choice import expected_error, pareto_front
+    from rotor37_rom.model_choice import pareto_front
 
     runs = study.get("runs", [])
     full = [i for i, r in enumerate(runs) if r["from_scratch"]]
@@ -1055,6 +1085,9 @@ def render_markdown(study: dict) -> str:
             row += f"{_pct(c['error'])} | {_pct(c.get('held_out_error'))} | {'yes' if opt else ''} |"
             lines.append(row)
         lines += ["", f"Cost: {scene['cost_unit']}. Held-out case: {scene.get('held_out_case') or 'none'}.", ""]
+        if scene.get("floor"):
+            lines += [f"Floor: {_pct(scene['floor']['error'])} ({scene['floor']['why']}): the scene cannot tell "
+                      "models apart below it, and the chooser expects no model to do better.", ""]
         chosen = []
         for tol, c in scene["choices"].items():
             if c["name"] is None:
@@ -1128,7 +1161,7 @@ def record_choices(study: dict) -> None:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scene", nargs="+", choices=SCENES + DISK_SCENES + UNMEASURED_SCENES + ("all", "disk"),
+    parser.add_argument("--scene", nargs="+", choices=SCENES + DISK_SCENES + ("all", "disk"),
                         default=["all"],
                         help="scenes to run: all (the single blade's), disk (the bladed disk's) or names")
     parser.add_argument("--json", type=Path, default=ROOT / "rotor37_rom" / "data" / "speed_accuracy.json")

@@ -77,12 +77,8 @@ def map_model(tolerance: float, gnl: bool, fallback: bool = False, disk: bool = 
     from rotor37_rom.model_choice import choose_model, load_study
 
     scene = ("disk-map-gnl" if gnl else "disk-map-linear") if disk else "map-gnl" if gnl else "map-linear"
-    study = load_study()
-    if scene == "disk-map-gnl" and scene not in study["scenes"]:
-        raise ValueError("--tolerance with --disk: the speed-accuracy study measured the disk's map without GNL only "
-                         "(scene disk-map-linear): give --gnl off, or the options")
     try:
-        return choose_model(scene, tolerance, study, fallback=fallback)
+        return choose_model(scene, tolerance, load_study(), fallback=fallback)
     except ValueError as exc:
         raise ValueError(f"--tolerance: {exc}") from None
 
@@ -148,9 +144,8 @@ class ContactMapConfig:
             the cheapest model of the speed-accuracy study within this relative error (``model_choice.choose_model``
             on the scenes 'map-linear' and 'map-gnl', read from rotor37_rom/data/speed_accuracy.json), in (0, 1);
             with ``disk`` (tuned) r_c, r_md, r_cyclic, the cap and the force evaluation from the scenes
-            'disk-map-linear' and 'disk-map-gnl' (measured with the cone normal and mu = 0.15; GNL on only once the
-            study file has the scene 'disk-map-gnl'). The options it sets must not be given with it. None: the
-            options as given.
+            'disk-map-linear' and 'disk-map-gnl' (measured with the cone normal and mu = 0.15). The options it sets
+            must not be given with it. None: the options as given.
         retry_diverged: runs that blew up run again with the step halved, up to this many times (0..4).
         mu: Coulomb friction coefficient of the casing contact (paper 0.15).
         c0: clearance at rest (m).
@@ -797,12 +792,14 @@ def capped_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np
     return states, scheme.h
 
 
-def time_scheme(config: ContactMapConfig, model: ReducedModel, gnl: bool, comm: MPI.Comm | None
-                ) -> CentralDifference:
+def time_scheme(config: ContactMapConfig, model: ReducedModel, gnl: bool, comm: MPI.Comm | None,
+                h: float | None = None) -> CentralDifference:
     """The central-difference scheme of one setting: its forces (exact or cubature), step and frequency cap; with a
     perturbation, the perturbed model's scheme with the same cap at the unperturbed model's step (the cap applies to
-    the perturbed model: its modes above the cap stay at the cap, their capped mass scaled with their stiffness)."""
-    run_model, states, h = model, None, config.h
+    the perturbed model: its modes above the cap stay at the cap, their capped mass scaled with their stiffness).
+    ``h``: the step to run at instead of the setting's (a record's own, e.g. a retried speed's); the forces stay the
+    setting's (a disk's cubature is trained at the setting's step, so replacing ``config.h`` would train another)."""
+    run_model, states, h = model, None, h or config.h
     if gnl and config.cubature is not None:
         run_model, states = cubature_model(config, model, comm)
         run_model = with_force_precision(run_model, config.precision)

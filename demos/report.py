@@ -249,7 +249,7 @@ def peak_stress(config: ContactMapConfig, run: MapResult, sector, model, recover
     speed = resonance(run, config.revolutions)
     if not np.isfinite(speed):
         return PeakStress(run.label, nonlinear, speed, False)
-    scheme = time_scheme(dataclasses.replace(config, h=run.h), model, nonlinear, None)   # cubature: the cached one
+    scheme = time_scheme(config, model, nonlinear, None, h=run.h)                 # the map's forces (its cubature)
     if sweep_folder(scheme, config.sweep_spec(model), config.out / "sweeps") != run.folder:
         raise RuntimeError(f"the rebuilt scheme of '{run.label}' is not the map's (sweep folders differ)")
     res, scheme, t_start = carry_on(config, scheme, run, speed)

@@ -143,10 +143,11 @@ def plot_time_history(t: np.ndarray, series: dict, path: str | Path, title: str 
 
 
 def plot_speed_accuracy(rows: list, path: str | Path, title: str = "", cost_label: str = "cost (s)",
-                        tolerances: tuple = ()) -> Path:
+                        tolerances: tuple = (), floor: float | None = None) -> Path:
     """Error against cost on log-log axes: rows of (label, cost, error (relative)); the Pareto-optimal models
-    (``model_choice.pareto_front``) are joined and labelled, the others drawn grey; ``tolerances`` as dotted lines.
-    A run that diverged (error inf) is drawn on the top edge with a cross."""
+    (``model_choice.pareto_front``) are joined and labelled, the others drawn grey; ``tolerances`` as dotted lines;
+    the scene's ``floor`` (the error below which it cannot tell models apart) shaded below a dashed line. A run that
+    diverged (error inf) is drawn on the top edge with a cross."""
     from rotor37_rom.model_choice import pareto_front
 
     plt = _pyplot()
@@ -169,6 +170,9 @@ def plot_speed_accuracy(rows: list, path: str | Path, title: str = "", cost_labe
     for tol in tolerances:
         ax.axhline(tol, color="k", ls=":", lw=0.7)
         ax.annotate(f"{100 * tol:g} %", (ax.get_xlim()[0], tol), fontsize=7, xytext=(2, 2), textcoords="offset points")
+    if floor:
+        ax.axhline(floor, color="C1", ls="--", lw=0.9, label="the scene's floor")
+        ax.axhspan(ax.get_ylim()[0], floor, color="C1", alpha=0.08)
     ax.set_xlabel(cost_label)
     ax.set_ylabel("relative error")
     ax.set_title(title, fontsize=9)

@@ -3,10 +3,10 @@
 The speed-accuracy study (``python benchmarks/speed_accuracy.py``, ``make speed-accuracy``) measures, per scene, the
 cost and the error against a reference of every candidate model and writes them to ``rotor37_rom/data/
 speed_accuracy.json`` (versioned with the code). ``choose_model(scene, tolerance)`` reads that file — never numbers
-typed here — and returns the cheapest candidate whose *expected* error is within the tolerance: the larger of the
-error measured on the study's cases and, when the study ran the candidate on held-out cases (other speeds, another
-mode or amplitude), the error there. A candidate that missed on held-out cases is thereby passed over for the next
-cheapest.
+typed here — and returns the cheapest candidate whose *expected* error is within the tolerance: the largest of the
+error measured on the study's cases, when the study ran the candidate on held-out cases (other speeds, another mode
+or amplitude) the error there, and the scene's floor where it states one (the error below which its reference cannot
+tell models apart). A candidate that missed on held-out cases is thereby passed over for the next cheapest.
 
 Pure Python and NumPy (no dolfinx): the demos call it before any meshing.
 """
@@ -20,8 +20,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-__all__ = ["STUDY_FILE", "SCHEMA", "ModelChoice", "load_study", "pareto_front", "expected_error", "choose_model",
-           "reference_model", "scenes"]
+__all__ = ["STUDY_FILE", "SCHEMA", "ModelChoice", "load_study", "pareto_front", "scene_floor", "expected_error",
+           "choose_model", "reference_model", "scenes"]
 
 STUDY_FILE = Path(__file__).resolve().parent / "data" / "speed_accuracy.json"
 SCHEMA = 1
@@ -30,7 +30,8 @@ SCHEMA = 1
 @dataclasses.dataclass(frozen=True)
 class ModelChoice:
     """One candidate of a scene: its options (the scene command's option names, e.g. ``frequency_cap``), its expected
-    error (relative), the error on the study's cases and on held-out cases (None: not run there), and its cost."""
+    error (relative), the error on the study's cases and on held-out cases (None: not run there), its cost, and the
+    scene's floor (0: the scene states none)."""
 
     scene: str
     name: str
@@ -40,14 +41,16 @@ class ModelChoice:
     held_out_error: float | None
     cost: float
     cost_unit: str
+    floor: float = 0.0
 
     def describe(self) -> str:
         if self.name == "reference":
             return (f"{self.scene}: the study's reference ({', '.join(f'{k} {v}' for k, v in self.options.items())};"
                     f" the yardstick of the others, its own error not measured), cost {self.cost:.3g} {self.cost_unit}")
         held = "not run" if self.held_out_error is None else f"{100 * self.held_out_error:.2g} %"
+        floor = f", the scene's floor {100 * self.floor:.2g} %" if self.floor else ""
         return (f"{self.scene}: {self.name} — expected error {100 * self.error:.2g} % (study "
-                f"{100 * self.study_error:.2g} %, held-out {held}), cost {self.cost:.3g} {self.cost_unit}")
+                f"{100 * self.study_error:.2g} %, held-out {held}{floor}), cost {self.cost:.3g} {self.cost_unit}")
 
 
 def load_study(path: str | Path | None = None) -> dict:
@@ -78,12 +81,21 @@ def pareto_front(costs: Sequence[float], errors: Sequence[float]) -> np.ndarray:
     return front
 
 
-def expected_error(candidate: dict) -> float:
-    """The error a candidate is chosen by: the larger of its study error and its held-out error (if measured)."""
+def scene_floor(scene: dict) -> float:
+    """The error below which ``scene`` (a scene of the study file) cannot tell models apart, 0 if it states none:
+    its ``floor`` record, e.g. what the reference's own frequency cap is worth (its model at a lower cap, measured
+    against it) or how far the reference's 1e-4 perturbation moves the scene's quantity."""
+    floor = scene.get("floor")
+    return 0.0 if floor is None else float(floor["error"])
+
+
+def expected_error(candidate: dict, scene: dict) -> float:
+    """The error a candidate of ``scene`` is chosen by: the largest of its study error, its held-out error (if
+    measured) and the scene's floor (``scene_floor``: a model cannot be shown closer to the truth than that)."""
     err = candidate.get("error")
     err = math.inf if err is None else float(err)
     held = candidate.get("held_out_error")
-    return err if held is None else max(err, float(held))
+    return max(err, scene_floor(scene), -math.inf if held is None else float(held))
 
 
 def choose_model(scene: str, tolerance: float, study: dict | None = None, fallback: bool = False,
@@ -103,17 +115,17 @@ def choose_model(scene: str, tolerance: float, study: dict | None = None, fallba
     candidates = [c for c in data["candidates"] if where is None or where(c)]
     best = None
     for cand in candidates:
-        err = expected_error(cand)
+        err = expected_error(cand, data)
         if err <= tolerance and (best is None or cand["cost"] < best["cost"]):
             best = cand
     if best is None and fallback:
         return reference_model(scene, study)
     if best is None:
-        smallest = min((expected_error(c) for c in candidates), default=math.inf)
+        smallest = min((expected_error(c, data) for c in candidates), default=math.inf)
         raise ValueError(f"tolerance {tolerance:g} is below every measured model of scene {scene!r} "
                          f"(smallest expected error {smallest:.4g}); allowed: tolerance >= {smallest:.4g}")
-    return ModelChoice(scene, best["name"], dict(best["options"]), expected_error(best), float(best["error"]),
-                       best.get("held_out_error"), float(best["cost"]), data["cost_unit"])
+    return ModelChoice(scene, best["name"], dict(best["options"]), expected_error(best, data), float(best["error"]),
+                       best.get("held_out_error"), float(best["cost"]), data["cost_unit"], scene_floor(data))
 
 
 def reference_model(scene: str, study: dict | None = None) -> ModelChoice:
