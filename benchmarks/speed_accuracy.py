@@ -45,7 +45,9 @@ Scenes (the report's settings):
 
 Writes ``rotor37_rom/data/speed_accuracy.json`` (versioned: ``choose_model`` reads it) and the charts
 ``docs/img/speed_accuracy_<scene>.png``; work files under ``results/speed_accuracy/``. Scenes not run keep their
-previous entries. Every figure of docs/choosing-a-model.md comes from that file.
+previous entries. Every figure of docs/choosing-a-model.md comes from that file. The disk scenes record a floor
+(``cap_floor``, ``stress_floor``: what the reference's own cap is worth, and for a stress how far the reference's
+1e-4 perturbation moves it), which ``choose_model`` takes as every candidate's least expected error.
 """
 from __future__ import annotations
 
@@ -654,7 +656,7 @@ def cap_floor(ref_opts: dict, cands: list[dict]) -> dict | None:
         return {k: v for k, v in options.items() if k != "frequency_cap"}
 
     lower = [c for c in cands if model(c["options"]) == model(ref_opts)
-             and c["options"].get("frequency_cap", math.inf) < ref_opts["frequency_cap"]]
+             and c["options"].get("frequency_cap", math.inf) < ref_opts.get("frequency_cap", math.inf)]
     if not lower:
         return None
     c = max(lower, key=lambda c: c["options"]["frequency_cap"])
@@ -713,7 +715,8 @@ def stress_floor(ref_opts: dict, cands: list[dict], moved: float) -> dict:
     cap = cap_floor(ref_opts, cands)
     moved = moved if np.isfinite(moved) else math.inf
     error = max(moved, 0.0 if cap is None else cap["error"])
-    why = f"the reference's {PERTURBATION:g} perturbation moves the stress by {_pct(moved)}"
+    why = (f"the reference's {PERTURBATION:g} perturbation moves the stress by {_pct(moved)}" if np.isfinite(moved)
+           else f"the reference's run perturbed by {PERTURBATION:g} diverged")
     if cap is not None:
         why = (f"the reference's own model at {cap['cap_khz']:g} kHz is {_pct(cap['error'])} off it and " + why)
     return dict(error=error, cap=cap, perturbation=moved, why=why)

@@ -265,6 +265,16 @@ class ContactMapConfig:
         """The speed-accuracy study's cheapest model within ``tolerance`` for one setting (a ModelChoice)."""
         return map_model(self.tolerance, gnl, disk=self.disk)
 
+    def model_beyond_choice(self, gnl: bool) -> dict:
+        """The options of the model built (r_c, r_md, a disk's r_cyclic) where they exceed one setting's choice: one
+        model serves GNL off and on, the larger of their choices. Empty without ``tolerance`` or where they agree."""
+        if self.tolerance is None:
+            return {}
+        built = {"r_c": self.modes[0], "r_md": self.modes[1], **({"r_cyclic": self.interface_modes} if self.disk
+                                                                  else {})}
+        chosen = self.choice(gnl).options
+        return {k: v for k, v in built.items() if k in chosen and chosen[k] != v}
+
     def setting(self, gnl: bool) -> "ContactMapConfig":
         """The configuration one setting (GNL off or on) runs with: with ``tolerance``, its chosen options."""
         if self.tolerance is None:
@@ -799,7 +809,7 @@ def time_scheme(config: ContactMapConfig, model: ReducedModel, gnl: bool, comm: 
     the perturbed model: its modes above the cap stay at the cap, their capped mass scaled with their stiffness).
     ``h``: the step to run at instead of the setting's (a record's own, e.g. a retried speed's); the forces stay the
     setting's (a disk's cubature is trained at the setting's step, so replacing ``config.h`` would train another)."""
-    run_model, states, h = model, None, h or config.h
+    run_model, states, h = model, None, config.h if h is None else h
     if gnl and config.cubature is not None:
         run_model, states = cubature_model(config, model, comm)
         run_model = with_force_precision(run_model, config.precision)
@@ -1111,7 +1121,10 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
     for gnl in GNL_SETTINGS[config.gnl]:
         setting = config.setting(gnl)
         if config.tolerance is not None and rank == 0:
-            print(f"--tolerance {config.tolerance:g}: {config.choice(gnl).describe()}")
+            larger = config.model_beyond_choice(gnl)
+            print(f"--tolerance {config.tolerance:g}: {config.choice(gnl).describe()}" + (
+                f"; run on the larger model the settings share ({', '.join(f'{k} {v}' for k, v in larger.items())}): "
+                f"the expected error and cost are the choice's, measured on its own model" if larger else ""))
         scheme = (schemes or {}).get(gnl) or time_scheme(setting, model, gnl, comm)
         label, tag = setting_names(setting, gnl)
         folder, records, retried, wall = sweep_map(setting, scheme, comm)
@@ -1125,7 +1138,8 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
         if config.tolerance is not None:
             choice = config.choice(gnl)
             summary["runs"][label]["chosen"] = dict(tolerance=config.tolerance, model=choice.name,
-                                                    options=choice.options, expected_error=choice.error)
+                                                    options=choice.options, expected_error=choice.error,
+                                                    run_on_larger_model=config.model_beyond_choice(gnl))
         print_map(result, summary["linear_resonance"])
         if gnl and setting.step_outliers == "drop" and result.imap.diverged.any():
             print(f"         {int(result.imap.diverged.sum())} speeds still blew up with --step-outliers drop (their "

@@ -170,7 +170,7 @@ def plot_speed_accuracy(rows: list, path: str | Path, title: str = "", cost_labe
     for tol in tolerances:
         ax.axhline(tol, color="k", ls=":", lw=0.7)
         ax.annotate(f"{100 * tol:g} %", (ax.get_xlim()[0], tol), fontsize=7, xytext=(2, 2), textcoords="offset points")
-    if floor:
+    if floor and np.isfinite(floor):
         ax.axhline(floor, color="C1", ls="--", lw=0.9, label="the scene's floor")
         ax.axhspan(ax.get_ylim()[0], floor, color="C1", alpha=0.08)
     ax.set_xlabel(cost_label)

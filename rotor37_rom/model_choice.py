@@ -85,8 +85,7 @@ def scene_floor(scene: dict) -> float:
     """The error below which ``scene`` (a scene of the study file) cannot tell models apart, 0 if it states none:
     its ``floor`` record, e.g. what the reference's own frequency cap is worth (its model at a lower cap, measured
     against it) or how far the reference's 1e-4 perturbation moves the scene's quantity."""
-    floor = scene.get("floor")
-    return 0.0 if floor is None else float(floor["error"])
+    return float((scene.get("floor") or {}).get("error", 0.0))
 
 
 def expected_error(candidate: dict, scene: dict) -> float:

@@ -53,6 +53,23 @@ def test_contact_map_perturbation_keeps_the_step(contact_map, ci_rom, tmp_path):
         contact_map.time_scheme(at_limit, ci_rom, False, None)
 
 
+def test_time_scheme_takes_a_record_step(contact_map, ci_rom, tmp_path):
+    """time_scheme(..., h=H) runs at H (a record's own step, as the stress carry-ons use) with the setting's forces,
+    cap and perturbation, the setting itself unchanged (its step is part of a disk cubature's training key); H = 0
+    is a step, refused as one, not "no step"."""
+    path = save_reduced_model(ci_rom, tmp_path / "rom.npz")
+    for cap in (None, 60.0):
+        config = contact_map.ContactMapConfig(model=path, perturbation=1e-4, quiet=True, frequency_cap=cap,
+                                              out=tmp_path)
+        plain = contact_map.time_scheme(config, ci_rom, cap is None, None)
+        half = contact_map.time_scheme(config, ci_rom, cap is None, None, h=plain.h / 2)
+        assert half.h == plain.h / 2 and config.h is None
+        assert half.frequency_cap == plain.frequency_cap and half.nonlinear == plain.nonlinear
+        assert np.array_equal(half.model.K, plain.model.K) and half.model.metadata["perturbation"] == 1e-4
+    with pytest.raises(ValueError, match="time step h must be > 0"):
+        contact_map.time_scheme(config, ci_rom, False, None, h=0.0)
+
+
 def test_contact_map_runs_in_process(contact_map, ci_rom, tmp_path):
     """run_contact_map on 2 speeds x 0.3 revolutions (GNL off): the result object holds what summary.json says, its
     NFRC is the map of the sweep folder it wrote, and it lists the files it wrote."""

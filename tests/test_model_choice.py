@@ -8,8 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotor37_rom.model_choice import (STUDY_FILE, choose_model, expected_error, load_study, pareto_front,
-                                      scenes)
+from rotor37_rom.model_choice import STUDY_FILE, choose_model, load_study, pareto_front, scenes
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -37,6 +36,12 @@ def test_pareto_front_is_the_set_of_undominated_points():
             assert front[i] == (np.isfinite(err[i]) and not dominated)
 
 
+def _expected(candidate: dict, scene: dict) -> float:
+    """The chooser's rule restated here, not imported: the largest of the study error, the held-out error (if run)
+    and the scene's floor (if it states one)."""
+    return max(candidate["error"], candidate.get("held_out_error") or 0.0, (scene.get("floor") or {}).get("error", 0.0))
+
+
 def test_choices_of_the_shipped_study():
     """Every scene of the shipped file: at each tolerance the choice's expected error (the largest of the study's
     error, the held-out error and the scene's floor) meets it and no cheaper candidate's does; a candidate that missed
@@ -46,10 +51,9 @@ def test_choices_of_the_shipped_study():
     assert study["schema"] == 1 and {"modes", "clearance", "map-linear"} <= set(scenes(study))
     for scene in scenes(study):
         cands = study["scenes"][scene]["candidates"]
-        floor = (study["scenes"][scene].get("floor") or {}).get("error", 0.0)
         previous = np.inf
         for tol in (0.01, 0.05, 0.2):
-            meeting = [c for c in cands if max(c["error"], c.get("held_out_error") or 0.0, floor) <= tol]
+            meeting = [c for c in cands if _expected(c, study["scenes"][scene]) <= tol]
             if not meeting:
                 with pytest.raises(ValueError, match="tolerance"):
                     choose_model(scene, tol, study)
@@ -91,6 +95,10 @@ def test_a_scene_floor_bounds_the_expected_error():
             assert cand["error"] == cap["error"] and cand["options"]["frequency_cap"] < ref["frequency_cap"]
             assert {k: v for k, v in cand["options"].items() if k != "frequency_cap"} == \
                 {k: v for k, v in ref.items() if k != "frequency_cap"}
+            between = [c for c in data["candidates"] if {k: v for k, v in c["options"].items() if k != "frequency_cap"}
+                       == {k: v for k, v in ref.items() if k != "frequency_cap"}
+                       and cap["cap_khz"] < c["options"]["frequency_cap"] < ref["frequency_cap"]]
+            assert not between, "the floor is the nearest lower cap's"
         parts = [cap["error"] if cap else 0.0] + ([floor["perturbation"]] if "perturbation" in floor else [])
         assert floor["error"] == max(parts)
 
@@ -210,7 +218,7 @@ def test_contact_map_takes_the_disk_choice():
         setting = "on" if gnl else "off"
         scene = study["scenes"][name]
         for tol in (0.01, 0.05, 0.2):
-            within = [c for c in scene["candidates"] if expected_error(c, scene) <= tol]
+            within = [c for c in scene["candidates"] if _expected(c, scene) <= tol]
             if not within:
                 with pytest.raises(ValueError, match="--tolerance: tolerance"):
                     cm.ContactMapConfig(disk=True, gnl=setting, tolerance=tol)
@@ -222,6 +230,15 @@ def test_contact_map_takes_the_disk_choice():
             assert config.modes == (opts["r_c"], opts["r_md"]) and config.interface_modes == opts["r_cyclic"]
             chosen = config.setting(gnl)
             assert all(getattr(chosen, k) == v for k, v in opts.items() if k != "r_c")
+            assert config.model_beyond_choice(gnl) == {}
+    # GNL off and on in one run: one disk model serves both, the larger of the two choices in each option, and each
+    # setting says where the model it runs on exceeds its choice
+    both = cm.ContactMapConfig(disk=True, gnl="both", tolerance=0.2)
+    chosen = {gnl: both.choice(gnl).options for gnl in (False, True)}
+    built = {k: max(c[k] for c in chosen.values()) for k in ("r_c", "r_md", "r_cyclic")}
+    assert both.modes == (built["r_c"], built["r_md"]) and both.interface_modes == built["r_cyclic"]
+    for gnl, c in chosen.items():
+        assert both.model_beyond_choice(gnl) == {k: v for k, v in built.items() if c[k] != v}
 
 
 def test_reduced_blade_builds_the_chosen_model():
@@ -235,7 +252,7 @@ def test_reduced_blade_builds_the_chosen_model():
     scene = study["scenes"]["clearance"]
     roms = [c for c in scene["candidates"] if "r_c" in c["options"]]
     for tol in (0.01, 0.05, 0.2, 0.5):
-        within = [c for c in roms if expected_error(c, scene) <= tol]
+        within = [c for c in roms if _expected(c, scene) <= tol]
         if not within:
             with pytest.raises(ValueError, match="--tolerance: tolerance"):
                 rb.ReducedBladeConfig(tolerance=tol)
