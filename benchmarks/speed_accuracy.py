@@ -46,7 +46,7 @@ Scenes (the report's settings):
 Writes ``rotor37_rom/data/speed_accuracy.json`` (versioned: ``choose_model`` reads it) and the charts
 ``docs/img/speed_accuracy_<scene>.png``; work files under ``results/speed_accuracy/``. Scenes not run keep their
 previous entries. Every figure of docs/choosing-a-model.md comes from that file. The disk scenes record a floor
-(``cap_floor``, ``stress_floor``: what the reference's own cap is worth, and for a stress how far the reference's
+(``floor_record``: what the reference's own cap is worth, and for a stress how far the reference's
 1e-4 perturbation moves it), which ``choose_model`` takes as every candidate's least expected error.
 """
 from __future__ import annotations
@@ -706,20 +706,24 @@ def scene_disk_stress(maps: dict, runs: dict, gnl: bool = False) -> dict:
                 reference=dict(options=ref_opts, speed=speed, vm_max=ref["vm"], vm_max_all=ref["vm_all"],
                                sector_of_max=ref["sector_of_max"], u_le=ref["u_le"], seconds=ref["seconds"]),
                 candidates=cands, machine=machine_description(), held_out_case=None,
-                floor=stress_floor(ref_opts, cands, moved))
+                floor=floor_record(ref_opts, cands, moved))
 
 
-def stress_floor(ref_opts: dict, cands: list[dict], moved: float) -> dict:
-    """The stress scene's floor: the larger of what the reference's cap is worth (``cap_floor``) and how far the
-    reference's 1e-4 perturbation moves the stress (``moved``; inf if the perturbed run diverged)."""
+def floor_record(ref_opts: dict, cands: list[dict], moved: float | None = None) -> dict | None:
+    """A scene's floor: the larger of what the reference's cap is worth (``cap_floor``) and, for a stress scene, how
+    far the reference's 1e-4 perturbation moves the stress (``moved``; inf if the perturbed run diverged). None if
+    neither is known."""
     cap = cap_floor(ref_opts, cands)
-    moved = moved if np.isfinite(moved) else math.inf
-    error = max(moved, 0.0 if cap is None else cap["error"])
-    why = (f"the reference's {PERTURBATION:g} perturbation moves the stress by {_pct(moved)}" if np.isfinite(moved)
-           else f"the reference's run perturbed by {PERTURBATION:g} diverged")
-    if cap is not None:
-        why = (f"the reference's own model at {cap['cap_khz']:g} kHz is {_pct(cap['error'])} off it and " + why)
-    return dict(error=error, cap=cap, perturbation=moved, why=why)
+    why = [] if cap is None else [f"the reference's own model at {cap['cap_khz']:g} kHz is {_pct(cap['error'])} off it"]
+    if moved is not None:
+        moved = moved if np.isfinite(moved) else math.inf
+        why.append(f"the reference's {PERTURBATION:g} perturbation moves the stress by {_pct(moved)}"
+                   if np.isfinite(moved) else f"the reference's run perturbed by {PERTURBATION:g} diverged")
+    if not why:
+        return None
+    record = dict(error=max(0.0 if cap is None else cap["error"], 0.0 if moved is None else moved), cap=cap,
+                  why=" and ".join(why))
+    return record if moved is None else dict(record, perturbation=moved)
 
 
 def scene_disk_map(gnl: bool = False) -> tuple[dict, dict]:
@@ -773,10 +777,9 @@ def scene_disk_map(gnl: bool = False) -> tuple[dict, dict]:
                                f"{DISK_HELD_OUT_SPEEDS[1]:g} rad/s" + (
                                    "; a cubature as trained on the study's speeds (its capped training step from the "
                                    "held-out map's probe)" if gnl else ""))
-    cap = cap_floor(ref_opts, cands)
-    if cap is not None:
-        scene["floor"] = dict(error=cap["error"], cap=cap, why=f"the reference's own model at {cap['cap_khz']:g} kHz "
-                                                               f"is {_pct(cap['error'])} off it")
+    floor = floor_record(ref_opts, cands)
+    if floor is not None:
+        scene["floor"] = floor
     ref_h, pert_h = reference_maps(DISK_HELD_OUT_SPEEDS)
     robust_h = disk_robust(ref_h, pert_h)
     scene["held_out_reference"] = dict(robust_speeds=ref_h.speeds[robust_h].tolist(), sweep_s=ref_h.sweep_wall)
@@ -1018,12 +1021,13 @@ def chart_cost_r(cost_r: dict) -> Path:
 
 def chart(name: str, scene: dict) -> Path:
     from rotor37_rom.charts import plot_speed_accuracy
+    from rotor37_rom.model_choice import scene_floor
 
     rows = [(c["name"], c["cost"], c["error"]) for c in scene["candidates"] if c["cost"] > 0]
     return plot_speed_accuracy(rows, IMG / f"speed_accuracy_{name}.png",
                                title=f"{name}: error against cost (Pareto front joined)",
                                cost_label=scene["cost_unit"], tolerances=TOLERANCES,
-                               floor=(scene.get("floor") or {}).get("error"))
+                               floor=scene_floor(scene))
 
 
 def chart_stability(stab: dict) -> Path:
