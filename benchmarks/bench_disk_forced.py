@@ -22,7 +22,10 @@ with the faces in the nonlinear force on N_F shapes (``DiskReductionConfig.face_
 
     python benchmarks/bench_disk_forced.py [--preset ci] [--cases 0:4000 9:4000 ...] [--criteria MI2b MMI ...]
         [--r-md 0 5 10 20] [--periods 10] [--steps-per-period 100] [--gnl-reference 0:4000]
-        [--patch 3 --load-correction on off] [--face-shapes N_F]
+        [--patch 3 --load-correction on off] [--face-shapes N_F] [--tolerance 0.05]
+
+``--tolerance T`` takes the model from the speed-accuracy study (scenes ``disk-forced-linear`` and, for a GNL reference
+with ``--patch 3``, ``disk-forced-gnl``; docs/choosing-a-model.md) instead of the model options.
 
 Results: results/disk_forced_<preset>.json; reference histories and models cached under results/disk_forced/<preset>/.
 """
@@ -56,6 +59,17 @@ def parse_case(text: str) -> tuple[int, float]:
         return int(nd), float(omega)
     except ValueError:
         raise ValueError(f"a case reads '<N_d>:<omega rad/s>', e.g. 9:13000; got {text!r}") from None
+
+
+def forced_model_choice(tolerance: float, gnl: bool):
+    """The speed-accuracy study's cheapest disk model within ``tolerance`` for this command's runs (scene
+    disk-forced-gnl or disk-forced-linear: node LE kept, MI 2b); ValueError naming --tolerance."""
+    from rotor37_rom.model_choice import choose_model
+
+    try:
+        return choose_model("disk-forced-gnl" if gnl else "disk-forced-linear", tolerance)
+    except ValueError as exc:
+        raise ValueError(f"--tolerance: {exc}") from None
 
 
 def sector_load(sector, patch_mm: float):
@@ -128,10 +142,10 @@ def main(argv=None) -> int:
     parser.add_argument("--preset", default="ci", choices=["ci", "coarse", "paper"])
     parser.add_argument("--cases", nargs="+", default=["0:4000", "0:13000", "0:17000", "9:4000", "9:13000",
                                                        "9:17000"], help="N_d:omega pairs")
-    parser.add_argument("--criteria", nargs="+", default=["MI2b"], help=f"selection criteria {CRITERIA}")
-    parser.add_argument("--r-md", nargs="+", type=int, default=[0, 5, 10, 20])
-    parser.add_argument("--r-c", type=int, default=10)
-    parser.add_argument("--r-cyclic", type=int, default=144)
+    parser.add_argument("--criteria", nargs="+", default=None, help=f"selection criteria {CRITERIA} (default MI2b)")
+    parser.add_argument("--r-md", nargs="+", type=int, default=None, help="default: 0 5 10 20")
+    parser.add_argument("--r-c", type=int, default=None, help="default: 10")
+    parser.add_argument("--r-cyclic", type=int, default=None, help="default: 144")
     parser.add_argument("--interface", nargs="+", default=["closest"], choices=["closest", "per_k"],
                         help="interface-mode selection(s): eq. 51's closest frequencies or equal shares per harmonic")
     parser.add_argument("--periods", type=float, default=10.0)
@@ -148,12 +162,34 @@ def main(argv=None) -> int:
                              "(DiskReductionConfig.load_patch), or not (the point-load models)")
     parser.add_argument("--partial", action="store_true",
                         help="score against an unfinished GNL reference (its checkpoint's window), not run it on")
-    parser.add_argument("--face-shapes", type=int, default=0,
+    parser.add_argument("--face-shapes", type=int, default=None,
                         help="0: eq. 61's nonlinear force of q^n only; n_f >= 1: the faces in it on n_f shapes")
+    parser.add_argument("--tolerance", type=float, default=None,
+                        help="the speed-accuracy study's cheapest model within this relative error replaces --r-c, "
+                             "--r-md, --r-cyclic, --criteria and --face-shapes: scene disk-forced-gnl when a GNL "
+                             "reference is asked with --patch 3 (its load), else disk-forced-linear")
     parser.add_argument("--out", default="results/disk_forced")
     parser.add_argument("--name", default="", help="results file suffix: results/disk_forced_<preset><name>.json")
     args = parser.parse_args(argv)
+    models = {"--r-c": "r_c", "--r-md": "r_md", "--r-cyclic": "r_cyclic", "--criteria": "criteria",
+              "--face-shapes": "face_shapes"}
     try:
+        if args.tolerance is not None:
+            given = [opt for opt, dest in models.items() if getattr(args, dest) is not None]
+            if given:
+                raise ValueError(f"--tolerance chooses {', '.join(given)}: give one or the other")
+            gnl = bool(args.gnl_reference) and args.patch == 3.0
+            if gnl and "off" in args.load_correction:
+                raise ValueError("--tolerance with --load-correction off: the study's GNL models carry the patch's "
+                                 "static correction")
+            choice = forced_model_choice(args.tolerance, gnl)
+            opts = choice.options
+            args.r_c, args.r_md, args.r_cyclic = opts["r_c"], [opts["r_md"]], opts["r_cyclic"]
+            args.criteria, args.face_shapes = ["MI2b"], opts.get("face_shapes", 0)
+        defaults = {"r_c": 10, "r_md": [0, 5, 10, 20], "r_cyclic": 144, "criteria": ["MI2b"], "face_shapes": 0}
+        for dest, value in defaults.items():
+            if getattr(args, dest) is None:
+                setattr(args, dest, value)
         cases = [parse_case(c) for c in args.cases]
         gnl_cases = {parse_case(c) for c in args.gnl_reference}
         for nd, omega in cases:
@@ -174,6 +210,8 @@ def main(argv=None) -> int:
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    if args.tolerance is not None:
+        print(choice.describe())
     out = Path(args.out) / args.preset
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()

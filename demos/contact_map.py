@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import hashlib
 import importlib
 import json
@@ -74,13 +75,23 @@ def map_model(tolerance: float, gnl: bool, fallback: bool = False, disk: bool = 
     """The speed-accuracy study's model of a map (scene 'map-gnl' or 'map-linear'; a disk's: 'disk-map-gnl' or
     'disk-map-linear') within ``tolerance``; with ``fallback`` the study's reference where no measured model meets it.
     Errors name --tolerance."""
-    from rotor37_rom.model_choice import choose_model, load_study
+    from rotor37_rom.model_choice import STUDY_FILE, choose_model
 
     scene = ("disk-map-gnl" if gnl else "disk-map-linear") if disk else "map-gnl" if gnl else "map-linear"
     try:
-        return choose_model(scene, tolerance, load_study(), fallback=fallback)
+        stamp = STUDY_FILE.stat().st_mtime_ns if STUDY_FILE.is_file() else None
+        return choose_model(scene, tolerance, _study(stamp), fallback=fallback)
     except ValueError as exc:
         raise ValueError(f"--tolerance: {exc}") from None
+
+
+@functools.lru_cache(maxsize=2)
+def _study(stamp: int | None) -> dict:
+    """The shipped study file, read once per version (``stamp``: its modification time; a study rewritten in the same
+    process is read again). Read-only: ``choose_model`` does not change it."""
+    from rotor37_rom.model_choice import load_study
+
+    return load_study()
 
 
 def continued_revolutions(revolutions: float) -> float:

@@ -143,11 +143,13 @@ def plot_time_history(t: np.ndarray, series: dict, path: str | Path, title: str 
 
 
 def plot_speed_accuracy(rows: list, path: str | Path, title: str = "", cost_label: str = "cost (s)",
-                        tolerances: tuple = (), floor: float | None = None) -> Path:
+                        tolerances: tuple = (), floor: float | None = None,
+                        reference: tuple | None = None) -> Path:
     """Error against cost on log-log axes: rows of (label, cost, error (relative)); the Pareto-optimal models
     (``model_choice.pareto_front``) are joined and labelled, the others drawn grey; ``tolerances`` as dotted lines;
-    the scene's ``floor`` (the error below which it cannot tell models apart) shaded below a dashed line. A run that
-    diverged (error inf) is drawn on the top edge with a cross."""
+    the scene's ``floor`` (the error below which it cannot tell models apart) shaded below a dashed line;
+    ``reference`` = (label, cost): the reference's cost as a vertical line (a full-order reference, whose error is 0 by
+    construction). A run that diverged (error inf) is drawn on the top edge with a cross."""
     from rotor37_rom.model_choice import pareto_front
 
     plt = _pyplot()
@@ -163,9 +165,19 @@ def plot_speed_accuracy(rows: list, path: str | Path, title: str = "", cost_labe
         ax.loglog(cost[~finite], np.full((~finite).sum(), top), "x", color="C3", ms=9, label="diverged")
     order = np.flatnonzero(front)[np.argsort(cost[front])]
     ax.loglog(cost[order], np.maximum(err[order], 1e-16), "o-", color="C0", label="Pareto-optimal")
-    for i in range(len(rows)):
-        y = err[i] if finite[i] else top
-        ax.annotate(labels[i], (cost[i], max(y, 1e-16)), fontsize=7, xytext=(4, 3), textcoords="offset points",
+    # labels that would overlap (e.g. models at a scene's floor) are stacked, not drawn over each other: a label
+    # spans about 0.01 of the axes' width per character from its point, 0.05 of the height
+    y_at = np.maximum(np.where(finite, err, top), 1e-16)
+    lx, ly = np.log10(np.maximum(cost, 1e-300)), np.log10(y_at)
+    fx = (lx - lx.min()) / max(np.ptp(lx), 1e-12) * 0.9          # about where the points sit in the axes
+    fy = (ly - ly.min()) / max(np.ptp(ly), 1e-12) * 0.9
+    placed = []                                                    # (x0, x1, y, level)
+    for i in np.argsort(cost, kind="stable"):
+        x0, x1 = fx[i], fx[i] + 0.0098 * len(labels[i])
+        taken = {lv for a, b, y, lv in placed if a < x1 and x0 < b and abs(y - fy[i]) < 0.05}
+        level = min(set(range(len(rows) + 1)) - taken)
+        placed.append((x0, x1, fy[i], level))
+        ax.annotate(labels[i], (cost[i], y_at[i]), fontsize=7, xytext=(4, 3 + 9 * level), textcoords="offset points",
                     color="k" if front[i] or not finite[i] else "0.45")
     for tol in tolerances:
         ax.axhline(tol, color="k", ls=":", lw=0.7)
@@ -173,6 +185,8 @@ def plot_speed_accuracy(rows: list, path: str | Path, title: str = "", cost_labe
     if floor and np.isfinite(floor):
         ax.axhline(floor, color="C1", ls="--", lw=0.9, label="the scene's floor")
         ax.axhspan(ax.get_ylim()[0], floor, color="C1", alpha=0.08)
+    if reference is not None:
+        ax.axvline(reference[1], color="C2", ls="--", lw=0.9, label=reference[0])
     ax.set_xlabel(cost_label)
     ax.set_ylabel("relative error")
     ax.set_title(title, fontsize=9)

@@ -136,4 +136,4 @@ def reference_model(scene: str, study: dict | None = None) -> ModelChoice:
     data = study["scenes"][scene]
     ref = data["reference"]
     return ModelChoice(scene, "reference", dict(ref.get("options", {})), math.nan, math.nan, None,
-                       float(ref.get("sweep_s", math.nan)), data["cost_unit"])
+                       float(ref.get("cost", ref.get("sweep_s", math.nan))), data["cost_unit"])
