@@ -105,7 +105,8 @@ speed-accuracy: $(STAMP)
 	$(PY) benchmarks/speed_accuracy.py
 
 # its bladed-disk scenes (the disk's frequencies at every nodal diameter, its short maps without and with GNL and
-# the stress in them); about 3 h, the GNL map scene 2 h 15 min of it (AMD EPYC, 2 cores)
+# the stress in them, its forced response without contact without and with GNL); about 4 h, the GNL map scene
+# 2 h 15 min of it, the forced-response scenes 12 and ~55 min (AMD EPYC, 2 cores)
 speed-accuracy-disk: $(STAMP)
 	$(PY) benchmarks/speed_accuracy.py --scene disk
 

@@ -102,14 +102,13 @@ def reference(sector, system, case, nonlinear, periods, spp, ramp, out: Path, pa
                     "partial": True}
     T = 2 * np.pi / omega
     steps = int(round(periods * spp))
-    t0 = time.perf_counter()
     res = solve_repeating_newmark(sector, n_rep, sector_load(sector, patch_mm),
                                   sector_harmonic_load(n_rep, sector.cyclic.n_sectors, nd, AMPLITUDE, omega, ramp * T),
                                   T / spp, steps, nonlinear=nonlinear, rtol=1e-7, atol=1e-8 * AMPLITUDE,
                                   snapshot_every=max(spp // 10, 1),
                                   checkpoint=checkpoint, ops=system.ops)
     data = {"t": res.t, "tip": res.tip, "fields": res.fields, "snapshots": res.snapshots,
-            "wall": np.float64(time.perf_counter() - t0), "iterations": res.iterations}
+            "wall": np.float64(res.wall), "iterations": res.iterations}      # res.wall: a resumed run's parts too
     save_npz(path, **data)
     checkpoint.unlink(missing_ok=True)
     return data
@@ -137,7 +136,15 @@ def reduced(model, sector, case, nonlinear, periods, spp, ramp, ref, patch_mm: f
     return {"tip": tip, "fields": fields, "wall": wall, "steps": steps}
 
 
-def main(argv=None) -> int:
+MODEL_OPTIONS = {"--r-c": "r_c", "--r-md": "r_md", "--r-cyclic": "r_cyclic", "--criteria": "criteria",
+                 "--face-shapes": "face_shapes"}
+MODEL_DEFAULTS = {"r_c": 10, "r_md": [0, 5, 10, 20], "r_cyclic": 144, "criteria": ["MI2b"], "face_shapes": 0}
+
+
+def parse_args(argv=None):
+    """The command's options, checked (ValueError naming the option) and completed: with ``--tolerance`` the model
+    options are the speed-accuracy study's choice (``args.choice``) and a GNL reference runs only where asked, on the
+    study's GNL load (``--patch 3``); without it the defaults (MODEL_DEFAULTS, GNL reference of 0:4000)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--preset", default="ci", choices=["ci", "coarse", "paper"])
     parser.add_argument("--cases", nargs="+", default=["0:4000", "0:13000", "0:17000", "9:4000", "9:13000",
@@ -150,8 +157,9 @@ def main(argv=None) -> int:
                         help="interface-mode selection(s): eq. 51's closest frequencies or equal shares per harmonic")
     parser.add_argument("--periods", type=float, default=10.0)
     parser.add_argument("--steps-per-period", type=int, default=100)
-    parser.add_argument("--gnl-reference", nargs="*", default=["0:4000"],
-                        help="cases that also get the (expensive) GNL full-order reference")
+    parser.add_argument("--gnl-reference", nargs="*", default=None,
+                        help="cases that also get the (expensive) GNL full-order reference (default 0:4000; with "
+                             "--tolerance, none unless given)")
     parser.add_argument("--ramp", type=float, default=1.0,
                         help="periods over which the load rises smoothly from 0 (0: a step where the phase is not 0)")
     parser.add_argument("--patch", type=float, default=0.0,
@@ -166,52 +174,66 @@ def main(argv=None) -> int:
                         help="0: eq. 61's nonlinear force of q^n only; n_f >= 1: the faces in it on n_f shapes")
     parser.add_argument("--tolerance", type=float, default=None,
                         help="the speed-accuracy study's cheapest model within this relative error replaces --r-c, "
-                             "--r-md, --r-cyclic, --criteria and --face-shapes: scene disk-forced-gnl when a GNL "
-                             "reference is asked with --patch 3 (its load), else disk-forced-linear")
+                             "--r-md, --r-cyclic, --criteria and --face-shapes (ci preset): scene disk-forced-gnl when "
+                             "a GNL reference is asked (--gnl-reference, with --patch 3: the scene's load), else "
+                             "disk-forced-linear")
     parser.add_argument("--out", default="results/disk_forced")
     parser.add_argument("--name", default="", help="results file suffix: results/disk_forced_<preset><name>.json")
     args = parser.parse_args(argv)
-    models = {"--r-c": "r_c", "--r-md": "r_md", "--r-cyclic": "r_cyclic", "--criteria": "criteria",
-              "--face-shapes": "face_shapes"}
+    args.choice = None
+    if args.gnl_reference is None:
+        args.gnl_reference = [] if args.tolerance is not None else ["0:4000"]
+    cases = [parse_case(c) for c in args.cases]
+    gnl_cases = {parse_case(c) for c in args.gnl_reference}
+    if args.tolerance is not None:
+        given = [opt for opt, dest in MODEL_OPTIONS.items() if getattr(args, dest) is not None]
+        if given:
+            raise ValueError(f"--tolerance chooses {', '.join(given)}: give one or the other")
+        if args.preset != "ci":
+            raise ValueError(f"--tolerance with --preset {args.preset}: the speed-accuracy study measured the ci "
+                             "preset")
+        gnl = bool(gnl_cases & set(cases))
+        if gnl and args.patch != 3.0:
+            raise ValueError(f"--tolerance with a GNL reference needs --patch 3 (the study's GNL load), got "
+                             f"--patch {args.patch:g}")
+        if gnl and "off" in args.load_correction:
+            raise ValueError("--tolerance with --load-correction off: the study's GNL models carry the patch's "
+                             "static correction")
+        args.choice = forced_model_choice(args.tolerance, gnl)
+        opts = args.choice.options
+        args.r_c, args.r_md, args.r_cyclic = opts["r_c"], [opts["r_md"]], opts["r_cyclic"]
+        args.criteria, args.face_shapes = ["MI2b"], opts.get("face_shapes", 0)
+    for dest, value in MODEL_DEFAULTS.items():
+        if getattr(args, dest) is None:
+            setattr(args, dest, value)
+    for nd, omega in cases:
+        repeat_count(36, nd)
+        if not 100.0 <= omega <= 1e5:
+            raise ValueError(f"omega must be in [100, 1e5] rad/s, got {omega}")
+    bad = [c for c in args.criteria if c not in CRITERIA]
+    if bad:
+        raise ValueError(f"criteria must be among {CRITERIA}, got {bad}")
+    if args.face_shapes < 0:
+        raise ValueError(f"face-shapes must be >= 0, got {args.face_shapes}")
+    if min(args.r_md) < 0 or args.r_c < 1:
+        raise ValueError(f"r-md must be >= 0 and r-c >= 1, got r-md {args.r_md}, r-c {args.r_c}")
+    if not (args.periods > 0 and args.steps_per_period >= 20 and 0 <= args.ramp < args.periods):
+        raise ValueError("periods must be > 0, steps-per-period >= 20 and ramp in [0, periods)")
+    if not 0 <= args.patch <= 20:
+        raise ValueError(f"patch must be in [0, 20] mm, got {args.patch:g}")
+    return args
+
+
+def main(argv=None) -> int:
     try:
-        if args.tolerance is not None:
-            given = [opt for opt, dest in models.items() if getattr(args, dest) is not None]
-            if given:
-                raise ValueError(f"--tolerance chooses {', '.join(given)}: give one or the other")
-            gnl = bool(args.gnl_reference) and args.patch == 3.0
-            if gnl and "off" in args.load_correction:
-                raise ValueError("--tolerance with --load-correction off: the study's GNL models carry the patch's "
-                                 "static correction")
-            choice = forced_model_choice(args.tolerance, gnl)
-            opts = choice.options
-            args.r_c, args.r_md, args.r_cyclic = opts["r_c"], [opts["r_md"]], opts["r_cyclic"]
-            args.criteria, args.face_shapes = ["MI2b"], opts.get("face_shapes", 0)
-        defaults = {"r_c": 10, "r_md": [0, 5, 10, 20], "r_cyclic": 144, "criteria": ["MI2b"], "face_shapes": 0}
-        for dest, value in defaults.items():
-            if getattr(args, dest) is None:
-                setattr(args, dest, value)
-        cases = [parse_case(c) for c in args.cases]
-        gnl_cases = {parse_case(c) for c in args.gnl_reference}
-        for nd, omega in cases:
-            repeat_count(36, nd)
-            if not 100.0 <= omega <= 1e5:
-                raise ValueError(f"omega must be in [100, 1e5] rad/s, got {omega}")
-        bad = [c for c in args.criteria if c not in CRITERIA]
-        if bad:
-            raise ValueError(f"criteria must be among {CRITERIA}, got {bad}")
-        if args.face_shapes < 0:
-            raise ValueError(f"face-shapes must be >= 0, got {args.face_shapes}")
-        if min(args.r_md) < 0 or args.r_c < 1:
-            raise ValueError(f"r-md must be >= 0 and r-c >= 1, got r-md {args.r_md}, r-c {args.r_c}")
-        if not (args.periods > 0 and args.steps_per_period >= 20 and 0 <= args.ramp < args.periods):
-            raise ValueError("periods must be > 0, steps-per-period >= 20 and ramp in [0, periods)")
-        if not 0 <= args.patch <= 20:
-            raise ValueError(f"patch must be in [0, 20] mm, got {args.patch:g}")
+        args = parse_args(argv)
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    if args.tolerance is not None:
-        print(choice.describe())
+    cases = [parse_case(c) for c in args.cases]
+    gnl_cases = {parse_case(c) for c in args.gnl_reference}
+    if args.choice is not None:
+        print(args.choice.describe())
     out = Path(args.out) / args.preset
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()

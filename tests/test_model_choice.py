@@ -295,7 +295,9 @@ def test_disk_forced_scenes_score_the_indicator():
     (["--tolerance", "1e-9", "--gnl-reference", "0:4000", "--patch", "3"],
      "below every measured model of scene 'disk-forced-gnl'"),
     (["--tolerance", "0.2", "--r-c", "5", "--r-md", "0"], "error: --tolerance chooses --r-c, --r-md"),
-    (["--tolerance", "0.2", "--patch", "3", "--load-correction", "off"], "error: --tolerance with --load-correction"),
+    (["--tolerance", "0.2", "--gnl-reference", "0:4000", "--patch", "3", "--load-correction", "off"],
+     "error: --tolerance with --load-correction"),
+    (["--tolerance", "0.2", "--gnl-reference", "0:4000"], "error: --tolerance with a GNL reference needs --patch 3"),
 ])
 def test_forced_response_bench_tolerance_errors(tmp_path, argv, message):
     """bench_disk_forced.py --tolerance (scenes disk-forced-linear / disk-forced-gnl): a bad value or an option it
@@ -305,6 +307,39 @@ def test_forced_response_bench_tolerance_errors(tmp_path, argv, message):
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr.count("\n") == 1 and message in proc.stderr, proc.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_forced_response_bench_takes_the_chosen_model():
+    """bench_disk_forced.py --tolerance runs the study's choice: the linear scene's model with no GNL reference unless
+    one is asked, the GNL scene's where it is (on the scene's 3 mm patch); without --tolerance, its own defaults."""
+    spec = importlib.util.spec_from_file_location("bench_disk_forced", ROOT / "benchmarks" / "bench_disk_forced.py")
+    bdf = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bdf)
+    models = ("r_c", "r_md", "r_cyclic", "criteria", "face_shapes")
+
+    def expected(scene, tol):
+        opts = choose_model(scene, tol).options
+        return opts["r_c"], [opts["r_md"]], opts["r_cyclic"], ["MI2b"], opts.get("face_shapes", 0)
+
+    args = bdf.parse_args(["--tolerance", "0.05"])
+    assert tuple(getattr(args, k) for k in models) == expected("disk-forced-linear", 0.05)
+    assert args.gnl_reference == [] and args.choice.scene == "disk-forced-linear"
+    args = bdf.parse_args([])
+    assert tuple(getattr(args, k) for k in models) == (10, [0, 5, 10, 20], 144, ["MI2b"], 0)
+    assert args.gnl_reference == ["0:4000"] and args.choice is None
+    gnl = ["--cases", "0:4000", "--gnl-reference", "0:4000", "--patch", "3", "--tolerance"]
+    for tol in (0.2, 0.5, 0.99):
+        try:
+            want = expected("disk-forced-gnl", tol)
+        except ValueError:
+            with pytest.raises(ValueError, match="--tolerance: tolerance .* scene 'disk-forced-gnl'"):
+                bdf.parse_args(gnl + [str(tol)])
+        else:
+            assert tuple(getattr(bdf.parse_args(gnl + [str(tol)]), k) for k in models) == want
+    with pytest.raises(ValueError, match="needs --patch 3"):
+        bdf.parse_args(["--tolerance", "0.2", "--gnl-reference", "0:4000"])
+    with pytest.raises(ValueError, match="measured the ci preset"):
+        bdf.parse_args(["--tolerance", "0.2", "--preset", "coarse"])
 
 
 def test_reference_model_is_the_yardstick():
