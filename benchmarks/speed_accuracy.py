@@ -81,7 +81,8 @@ ROOT = Path(__file__).resolve().parents[1]
 WORK = ROOT / "results" / "speed_accuracy"
 IMG = ROOT / "docs" / "img"
 SCENES = ("modes", "clearance", "map-linear", "map-gnl", "stability", "paper-speedup", "cost-r")
-DISK_SCENES = ("disk-modes", "disk-map-linear", "disk-map-gnl", "disk-forced-linear", "disk-forced-gnl")   # not in 'all' (the single-blade study's hour)
+DISK_SCENES = ("disk-modes", "disk-map-linear", "disk-map-gnl",        # not in 'all' (the single-blade study's hour)
+               "disk-forced-linear", "disk-forced-gnl")
 PAPER_R, PAPER_H = 189, 1e-7            # the paper's single-blade GNL setting: r = 189, exact tensors, h = 1e-7 s
 TOLERANCES = (0.01, 0.05, 0.2)
 PERTURBATION = 1e-4
@@ -888,8 +889,7 @@ def forced_error(model, case: tuple, gnl: bool, ref: dict) -> dict:
                        float(ref["wall"])], sort_keys=True)
     path = WORK / "disk_forced" / "ci" / f"rom_{hashlib.sha1(spec.encode()).hexdigest()[:16]}.json"
     if path.is_file():
-        out = json.loads(path.read_text())
-        return out                                     # a failure's error is inf (JSON's Infinity)
+        return json.loads(path.read_text())            # a failure's error is inf (JSON's Infinity)
     t0 = time.perf_counter()
     try:
         rom = bdf.reduced(model, sector, case, gnl and model.forces is not None, DISK_FORCED["periods"],
