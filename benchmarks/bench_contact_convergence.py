@@ -39,8 +39,8 @@ RESULTS = Path("results/bench_contact_convergence.json")
 def nfrc_run(model, gnl, speeds, casing, revolutions, safety, cap, h=None, states=0):
     """NFRC at each speed; with ``states`` > 0 also the that many largest-amplitude reduced states of the run (the
     GNL tangent stability limit is evaluated on them)."""
-    from rotor37_rom.integrator import CentralDifference, largest_states, simulate
-    from rotor37_rom.sweep import last_revolution_max
+    from rotor37_rom.dynamics.explicit import CentralDifference, largest_states, simulate
+    from rotor37_rom.studies.sweep import last_revolution_max
 
     scheme = CentralDifference(model, nonlinear=gnl, safety=safety, frequency_cap=cap, h=h)
     rec = max(1, int(round(1e-5 / scheme.h)))
@@ -83,16 +83,16 @@ def main(argv=None) -> int:
     parser.add_argument("--tangent-safety", type=float, default=0.7,
                         help="GNL with a cap: h <= this x 2 / tangent omega_max on the reference's largest states")
     args = parser.parse_args(argv)
-    from rotor37_rom.casing import Casing
-    from rotor37_rom.charts import plot_nfrc, plot_speed_accuracy
-    from rotor37_rom.integrator import gnl_time_step
-    from rotor37_rom.reduction import load_reduced_model, save_reduced_model
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.viz.charts import plot_nfrc, plot_speed_accuracy
+    from rotor37_rom.dynamics.explicit import gnl_time_step
+    from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model
 
     if Path(args.model).exists():
         model = load_reduced_model(args.model)
     else:
         from rotor37_rom import fem
-        from rotor37_rom.builder import ReductionConfig, build_reduced_model
+        from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
 
         sector = fem.create_blade_sector(preset="ci")
         model, _ = build_reduced_model(sector, ReductionConfig(r_c=15, r_md=0, global_md_modes=3, forces="intrusive"),

@@ -46,7 +46,7 @@ RESULTS = Path("results/bench_contact_ecsw.json")
 def training_runs(model, speeds, casing, revolutions, h, cache: Path) -> tuple[list[np.ndarray], float | None]:
     """Recorded states (r, n) of exact GNL contact runs at the training speeds, and the wall time of those runs
     (cached as .npz)."""
-    from rotor37_rom.integrator import CentralDifference, simulate
+    from rotor37_rom.dynamics.explicit import CentralDifference, simulate
     from rotor37_rom.npz import load_npz, save_npz
 
     data = load_npz(cache, what="training runs")
@@ -64,8 +64,8 @@ def step_cost(model, h, n_speeds, n_steps):
     """us per simulation-step of n_speeds in 1200-1600 rad/s in one batch with casing contact, and the hours of the
     headline map (100 speeds x 200 revolutions) at that cost and step (timing noise on the shared 2-core machine:
     +-20 % between runs; the variants are measured back to back)."""
-    from rotor37_rom.casing import Casing
-    from rotor37_rom.integrator import CentralDifference, simulate
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.dynamics.explicit import CentralDifference, simulate
 
     scheme = CentralDifference(model, nonlinear=True, h=h)
     speeds = np.linspace(1200.0, 1600.0, n_speeds)
@@ -103,12 +103,12 @@ def main(argv=None) -> int:
         print(f"error: --tols must lie in (0, 1), got {args.tols}", file=sys.stderr)
         return 2
     from rotor37_rom import fem
-    from rotor37_rom.builder import ReductionConfig, build_reduced_model, hyper_reduce
-    from rotor37_rom.casing import Casing
-    from rotor37_rom.ecsw import state_errors, trajectory_states
-    from rotor37_rom.integrator import gnl_time_step, highest_frequency, tangent_highest_frequency
-    from rotor37_rom.nonlinear_forces import PolynomialForces
-    from rotor37_rom.reduction import load_reduced_model, save_reduced_model, with_force_precision
+    from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model, hyper_reduce
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.forces.cubature import state_errors, trajectory_states
+    from rotor37_rom.dynamics.explicit import gnl_time_step, highest_frequency, tangent_highest_frequency
+    from rotor37_rom.forces.tensors import PolynomialForces
+    from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model, with_force_precision
 
     sector = fem.create_blade_sector(preset="ci")
     if Path(args.model).exists():

@@ -55,7 +55,7 @@ def reference_run(sector, ops, casing, omega, duration, h, gnl, checkpoint, rho_
     """LE normal displacement of the full-order model every step, with the contact checks and the wall time;
     ``rho_inf``: generalised-alpha instead of average acceleration; ``interface``: the contact patches' C (the LE
     displacement is then its patch mean, as in the reduced models with the same patches)."""
-    from rotor37_rom.casing import contact_frames
+    from rotor37_rom.dynamics.casing import contact_frames
     from rotor37_rom.fem.periodic import solve_repeating_newmark
 
     n_steps = int(round(duration / h))
@@ -81,7 +81,7 @@ def rom_runs(model, casing, speeds, duration, gnl, record, cap=None, h=None, dam
     is saved there every ``checkpoint_seconds``, and a run of the same model, speeds, step, length and record interval
     resumes from it (the r = 169 GNL model at 2e-7 s runs for over an hour); its wall time counts the time run before
     the restart."""
-    from rotor37_rom.integrator import CentralDifference, loop_state, save_loop_state, simulate
+    from rotor37_rom.dynamics.explicit import CentralDifference, loop_state, save_loop_state, simulate
 
     scheme = CentralDifference(model, nonlinear=gnl, safety=0.5, damping=damping, frequency_cap=cap, h=h,
                                force=True)
@@ -157,7 +157,7 @@ def completed_revolutions(run, omega):
 
 def last_peak(run, omega):
     """The last revolution's max |u| of a run (m): the NFRC's quantity (``sweep.last_revolution_max``)."""
-    from rotor37_rom.sweep import last_revolution_max
+    from rotor37_rom.studies.sweep import last_revolution_max
 
     return last_revolution_max(np.asarray(run["t"]), np.asarray(run["u_le"]), omega)
 
@@ -196,7 +196,7 @@ def main(argv=None) -> int:
                         help="draw the LE histories of the reference and the compared models, one file per speed "
                              "(the speed appended to the name)")
     args = parser.parse_args(argv)
-    from rotor37_rom.reduction import GLOBAL_MD_MAX
+    from rotor37_rom.reduction.craig_bampton import GLOBAL_MD_MAX
 
     checks = (("--revolutions", [args.revolutions], 0.5, 50), ("--h-full", args.h_full, 1e-8, 1e-4),
               ("--bump", [args.bump], 0.0, 4.9), ("--mu", [args.mu], 0.0, 2.0), ("--speeds", args.speeds, 1.0, 5000),
@@ -212,9 +212,9 @@ def main(argv=None) -> int:
     if (args.rom_cap is None) != (args.rom_step is None):
         parser.exit(2, "bench_contact_reference.py: give --rom-cap and --rom-step together\n")
     from rotor37_rom import fem
-    from rotor37_rom.builder import ReductionConfig, build_reduced_model
-    from rotor37_rom.casing import Casing
-    from rotor37_rom.sweep import band_rms
+    from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.studies.sweep import band_rms
 
     sector = fem.create_blade_sector(preset="ci")
     ops = fem.create_svk_operators(sector)
@@ -346,7 +346,7 @@ def main(argv=None) -> int:
                            revolutions=min(1.0, args.revolutions))
             print(f"  {label}: " + " / ".join(f"{1e3 * x:.3f}" for x in rms))
         if args.plot:
-            from rotor37_rom.charts import plot_time_history
+            from rotor37_rom.viz.charts import plot_time_history
             t = np.asarray(ref["t"])
             series = {("reference" if args.no_full_order else
                        f"full order, h = {ref['h']:.3g} s" + (f", rho_inf {ref['rho_inf']:g}"

@@ -44,8 +44,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     results = RESULTS.with_name(RESULTS.stem + "_gnl.json") if args.gnl else RESULTS
     from rotor37_rom import fem
-    from rotor37_rom.builder import ReductionConfig, build_reduced_model
-    from rotor37_rom.casing import Casing
+    from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
+    from rotor37_rom.dynamics.casing import Casing
 
     sector = fem.create_blade_sector(preset="ci")
     ops = fem.create_svk_operators(sector)

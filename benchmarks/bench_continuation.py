@@ -42,7 +42,7 @@ def per_step(scheme, casing, omega: float, n: int = 3000) -> int:
     results/bench_continuation.json under 'per_step_us' keyed by the thread count."""
     import os
 
-    from rotor37_rom.integrator import simulate
+    from rotor37_rom.dynamics.explicit import simulate
 
     res = simulate(scheme, [omega], casing, revolutions=3)
     q, qp = res.q_final[:, 0], res.q_prev[:, 0]
@@ -85,8 +85,8 @@ def main(argv=None) -> int:
     from speed_accuracy import study_training_speeds
     cm = load_demo("contact_map")             # the one copy speed_accuracy's study_training_speeds also loads
 
-    from rotor37_rom.reduction import load_reduced_model
-    from rotor37_rom.sweep import continuation
+    from rotor37_rom.model.reduced import load_reduced_model
+    from rotor37_rom.studies.sweep import continuation
 
     comm = cm.world_comm()
     rank, size = (0, 1) if comm is None else (comm.rank, comm.size)

@@ -23,9 +23,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import write_results  # noqa: E402
 
 from rotor37_rom import fem  # noqa: E402
-from rotor37_rom.analysis import cyclic_harmonic_frequencies  # noqa: E402
-from rotor37_rom.disk import harmonic_frequencies  # noqa: E402
-from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
+from rotor37_rom.post.stress import cyclic_harmonic_frequencies  # noqa: E402
+from rotor37_rom.disk.harmonics import harmonic_frequencies  # noqa: E402
+from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model  # noqa: E402
 
 FAMILIES = ("1B", "1T", "2B")
 

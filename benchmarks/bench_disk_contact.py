@@ -34,10 +34,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import write_results  # noqa: E402
 
 from rotor37_rom import fem  # noqa: E402
-from rotor37_rom.casing import Casing  # noqa: E402
-from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
-from rotor37_rom.integrator import CentralDifference, gnl_time_step, largest_states, simulate  # noqa: E402
-from rotor37_rom.sweep import SweepSpec, last_revolution_max, load_sweep, run_sweep  # noqa: E402
+from rotor37_rom.dynamics.casing import Casing  # noqa: E402
+from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model  # noqa: E402
+from rotor37_rom.dynamics.explicit import CentralDifference, gnl_time_step, largest_states, simulate  # noqa: E402
+from rotor37_rom.studies.sweep import SweepSpec, last_revolution_max, load_sweep, run_sweep  # noqa: E402
 
 MAP_SPEEDS, MAP_REVOLUTIONS = np.linspace(1200.0, 1650.0, 90), 200.0     # the full-disk map
 

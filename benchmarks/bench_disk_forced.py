@@ -43,12 +43,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import write_results  # noqa: E402
 
 from rotor37_rom import fem  # noqa: E402
-from rotor37_rom.disk import (best_approximation, harmonic_field_load, harmonic_node_load,  # noqa: E402
-                               indicator_histories, performance_indicator, repeat_count)
-from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
+from rotor37_rom.disk.indicators import best_approximation, indicator_histories, performance_indicator
+from rotor37_rom.disk.loads import harmonic_field_load, harmonic_node_load, repeat_count
+from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model  # noqa: E402
 from rotor37_rom.fem.periodic import RepeatingSectors, sector_harmonic_load, solve_repeating_newmark  # noqa: E402
 from rotor37_rom.npz import save_npz  # noqa: E402
-from rotor37_rom.reduction import CRITERIA, simulate_newmark  # noqa: E402
+from rotor37_rom.reduction.craig_bampton import CRITERIA  # noqa: E402
+from rotor37_rom.dynamics.newmark import simulate_newmark  # noqa: E402
 
 AMPLITUDE = 400.0
 
@@ -64,7 +65,7 @@ def parse_case(text: str) -> tuple[int, float]:
 def forced_model_choice(tolerance: float, gnl: bool):
     """The speed-accuracy study's cheapest disk model within ``tolerance`` for this command's runs (scene
     disk-forced-gnl or disk-forced-linear: node LE kept, MI 2b); ValueError naming --tolerance."""
-    from rotor37_rom.model_choice import choose_model
+    from rotor37_rom.studies.model_choice import choose_model
 
     try:
         return choose_model("disk-forced-gnl" if gnl else "disk-forced-linear", tolerance)

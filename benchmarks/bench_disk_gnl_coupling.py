@@ -39,11 +39,14 @@ from _common import write_results  # noqa: E402
 from bench_disk_forced import AMPLITUDE, reference, sector_load  # noqa: E402
 
 from rotor37_rom import fem  # noqa: E402
-from rotor37_rom.disk import best_approximation, face_shapes, performance_indicator, travelling_load  # noqa: E402
-from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
+from rotor37_rom.disk.indicators import best_approximation, performance_indicator  # noqa: E402
+from rotor37_rom.disk.assembly import face_shapes  # noqa: E402
+from rotor37_rom.disk.loads import travelling_load  # noqa: E402
+from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model  # noqa: E402
 from rotor37_rom.fem.periodic import RepeatingSectors  # noqa: E402
-from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces  # noqa: E402
-from rotor37_rom.reduction import CRITERIA, simulate_newmark  # noqa: E402
+from rotor37_rom.forces.tensors import QuadratureForces, compute_polynomial_forces  # noqa: E402
+from rotor37_rom.reduction.craig_bampton import CRITERIA  # noqa: E402
+from rotor37_rom.dynamics.newmark import simulate_newmark  # noqa: E402
 
 OMEGA, PERIODS, SPP, RAMP = 4000.0, 10, 100, 1.0
 

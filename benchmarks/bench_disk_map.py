@@ -56,8 +56,8 @@ _demo = load_demo("contact_map")
 ContactMapConfig, reduced_model, run_contact_map, time_scheme, world_comm = (
     _demo.ContactMapConfig, _demo.reduced_model, _demo.run_contact_map, _demo.time_scheme, _demo.world_comm)
 
-from rotor37_rom.integrator import CentralDifference, training_speeds  # noqa: E402
-from rotor37_rom.sweep import load_speed, run_sweep, sector_maxima, sweep_folder  # noqa: E402
+from rotor37_rom.dynamics.explicit import CentralDifference, training_speeds  # noqa: E402
+from rotor37_rom.studies.sweep import load_speed, run_sweep, sector_maxima, sweep_folder  # noqa: E402
 
 SPEEDS, REVOLUTIONS = (1200.0, 1650.0, 90), 200.0
 CUBATURE, PRECISION, CAP_KHZ = 3e-3, "single", 60.0

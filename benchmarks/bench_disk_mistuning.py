@@ -37,12 +37,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import write_results  # noqa: E402
 
 from rotor37_rom import fem  # noqa: E402
-from rotor37_rom.casing import Casing  # noqa: E402
-from rotor37_rom.disk import mistuning_factors  # noqa: E402
-from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
-from rotor37_rom.integrator import CentralDifference  # noqa: E402
-from rotor37_rom import sweep  # noqa: E402
-from rotor37_rom.sweep import SweepSpec, run_sweep  # noqa: E402
+from rotor37_rom.dynamics.casing import Casing  # noqa: E402
+from rotor37_rom.disk.assembly import mistuning_factors  # noqa: E402
+from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model  # noqa: E402
+from rotor37_rom.dynamics.explicit import CentralDifference  # noqa: E402
+from rotor37_rom.studies import sweep  # noqa: E402
+from rotor37_rom.studies.sweep import SweepSpec, run_sweep  # noqa: E402
 
 OUT = Path("results/bench_disk_mistuning")
 

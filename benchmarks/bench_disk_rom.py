@@ -27,11 +27,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import write_results  # noqa: E402
 
 from rotor37_rom import fem  # noqa: E402
-from rotor37_rom.analysis import disk_stress  # noqa: E402
-from rotor37_rom.disk import harmonic_node_load  # noqa: E402
-from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
-from rotor37_rom.integrator import CentralDifference, SimulationDiverged, simulate  # noqa: E402
-from rotor37_rom.reduction import simulate_newmark  # noqa: E402
+from rotor37_rom.post.stress import disk_stress  # noqa: E402
+from rotor37_rom.disk.loads import harmonic_node_load  # noqa: E402
+from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model  # noqa: E402
+from rotor37_rom.dynamics.explicit import CentralDifference, SimulationDiverged, simulate  # noqa: E402
+from rotor37_rom.dynamics.newmark import simulate_newmark  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -79,7 +79,7 @@ def main(argv=None) -> int:
         key = "gnl" if gnl else "linear"
         k_max = int(np.argmax(np.abs(explicit[0])))                  # t_max of sector 0's LE
         fields, vm = disk_stress(sector, model, np.asarray(res.records_q[0])[:, k_max], nonlinear=gnl)
-        from rotor37_rom.plotting import render_stress
+        from rotor37_rom.viz.plotting import render_stress
 
         picture = render_stress(sector, fields[0], vm.max(axis=2), Path("results") / "bench_disk_rom" / f"stress_{key}.png",
                                 f"bladed disk, ROM r = {model.r}, {key}, t = {1e3 * res.t[0][k_max]:.2f} ms",

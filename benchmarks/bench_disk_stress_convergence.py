@@ -88,9 +88,9 @@ def contact_stress(sector, point=MAP_POINT, mu: float = 0.15) -> dict:
     outside the tip band and outside balls around node LE, and where the largest sit; near ``point`` (r, z, theta in
     mm, mm, deg); node LE's displacement per kN (its length and inward along the normal)."""
     from rotor37_rom import fem
-    from rotor37_rom.analysis import (ROOT_BAND, TIP_BAND, disk_stress_summary, root_distance, stress_location,
-                                      tip_band)
-    from rotor37_rom.casing import Casing, contact_frames
+    from rotor37_rom.post.stress import (ROOT_BAND, TIP_BAND, disk_stress_summary, root_distance, stress_location,
+        tip_band)
+    from rotor37_rom.dynamics.casing import Casing, contact_frames
 
     t0 = time.perf_counter()
     casing = Casing(direction="cone", mu=mu)
@@ -140,7 +140,7 @@ def contact_stress(sector, point=MAP_POINT, mu: float = 0.15) -> dict:
 def mode_stress(sector, point=MAP_POINT) -> dict:
     """One mesh: the 1B 0-diameter mode's stresses (MPa) at 1 mm at node LE and where the off-corner largest sits."""
     from rotor37_rom import fem
-    from rotor37_rom.analysis import disk_stress_summary, tip_band
+    from rotor37_rom.post.stress import disk_stress_summary, tip_band
 
     t0 = time.perf_counter()
     cyc = fem.CyclicOperators(sector)

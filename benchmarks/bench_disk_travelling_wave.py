@@ -30,11 +30,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import write_results  # noqa: E402
 
 from rotor37_rom import fem  # noqa: E402
-from rotor37_rom.casing import Casing  # noqa: E402
-from rotor37_rom.disk import travelling_wave_departure  # noqa: E402
-from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
-from rotor37_rom.integrator import CentralDifference, gnl_time_step, largest_states, simulate  # noqa: E402
-from rotor37_rom.reduction import modal_damping  # noqa: E402
+from rotor37_rom.dynamics.casing import Casing  # noqa: E402
+from rotor37_rom.disk.harmonics import travelling_wave_departure  # noqa: E402
+from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model  # noqa: E402
+from rotor37_rom.dynamics.explicit import CentralDifference, gnl_time_step, largest_states, simulate  # noqa: E402
+from rotor37_rom.reduction.craig_bampton import modal_damping  # noqa: E402
 
 OMEGA = 1400.0
 SHIFT = 2 * np.pi / 36 / OMEGA            # time for the rotor to turn one sector (s)

@@ -9,7 +9,7 @@ the last revolution (or the time it was stopped), the three works, and the frict
 damping's over the last third of the run: the balance that decides whether a response grows. After each batch, the
 number of speeds stopped per friction coefficient.
 
-First, the stability of persistent sliding (``rotor37_rom.friction``) at each tip node, the LE and TE halves and all
+First, the stability of persistent sliding (``rotor37_rom.dynamics.friction``) at each tip node, the LE and TE halves and all
 8 nodes, both rotation senses: the divergence (sprag-slip) coefficient from the static compliance, and the first
 instability of the constrained dynamics growing faster than --min-rate (1/s), divergence or flutter.
 
@@ -44,8 +44,8 @@ def _tail_rates(t, work, energy, omega, fraction=1.0 / 3.0):
 
 def sliding_stability(model, min_rate: float) -> list:
     """Onsets of friction-induced instability of persistent sliding, per node set and rotation sense (printed)."""
-    from rotor37_rom.casing import Casing, contact_matrices
-    from rotor37_rom.friction import critical_friction, sprag_slip_friction
+    from rotor37_rom.dynamics.casing import Casing, contact_matrices
+    from rotor37_rom.dynamics.friction import critical_friction, sprag_slip_friction
 
     sets = {**{f"node {k}": [k] for k in range(8)}, "LE half (0-3)": [0, 1, 2, 3], "TE half (4-7)": [4, 5, 6, 7],
             "all 8": None}
@@ -80,10 +80,10 @@ def main(argv=None) -> int:
     parser.add_argument("--stability-only", action="store_true", help="the sliding stability table only")
     args = parser.parse_args(argv)
     from rotor37_rom import fem
-    from rotor37_rom.builder import ReductionConfig, build_reduced_model
-    from rotor37_rom.casing import Casing
-    from rotor37_rom.integrator import CentralDifference, gnl_time_step, probe_states, simulate
-    from rotor37_rom.sweep import last_revolution_max
+    from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.dynamics.explicit import CentralDifference, gnl_time_step, probe_states, simulate
+    from rotor37_rom.studies.sweep import last_revolution_max
 
     sector = fem.create_blade_sector(preset="ci")
     ops = fem.create_svk_operators(sector)

@@ -88,7 +88,7 @@ def check_command(args, mu: float, speeds: tuple, check: tuple, out: Path, pertu
     """The demo's command line of the step check of one speed range: the GNL runs at the ``check`` speeds (START
     STOP N) again with the step from every state (--step-outliers keep), on the range's cubature (its cache and
     training speeds), into OUT/step_check (with a perturbation: OUT/step_check_floor)."""
-    from rotor37_rom.integrator import training_speeds
+    from rotor37_rom.dynamics.explicit import training_speeds
 
     train = training_speeds(np.linspace(speeds[0], speeds[1], int(speeds[2])))
     extra = ["--cubature-speeds", *[str(float(w)) for w in train], "--cache", str(out / "cache")]
@@ -138,7 +138,7 @@ def setting_records(folder: Path, gnl: bool, revolutions: float, every: bool = F
     another); ({}, None) when the folder has no map of that setting. Only sweeps of the entry's model (a map run
     again with another --perturbation writes beside it at the same step). Read once per process (``map_row`` and
     ``step_check`` both ask), after the maps have run; callers do not modify what it returns."""
-    from rotor37_rom.sweep import load_sweep
+    from rotor37_rom.studies.sweep import load_sweep
 
     summary = json.loads((folder / "summary.json").read_text())
     entry = next((v for k, v in summary["runs"].items() if k.startswith("GNL") == gnl), None)
@@ -173,7 +173,7 @@ def step_check(folder: Path, revolutions: float) -> list[dict]:
     """The GNL map in ``folder`` (run with --step-outliers drop) against its speeds run again in folder/step_check
     at the step from every state: per speed, the largest LE response of both (mm), their relative difference and
     both steps; with the floor runs (folder/floor, folder/step_check_floor), both responses perturbed too."""
-    from rotor37_rom.sweep import interaction_map
+    from rotor37_rom.studies.sweep import interaction_map
 
     runs = [setting_records(folder, True, revolutions), setting_records(folder / "step_check", True, revolutions,
                                                                          every=True)]
@@ -202,7 +202,7 @@ def step_check(folder: Path, revolutions: float) -> list[dict]:
 def floor_row(folders: list[Path], gnl: bool, revolutions: float) -> dict | None:
     """The maps of ``folders`` run again perturbed (folder/floor): their perturbation, speeds and NFRC (mm), and the
     1B/EO4 resonance of the perturbed map (rad/s), or None when none was run."""
-    from rotor37_rom.sweep import engine_order_resonance, interaction_map
+    from rotor37_rom.studies.sweep import engine_order_resonance, interaction_map
 
     records, eps = {}, set()
     for folder in folders:
@@ -222,7 +222,7 @@ def floor_row(folders: list[Path], gnl: bool, revolutions: float) -> dict | None
 def map_row(folders: list[Path], mu: float, gnl: bool, revolutions: float, quarter_omega1: float) -> dict:
     """One setting (GNL off or on) over the speed ranges of ``folders``: speeds grown past the limit, the largest
     response, the 1B/EO4 resonance and the contact mechanism there."""
-    from rotor37_rom.sweep import engine_order_resonance, interaction_map
+    from rotor37_rom.studies.sweep import engine_order_resonance, interaction_map
 
     records, entries = {}, []
     for folder in folders:
@@ -345,7 +345,7 @@ def build_model(path: Path, preset: str, r_c: int, global_md: int) -> None:
     """The reduced model the maps share, built as the map command builds it (24 tip DOFs, r_c fixed-interface modes,
     the modal derivatives of the first ``global_md`` clamped modes (3: 1B, 1T, 2B), exact cubic tensors), saved to
     ``path``."""
-    from rotor37_rom.reduction import save_reduced_model
+    from rotor37_rom.model.reduced import save_reduced_model
 
     demo = load_demo("contact_map")
     model = demo.build_model(demo.ContactMapConfig(preset=preset, r_c=r_c, global_md=global_md, out=OUT))
@@ -356,7 +356,7 @@ def build_model(path: Path, preset: str, r_c: int, global_md: int) -> None:
 def nfrc_chart(rows: list[dict], direction: str, quarter_omega1: float) -> Path:
     """The NFRC of every row with this normal, one curve per friction value and setting, with the paper's zero-IC
     resonances; results/gnl_vs_linear/nfrc_<direction>.png."""
-    from rotor37_rom.charts import plot_nfrc
+    from rotor37_rom.viz.charts import plot_nfrc
 
     curves = {f"r = {r['r']}, mu = {r['mu']:g}, GNL {gnl_label(r)}, {r['speeds'][0]:g}-{r['speeds'][-1]:g} rad/s":
               (r["speeds"], np.asarray(r["nfrc_mm"], float) * 1e-3, "o-" if r["gnl"] else "s--")
@@ -411,7 +411,8 @@ def main(argv=None) -> int:
         if error:
             print(f"error: --step-check: {error}", file=sys.stderr)
             return 2
-    from rotor37_rom.reduction import GLOBAL_MD_MAX, load_reduced_model
+    from rotor37_rom.reduction.craig_bampton import GLOBAL_MD_MAX
+    from rotor37_rom.model.reduced import load_reduced_model
 
     if not 0 <= args.global_md <= GLOBAL_MD_MAX:
         print(f"error: --global-md must be in 0..{GLOBAL_MD_MAX}, got {args.global_md}", file=sys.stderr)

@@ -52,7 +52,7 @@ def _largest(Q: np.ndarray, boundary_rows: np.ndarray, n: int) -> np.ndarray:
 
 
 def _nfrc_by_speed(patterns) -> dict:
-    from rotor37_rom.sweep import interaction_map, load_sweep
+    from rotor37_rom.studies.sweep import interaction_map, load_sweep
 
     out = {}
     for folder in sorted({str(Path(f).parent) for f in _files(patterns)}):
@@ -86,14 +86,14 @@ def main(argv=None) -> int:
     from mpi4py import MPI
 
     from rotor37_rom import fem
-    from rotor37_rom.builder import hyper_reduce
-    from rotor37_rom.casing import Casing
-    from rotor37_rom.ecsw import trajectory_states
-    from rotor37_rom.integrator import (CentralDifference, contact_training_states, gnl_time_step, simulate,
-                                        training_speeds)
+    from rotor37_rom.reduction.builder import hyper_reduce
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.forces.cubature import trajectory_states
+    from rotor37_rom.dynamics.explicit import (CentralDifference, contact_training_states, gnl_time_step, simulate,
+        training_speeds)
     from rotor37_rom.npz import load_npz, save_npz
-    from rotor37_rom.reduction import load_reduced_model, save_reduced_model, with_force_precision
-    from rotor37_rom.sweep import SweepSpec, interaction_map, load_sweep, run_sweep
+    from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model, with_force_precision
+    from rotor37_rom.studies.sweep import SweepSpec, interaction_map, load_sweep, run_sweep
 
     summary_path = Path(args.headline) / "summary.json"
     if not summary_path.is_file():

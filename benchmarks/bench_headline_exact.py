@@ -37,11 +37,11 @@ def main(argv=None) -> int:
     parser.add_argument("--out", default="results/bench_headline_exact",
                         help="sweeps under it, the table in results/<its name>.json")
     args = parser.parse_args(argv)
-    from rotor37_rom.casing import Casing
-    from rotor37_rom.integrator import CentralDifference
-    from rotor37_rom.nonlinear_forces import PolynomialForces
-    from rotor37_rom.reduction import load_reduced_model
-    from rotor37_rom.sweep import SweepSpec, interaction_map, load_sweep, run_sweep
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.dynamics.explicit import CentralDifference
+    from rotor37_rom.forces.tensors import PolynomialForces
+    from rotor37_rom.model.reduced import load_reduced_model
+    from rotor37_rom.studies.sweep import SweepSpec, interaction_map, load_sweep, run_sweep
 
     summary_path = Path(args.headline) / "summary.json"
     if not summary_path.is_file():

@@ -33,8 +33,9 @@ def gemm_rate(n: int = 2000) -> float:
 
 
 def synthetic_model(r: int, seed: int = 0):
-    from rotor37_rom.nonlinear_forces import PolynomialForces
-    from rotor37_rom.reduction import NodeMap, ReducedModel
+    from rotor37_rom.forces.tensors import PolynomialForces
+    from rotor37_rom.model.nodes import NodeMap
+    from rotor37_rom.model.reduced import ReducedModel
 
     rng = np.random.default_rng(seed)
     X = rng.standard_normal((r, r))
@@ -51,7 +52,7 @@ def synthetic_model(r: int, seed: int = 0):
 
 def full_tensors(forces):
     """Dense A (r, r, r) and B (r, r, r, r) holding the same polynomial (coefficient on the sorted index)."""
-    from rotor37_rom.nonlinear_forces import cubic_monomial_indices, quadratic_monomial_indices
+    from rotor37_rom.forces.tensors import cubic_monomial_indices, quadratic_monomial_indices
 
     r = forces.r
     A3 = np.zeros((r, r, r))
@@ -86,8 +87,8 @@ def stress_kernel(headline: str, point_counts, P: int = 50, r: int = 45) -> dict
     """The cubature force's point stress: the fused C kernel (svk_kernel) against the NumPy path, same arrays, same
     run (synthetic gradients: timing only), float32 and float64; then the whole integrator step on a trained
     cubature model with the kernel and with the NumPy path (1 revolution, casing contact, mu = 0)."""
-    from rotor37_rom import nonlinear_forces
-    from rotor37_rom.nonlinear_forces import QuadratureForces
+    from rotor37_rom.forces import tensors as nonlinear_forces
+    from rotor37_rom.forces.tensors import QuadratureForces
 
     out = {"P": P, "r": r, "stress": [], "step": None}
     rng = np.random.default_rng(2)
@@ -112,9 +113,9 @@ def stress_kernel(headline: str, point_counts, P: int = 50, r: int = 45) -> dict
     if cubature_model is None:
         print(f"step with/without the kernel: skipped (no headline map with one trained cubature in {headline})")
         return out
-    from rotor37_rom.casing import Casing
-    from rotor37_rom.integrator import CentralDifference, simulate
-    from rotor37_rom.reduction import load_reduced_model, with_force_precision
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.dynamics.explicit import CentralDifference, simulate
+    from rotor37_rom.model.reduced import load_reduced_model, with_force_precision
 
     model = with_force_precision(load_reduced_model(cubature_model), "single")
     scheme = CentralDifference(model, nonlinear=True, h=h, frequency_cap=2 * np.pi * 120e3)
@@ -148,7 +149,7 @@ def main(argv=None) -> int:
                              "for the step with and without the C stress kernel; skipped when missing")
     parser.add_argument("--kernel-points", type=int, nargs="+", default=[376, 3000])
     args = parser.parse_args(argv)
-    from rotor37_rom.integrator import CentralDifference
+    from rotor37_rom.dynamics.explicit import CentralDifference
 
     gflops = gemm_rate()
     print(f"dgemm 2000^3: {gflops:.1f} GFLOP/s")
@@ -181,9 +182,9 @@ def main(argv=None) -> int:
         A3 = B4 = None          # free the dense tensors before the next r
     # real model: full step with contact, and interaction-map throughput
     from rotor37_rom import fem
-    from rotor37_rom.builder import ReductionConfig, build_reduced_model
-    from rotor37_rom.casing import Casing
-    from rotor37_rom.integrator import simulate
+    from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.dynamics.explicit import simulate
 
     sector = fem.create_blade_sector(preset=args.preset)
     model, _ = build_reduced_model(sector, ReductionConfig(r_c=15, r_md=0, global_md_modes=3, forces="intrusive"),

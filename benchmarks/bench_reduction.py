@@ -23,7 +23,7 @@ CHILD = r"""
 import json, resource, sys, time
 import numpy as np
 from rotor37_rom import fem
-from rotor37_rom.builder import ReductionConfig, build_reduced_model
+from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
 preset, r_md, forces = sys.argv[1], int(sys.argv[2]), sys.argv[3]
 sector = fem.create_blade_sector(preset=preset)
 ops = fem.create_svk_operators(sector)

@@ -37,8 +37,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import write_results  # noqa: E402
 
-from rotor37_rom.casing import contact_frames  # noqa: E402
-from rotor37_rom.friction import sprag_slip_friction  # noqa: E402
+from rotor37_rom.dynamics.casing import contact_frames  # noqa: E402
+from rotor37_rom.dynamics.friction import sprag_slip_friction  # noqa: E402
 
 SENSES = (-1, 1)             # rotor 37 is taken to turn towards -theta (inferred from the stagger); +1 for contrast
 SPINS = (1400.0, 1800.0)     # rad/s: the 1B/EO4 region and the design speed

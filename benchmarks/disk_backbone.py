@@ -34,7 +34,7 @@ DEFECT = 1e-2          # points whose ansatz defect is larger are marked (x), no
 
 def le_amplitude(Nm: np.ndarray, q: np.ndarray, k: int, omega: float) -> float:
     """Node LE of sector 0: max over a period of |its normal displacement| (m) for the wave whose snapshot is q."""
-    from rotor37_rom.disk import wave_history
+    from rotor37_rom.disk.harmonics import wave_history
 
     return float(np.abs(wave_history(Nm @ q, k, omega)).max())
 
@@ -42,7 +42,7 @@ def le_amplitude(Nm: np.ndarray, q: np.ndarray, k: int, omega: float) -> float:
 def backbone(model, Nm: np.ndarray, k: int, le_max: float, points: int) -> tuple[list[dict], str]:
     """The wave of k nodal diameters from small amplitude to node LE at le_max (m), ``points`` steps at least (at
     most 4 x ``points``), and why it stopped."""
-    from rotor37_rom.disk import travelling_wave_backbone
+    from rotor37_rom.disk.harmonics import travelling_wave_backbone
 
     probe = travelling_wave_backbone(model, k, [1e-6])[0]
     per_a = le_amplitude(Nm, probe["q"], k, probe["omega"]) / probe["a"]      # linear: node LE per modal amplitude
@@ -108,8 +108,8 @@ def main(argv=None) -> int:
         print(f"error: --model {args.model} is not a file (a disk map's rom.npz: demos/contact_map.py --disk writes "
               f"it in --out)", file=sys.stderr)
         return 2
-    from rotor37_rom.casing import Casing, contact_matrices
-    from rotor37_rom.reduction import load_reduced_model
+    from rotor37_rom.dynamics.casing import Casing, contact_matrices
+    from rotor37_rom.model.reduced import load_reduced_model
 
     try:
         model = load_reduced_model(args.model)

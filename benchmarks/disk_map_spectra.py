@@ -27,13 +27,13 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import write_results  # noqa: E402
 
-from rotor37_rom.sweep import (engine_order_content, engine_order_resonance, interaction_map, load_sweep,  # noqa: E402
-                               record_row, sector_maxima, sector_rows)
+from rotor37_rom.studies.sweep import (engine_order_content, engine_order_resonance, interaction_map, load_sweep,
+    record_row, sector_maxima, sector_rows)
 
 
 def critical_speeds(model, lo: float, hi: float, families: int = 3) -> tuple[float, list[dict]]:
     """The model's 1B/EO4 point omega_{1,4} / 4 and its critical speeds omega_{f,k} / k in [lo, hi] (rad/s)."""
-    from rotor37_rom.disk import harmonic_frequencies
+    from rotor37_rom.disk.harmonics import harmonic_frequencies
 
     freqs = harmonic_frequencies(model, families)
     found = [{"family": f + 1, "k": k, "frequency": float(freqs[k, f]), "speed": float(freqs[k, f] / k)}
@@ -94,7 +94,7 @@ def main(argv=None) -> int:
         return 2
     model = None
     if args.model is not None:
-        from rotor37_rom.reduction import load_reduced_model
+        from rotor37_rom.model.reduced import load_reduced_model
 
         model = load_reduced_model(args.model)
     rows = []

@@ -16,7 +16,7 @@ import json
 import sys
 from pathlib import Path
 
-from rotor37_rom.charts import plot_disk_indicator, plot_error_histories
+from rotor37_rom.viz.charts import plot_disk_indicator, plot_error_histories
 
 PAPER = {"MMI": 0.93, "MI 2a": 0.96, "MI 2b": 0.97, "SMVW": 0.91}       # §3.3.1, N_d = 0, 4,000 rad/s
 

@@ -102,7 +102,7 @@ def _finite(x):
 
 def scene_modes() -> dict:
     from rotor37_rom import fem
-    from rotor37_rom.modes import classify_blade_modes
+    from rotor37_rom.post.modes import classify_blade_modes
 
     fem.create_blade_sector(preset="ci")                     # warm-up: imports and form compilation off the clock
     rows = {}
@@ -142,8 +142,8 @@ CLEARANCE_BASES = [  # (name, r_c, global_md_modes, r_md, criterion)
 
 def scene_clearance() -> dict:
     from rotor37_rom import fem
-    from rotor37_rom.builder import ReductionConfig, build_reduced_model, clearance_consumption_study
-    from rotor37_rom.clearance import relative_error
+    from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model, clearance_consumption_study
+    from rotor37_rom.post.clearance import relative_error
 
     sector = fem.create_blade_sector(preset="ci")
     ops = fem.create_svk_operators(sector)
@@ -198,12 +198,12 @@ def scene_disk_modes() -> dict:
     (r_c, r_cyclic, modal derivatives) against the sector's full-order cyclic modes; held out: the 4th-6th modes of
     every k. Cost: the linear contact run's time per simulated millisecond at the disk maps' 60 kHz cap."""
     from rotor37_rom import fem
-    from rotor37_rom.analysis import cyclic_harmonic_frequencies
-    from rotor37_rom.builder import mesh_signature
-    from rotor37_rom.casing import Casing
-    from rotor37_rom.disk import harmonic_frequencies
-    from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
-    from rotor37_rom.integrator import CentralDifference, simulate
+    from rotor37_rom.post.stress import cyclic_harmonic_frequencies
+    from rotor37_rom.reduction.builder import mesh_signature
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.disk.harmonics import harmonic_frequencies
+    from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model
+    from rotor37_rom.dynamics.explicit import CentralDifference, simulate
     from rotor37_rom.npz import load_npz, save_npz
 
     sector = fem.create_disk_sector(preset="ci")
@@ -280,7 +280,7 @@ class MapRun:
 def model_file(r_c: int) -> Path:
     """The ci blade's r_c model (24 tip DOFs + r_c modes + the 6 MDs of 1B/1T/2B), exact tensors, built once (checked
     once per process against the builder's cache)."""
-    from rotor37_rom.reduction import load_reduced_model, save_reduced_model
+    from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model
 
     path = WORK / "models" / f"rom_rc{r_c}.npz"
     cm = load_demo("contact_map")
@@ -305,8 +305,8 @@ def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_pat
     A candidate '<base>, retries' is its base candidate's map with the speeds that blew up run again at a smaller
     step: it runs in the base's folder (the base's sweep is reused, only the retries run), and its cost is the base
     map's plus the retries'."""
-    from rotor37_rom.reduction import saved_model_key
-    from rotor37_rom.sweep import load_sweep
+    from rotor37_rom.model.reduced import saved_model_key
+    from rotor37_rom.studies.sweep import load_sweep
 
     cm = load_demo("contact_map")
     opts = {k: v for k, v in options.items() if k not in MODEL_OPTIONS}
@@ -363,7 +363,7 @@ def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_pat
                 records[w] = (r, h)
     record_h = [records[w][1] for w in sorted(records)]
     records = [records[w][0] for w in sorted(records)]
-    from rotor37_rom.sweep import interaction_map
+    from rotor37_rom.studies.sweep import interaction_map
 
     imap = interaction_map(records, config.node)
     steps = sum(config.revolutions * 2 * np.pi / float(r["omega"]) / h for r, h in zip(records, record_h))
@@ -376,7 +376,7 @@ def run_map(name: str, gnl: bool, options: dict, speeds=MAP["speeds"], model_pat
 def map_errors(run: MapRun, ref: MapRun, robust: np.ndarray) -> dict:
     """NFRC error on the robust speeds (relative to the reference's peak there), resonance speed and peak errors,
     and the LE history error at the robust speed of largest reference response."""
-    from rotor37_rom.sweep import record_row
+    from rotor37_rom.studies.sweep import record_row
 
     if run.diverged.any():
         return dict(nfrc=math.inf, speed=math.inf, peak=math.inf, map=math.inf, history=math.inf)
@@ -428,7 +428,7 @@ def scene_map(gnl: bool) -> tuple[dict, dict]:
     ref_options = {"r_c": 15} if gnl else {"r_c": 40}
     ref = run_map("reference", gnl, ref_options)
     pert_path = WORK / "models" / f"rom_rc{ref_options['r_c']}_perturbed_{'gnl' if gnl else 'linear'}.npz"
-    from rotor37_rom.reduction import load_reduced_model, perturbed_model, save_reduced_model
+    from rotor37_rom.model.reduced import load_reduced_model, perturbed_model, save_reduced_model
 
     perturbed = perturbed_model(load_reduced_model(model_file(ref_options["r_c"])), PERTURBATION)
     if not pert_path.is_file() or load_reduced_model(pert_path).key != perturbed.key:
@@ -476,7 +476,7 @@ def held_out_options(options: dict, setup: dict = MAP) -> dict:
 
 def study_training_speeds(setup: dict = MAP) -> tuple[float, ...]:
     """The speeds a cubature of a map scene is trained at (those of the study's that contact_map picks)."""
-    from rotor37_rom.integrator import training_speeds
+    from rotor37_rom.dynamics.explicit import training_speeds
 
     return tuple(training_speeds(load_demo("contact_map").ContactMapConfig(**setup).speed_grid).tolist())
 
@@ -497,7 +497,7 @@ def held_out_map(scene: dict, gnl: bool, tolerances=TOLERANCES) -> None:
 def held_out_choices(scene: dict, tolerances, error_of) -> None:
     """For each tolerance, the chosen model's error on the held-out case (``error_of(name, options)``), recorded on
     its candidate; a miss passes the choice to the next cheapest, which is run in turn, until one holds."""
-    from rotor37_rom.model_choice import choose_model
+    from rotor37_rom.studies.model_choice import choose_model
 
     study = {"schema": 1, "scenes": {"s": scene}}
     by_name = {c["name"]: c for c in scene["candidates"]}
@@ -567,9 +567,9 @@ def disk_model_file(options: dict, perturbation: float = 0.0, gnl: bool = False)
 
 @functools.lru_cache(maxsize=None)
 def _disk_model_file(r_c: int, r_md: int, r_cyclic: int, perturbation: float, gnl: bool) -> Path:
-    from rotor37_rom.builder import mesh_signature
-    from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
-    from rotor37_rom.reduction import load_reduced_model, perturbed_model, save_reduced_model
+    from rotor37_rom.reduction.builder import mesh_signature
+    from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model
+    from rotor37_rom.model.reduced import load_reduced_model, perturbed_model, save_reduced_model
 
     sector, ops = _disk_sector()
     stem = f"disk_{mesh_signature(sector)[:12]}_rc{r_c}_md{r_md}_cyc{r_cyclic}" + ("_gnl" if gnl else "")
@@ -597,7 +597,7 @@ def run_disk_map(name: str, options: dict, speeds=None, perturbation: float = 0.
 
 def largest_over_blades(run: MapRun) -> np.ndarray:
     """Per speed, the largest over the 36 blades of node LE's max |u| over the last revolution."""
-    from rotor37_rom.sweep import sector_maxima
+    from rotor37_rom.studies.sweep import sector_maxima
 
     return np.array([np.nanmax(sector_maxima(r)) if int(r["diverged_step"]) < 0 else np.nan for r in run.records])
 
@@ -638,7 +638,7 @@ def disk_stress_at_tmax(run: MapRun, model_path: Path, speed: float, gnl: bool =
     ``run``'s final state at ``speed`` (what ``contact_map.py --stress`` does at the map's largest response), every
     sector rebuilt from q: the largest off the root corner and outside the tip band in sector 0 and over the sectors
     (``analysis.disk_stress_summary``: the numbers that converge with the mesh), with the wall time."""
-    from rotor37_rom.reduction import load_reduced_model
+    from rotor37_rom.model.reduced import load_reduced_model
 
     cm = load_demo("contact_map")
     sector, _ = _disk_sector()
@@ -864,7 +864,7 @@ def forced_reference(case: tuple, gnl: bool) -> dict:
 def forced_model(options: dict, gnl: bool):
     """The §3.3 disk model of ``options`` (node LE kept, r_b = 3; r_md by MI 2b; GNL: the patch's static correction
     and exact tensors with eq. 61's force or ``face_shapes``), built once (cached under results/speed_accuracy)."""
-    from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
+    from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model
 
     sector, ops, *_ = _forced_sector()
     config = DiskReductionConfig(tip_nodes="LE", r_c=options["r_c"], r_md=options["r_md"], criterion="MI2b",
@@ -882,7 +882,7 @@ def forced_error(model, case: tuple, gnl: bool, ref: dict) -> dict:
     by the performance indicator's four criteria (loaded node, tip nodes, field, strain energy); ``error`` is their
     largest. Cached by the model's key: a re-run of the study reads it."""
     import bench_disk_forced as bdf
-    from rotor37_rom.disk import performance_indicator
+    from rotor37_rom.disk.indicators import performance_indicator
 
     sector, _, K_s, M_s = _forced_sector()
     spec = json.dumps([model.key, list(case), gnl, DISK_FORCED, DISK_FORCED_PATCH_MM if gnl else 0.0,
@@ -980,8 +980,8 @@ def _recovery(r_c: int):
     from mpi4py import MPI
 
     from rotor37_rom import fem
-    from rotor37_rom.reduction import load_reduced_model
-    from rotor37_rom.stress import StressRecovery
+    from rotor37_rom.model.reduced import load_reduced_model
+    from rotor37_rom.post.recovery import StressRecovery
 
     model = load_reduced_model(model_file(r_c))
     sector = fem.create_blade_sector(MPI.COMM_SELF, preset=MAP["preset"])
@@ -992,7 +992,7 @@ def _recovery(r_c: int):
 def stress_at_tmax(run: MapRun, options: dict, gnl: bool, speed: float) -> dict:
     """von Mises at t_max of one revolution carried on from ``run``'s final state at ``speed`` (the report's
     procedure: ``analysis.stress_at_peak``, the largest outside the contact nodes' tip band), with the wall time."""
-    from rotor37_rom.analysis import stress_at_peak
+    from rotor37_rom.post.stress import stress_at_peak
 
     cm = load_demo("contact_map")
     sector, model, recovery = _recovery(int(options.get("r_c", 15)))     # made once per basis, not timed
@@ -1012,7 +1012,7 @@ def scene_stress(gnl: bool, maps: dict) -> dict:
     for the map scene's reference and candidates (the same runs: the stress needs a map's final state); error
     relative to the reference's maximum. On the ci mesh, whose clamped root corner is singular: a comparison of
     models on one mesh, not a converged stress."""
-    from rotor37_rom.sweep import engine_order_resonance, interaction_map
+    from rotor37_rom.studies.sweep import engine_order_resonance, interaction_map
 
     ref_run = run_map("reference", gnl, maps["reference"]["options"])
     speed = engine_order_resonance(interaction_map(ref_run.records, ref_run.config.node), 4, MAP["revolutions"])
@@ -1044,8 +1044,8 @@ def scene_stress(gnl: bool, maps: dict) -> dict:
 # ## Stability map: the stable step against the amplitude
 
 def scene_stability() -> dict:
-    from rotor37_rom.integrator import CentralDifference, highest_frequency, tangent_highest_frequency
-    from rotor37_rom.reduction import load_reduced_model, solve_reduced_static
+    from rotor37_rom.dynamics.explicit import CentralDifference, highest_frequency, tangent_highest_frequency
+    from rotor37_rom.model.reduced import load_reduced_model, solve_reduced_static
 
     model = load_reduced_model(model_file(15))
     le = model.nodes.q_index[model.nodes.row("LE")][0]      # x DOF of node LE
@@ -1077,9 +1077,9 @@ def scene_paper_speedup(study: dict, tolerance: float = 0.05) -> dict:
     a step does not depend on their values, and building the real ones takes hours)."""
     from bench_integrator import synthetic_model, time_per_step
 
-    from rotor37_rom.integrator import CentralDifference
-    from rotor37_rom.model_choice import choose_model
-    from rotor37_rom.reduction import load_reduced_model
+    from rotor37_rom.dynamics.explicit import CentralDifference
+    from rotor37_rom.studies.model_choice import choose_model
+    from rotor37_rom.model.reduced import load_reduced_model
 
     cm = load_demo("contact_map")
     for tolerance in (tolerance, 0.2):          # no 5 % model: the 20 % one (the docs say which)
@@ -1118,7 +1118,7 @@ POINTS_PER_MODE = 10         # trained here: 8.5-13.5 points per mode at toleran
 
 
 def _synthetic_cubature(r: int, n: int, precision: str, rng) -> "QuadratureForces":
-    from rotor37_rom.nonlinear_forces import QuadratureForces
+    from rotor37_rom.forces.tensors import QuadratureForces
 
     return QuadratureForces(rng.standard_normal((n, r, 3, 3)) * 1e-3, rng.random(n) * 1e-9, 1.0e11, 7.0e10,
                             precision=precision)
@@ -1132,8 +1132,8 @@ def scene_cost_r(r_values=COST_R, P: int = 11, min_time: float = 0.4) -> dict:
     cubatures of the map-gnl scene are timed as they are (their r and point count) to place them on the chart."""
     from bench_integrator import synthetic_model, time_per_step
 
-    from rotor37_rom.integrator import CentralDifference
-    from rotor37_rom.reduction import load_reduced_model
+    from rotor37_rom.dynamics.explicit import CentralDifference
+    from rotor37_rom.model.reduced import load_reduced_model
 
     rng = np.random.default_rng(3)
     methods = {"linear (no GNL forces)": [], "exact tensors": [], "cubature, all points": [],
@@ -1175,7 +1175,7 @@ def scene_cost_r(r_values=COST_R, P: int = 11, min_time: float = 0.4) -> dict:
 
 
 def chart_cost_r(cost_r: dict) -> Path:
-    from rotor37_rom.charts import _pyplot, _save
+    from rotor37_rom.viz.charts import _pyplot, _save
 
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.8, 4.6))
@@ -1199,8 +1199,8 @@ def chart_cost_r(cost_r: dict) -> Path:
 # ## Charts and the file
 
 def chart(name: str, scene: dict) -> Path:
-    from rotor37_rom.charts import plot_speed_accuracy
-    from rotor37_rom.model_choice import scene_floor
+    from rotor37_rom.viz.charts import plot_speed_accuracy
+    from rotor37_rom.studies.model_choice import scene_floor
 
     rows = [(c["name"], c["cost"], c["error"]) for c in scene["candidates"] if c["cost"] > 0]
     return plot_speed_accuracy(rows, IMG / f"speed_accuracy_{name}.png",
@@ -1212,7 +1212,7 @@ def chart(name: str, scene: dict) -> Path:
 
 
 def chart_stability(stab: dict) -> Path:
-    from rotor37_rom.charts import _pyplot, _save
+    from rotor37_rom.viz.charts import _pyplot, _save
 
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
@@ -1242,7 +1242,7 @@ def _options(options: dict) -> str:
 def render_markdown(study: dict) -> str:
     """The generated part of docs/choosing-a-model.md: per scene, the candidates (cost, error, held-out error,
     Pareto-optimal or not) and the models chosen at each tolerance, every number from the study file."""
-    from rotor37_rom.model_choice import pareto_front
+    from rotor37_rom.studies.model_choice import pareto_front
 
     runs = study.get("runs", [])
     full = [i for i, r in enumerate(runs) if r["from_scratch"]]
@@ -1335,7 +1335,7 @@ def write_docs(study: dict) -> None:
 
 
 def record_choices(study: dict) -> None:
-    from rotor37_rom.model_choice import choose_model
+    from rotor37_rom.studies.model_choice import choose_model
 
     for name, scene in study["scenes"].items():
         scene["choices"] = {}

@@ -27,7 +27,7 @@ import numpy as np
 
 from rotor37_rom.cli import TABLE_HELP, ArgumentParser, resolve_table, run_main
 from rotor37_rom.geometry.blade import MESH_PRESETS
-from rotor37_rom.modes import PAPER_CLAMPED_OMEGA
+from rotor37_rom.post.modes import PAPER_CLAMPED_OMEGA
 
 LOG = logging.getLogger("blade_modes")
 # -
@@ -118,15 +118,15 @@ class BladeModesResult:
 # ## One blade: mesh, modes, labels, mass and tip clearance
 #
 # The labels come from the tip: bending moves the leading and trailing edges together, torsion in opposite senses
-# (`rotor37_rom.modes.classify_blade_modes`).
+# (`rotor37_rom.post.modes.classify_blade_modes`).
 
 # +
 def study_blade(config: BladeModesConfig, table: Path | None, comm) -> tuple[BladeModes, list[Path]]:
     """Mesh one blade, compute its clamped modes, write the XDMF (and PNGs); returns its modes and the files."""
     from rotor37_rom import fem
     from rotor37_rom.geometry.tables import default_data_dir, read_hub_shroud_table
-    from rotor37_rom.modes import classify_blade_modes
-    from rotor37_rom.plotting import render_mode_shapes, write_xdmf
+    from rotor37_rom.post.modes import classify_blade_modes
+    from rotor37_rom.viz.plotting import render_mode_shapes, write_xdmf
 
     t0 = time.perf_counter()
     sector = fem.create_blade_sector(comm, table=table, preset=config.preset)

@@ -25,7 +25,7 @@ from mpi4py import MPI
 from rotor37_rom import fem
 from rotor37_rom.cli import TABLE_HELP, ArgumentParser, resolve_table, run_main
 from rotor37_rom.geometry.blade import MESH_PRESETS
-from rotor37_rom.modes import classify_blade_modes
+from rotor37_rom.post.modes import classify_blade_modes
 
 LOG = logging.getLogger("bladed_disk")
 # -
@@ -97,14 +97,14 @@ def run_bladed_disk(config: BladedDiskConfig) -> BladedDiskResult:
     clamped_blade = np.array([single.omega[labels.index(f)] for f in ("1B", "1T", "2B")])
     out = Path(config.out) / config.preset
     if comm.rank == 0:
-        from rotor37_rom.charts import plot_safe_diagram
+        from rotor37_rom.viz.charts import plot_safe_diagram
 
         out.mkdir(parents=True, exist_ok=True)
         refs = {f"clamped blade (4 mm shorter) {f}": w for f, w in zip(("1B", "1T", "2B"), clamped_blade)}
         files.append(plot_safe_diagram(safe, out / "safe_diagram.png", refs,
                                        f"rotor 37 bladed disk, {config.preset} ({sector.n_dofs} DOF per sector)"))
     if config.pictures:
-        from rotor37_rom.plotting import render_cyclic_mode, write_cyclic_xdmf
+        from rotor37_rom.viz.plotting import render_cyclic_mode, write_cyclic_xdmf
 
         for k in config.pictures:
             modes = fem.solve_cyclic_modes(sector, int(k), config.n_modes)

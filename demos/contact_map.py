@@ -37,20 +37,21 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 import scipy.linalg
 
-from rotor37_rom.casing import Casing, contact_matrices
-from rotor37_rom.disk import mistuning_factors, sector_harmonics
+from rotor37_rom.dynamics.casing import Casing, contact_matrices
+from rotor37_rom.disk.assembly import mistuning_factors
+from rotor37_rom.disk.harmonics import sector_harmonics
 from rotor37_rom.cli import ArgumentParser, run_main
-from rotor37_rom.charts import plot_interaction_map, plot_nfrc, plot_time_history
-from rotor37_rom.friction import sprag_slip_friction
+from rotor37_rom.viz.charts import plot_interaction_map, plot_nfrc, plot_time_history
+from rotor37_rom.dynamics.friction import sprag_slip_friction
 from rotor37_rom.geometry.blade import MESH_PRESETS
-from rotor37_rom.integrator import (CentralDifference, gnl_step_report, largest_states, probe_states, simulate,
-                                    training_speeds)
+from rotor37_rom.dynamics.explicit import (CentralDifference, gnl_step_report, largest_states, probe_states, simulate,
+    training_speeds)
 from rotor37_rom.npz import load_npz, save_json, save_npz
-from rotor37_rom.reduction import (GLOBAL_MD_MAX, ReducedModel, load_reduced_model, perturbed_model,
-                                   save_reduced_model, with_force_precision)
-from rotor37_rom.sweep import (ContinuationPoint, InteractionMap, SweepSpec, continuation, interaction_map,
-                               idle_barrier, load_speed, load_sweep, record_row, rerun_diverged, run_sweep,
-                               sector_maxima, sweep_folder)
+from rotor37_rom.reduction.craig_bampton import GLOBAL_MD_MAX
+from rotor37_rom.model.reduced import (ReducedModel, load_reduced_model, perturbed_model, save_reduced_model,
+    with_force_precision)
+from rotor37_rom.studies.sweep import (ContinuationPoint, InteractionMap, SweepSpec, continuation, interaction_map,
+    idle_barrier, load_speed, load_sweep, record_row, rerun_diverged, run_sweep, sector_maxima, sweep_folder)
 
 if TYPE_CHECKING:
     from mpi4py import MPI
@@ -75,7 +76,7 @@ def map_model(tolerance: float, gnl: bool, fallback: bool = False, disk: bool = 
     """The speed-accuracy study's model of a map (scene 'map-gnl' or 'map-linear'; a disk's: 'disk-map-gnl' or
     'disk-map-linear') within ``tolerance``; with ``fallback`` the study's reference where no measured model meets it.
     Errors name --tolerance."""
-    from rotor37_rom.model_choice import STUDY_FILE, choose_model
+    from rotor37_rom.studies.model_choice import STUDY_FILE, choose_model
 
     scene = ("disk-map-gnl" if gnl else "disk-map-linear") if disk else "map-gnl" if gnl else "map-linear"
     try:
@@ -89,7 +90,7 @@ def map_model(tolerance: float, gnl: bool, fallback: bool = False, disk: bool = 
 def _study(stamp: int | None) -> dict:
     """The shipped study file, read once per version (``stamp``: its modification time; a study rewritten in the same
     process is read again). Read-only: ``choose_model`` does not change it."""
-    from rotor37_rom.model_choice import load_study
+    from rotor37_rom.studies.model_choice import load_study
 
     return load_study()
 
@@ -308,7 +309,7 @@ class ContactMapConfig:
             raise ValueError(f"--retry-diverged must be in 0..4, got {self.retry_diverged}")
 
     def _check_casing(self) -> None:
-        """Each casing option alone through rotor37_rom.casing.Casing (its checks are per field)."""
+        """Each casing option alone through rotor37_rom.dynamics.casing.Casing (its checks are per field)."""
         for flag, name, value in (("--c0", "c0", self.c0), ("--hb", "h_b", self.hb), ("--mu", "mu", self.mu),
                                   ("--direction", "direction", self.direction)):
             try:
@@ -579,7 +580,7 @@ def build_model(config: ContactMapConfig) -> ReducedModel:
     r_c, r_md = config.modes
     t0 = time.perf_counter()
     if config.disk:
-        from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
+        from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model
 
         sector = fem.create_disk_sector(MPI.COMM_SELF, preset=config.preset)
         factors = None if config.mistuning == 0 else tuple(mistuning_factors(N_SECTORS, config.mistuning,
@@ -590,7 +591,7 @@ def build_model(config: ContactMapConfig) -> ReducedModel:
                                         forces="none" if config.gnl == "off" else "intrusive")
         model, _ = build_disk_model(sector, reduction, cache_dir=config.cache_dir)
     else:
-        from rotor37_rom.builder import ReductionConfig, build_reduced_model
+        from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
 
         sector = fem.create_blade_sector(MPI.COMM_SELF, preset=config.preset)
         reduction = ReductionConfig(r_c=r_c, r_md=r_md, global_md_modes=config.global_md, forces="intrusive",
@@ -617,7 +618,7 @@ def eo4_frequency(model: ReducedModel) -> float:
 
 
 def sprag_slip_onsets(model: ReducedModel, casing: Casing, sector: int = 0) -> dict:
-    """Friction coefficients at which sustained sliding on the casing diverges (rotor37_rom.friction): per contact
+    """Friction coefficients at which sustained sliding on the casing diverges (rotor37_rom.dynamics.friction): per contact
     node of ``sector`` (a tuned disk's sectors are alike) and for all contact nodes together."""
     N, S, _, rows = contact_matrices(model.nodes, model.r, casing)
     mine = [k for k, row in enumerate(rows) if model.nodes.sector[row] == sector]
@@ -707,8 +708,8 @@ def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: Centr
     from mpi4py import MPI
 
     from rotor37_rom import fem
-    from rotor37_rom.builder import hyper_reduce
-    from rotor37_rom.integrator import contact_training_states
+    from rotor37_rom.reduction.builder import hyper_reduce
+    from rotor37_rom.dynamics.explicit import contact_training_states
 
     casing = config.casing
     t0 = time.perf_counter()
@@ -994,7 +995,7 @@ def stress_mesh(config: ContactMapConfig, model: ReducedModel):
     from mpi4py import MPI
 
     from rotor37_rom import fem
-    from rotor37_rom.builder import mesh_signature
+    from rotor37_rom.reduction.builder import mesh_signature
 
     if model.sectors is None:
         raise ValueError("--stress needs a disk model (this one is a single blade's: demos/report.py draws its stress)")
@@ -1011,7 +1012,7 @@ def disk_stress_of(sector, model: ReducedModel, res, nonlinear: bool, monitor: i
     ``sector`` (``stress_mesh``), summarised for sector ``monitor`` and over the sectors
     (``analysis.disk_stress_summary``). Returns (the sectors' displacement fields, each sector's largest von Mises
     per cell, the numbers with ``u_le``, the record's index)."""
-    from rotor37_rom.analysis import disk_stress, disk_stress_summary
+    from rotor37_rom.post.stress import disk_stress, disk_stress_summary
 
     u = res.u_r[0][0]
     k = int(np.nanargmax(np.abs(u)))
@@ -1027,8 +1028,8 @@ def disk_peak_stress(config: ContactMapConfig, scheme: CentralDifference, result
     largest bounded response: that run carried on one revolution from its final state (as the report does for the
     blade), every sector's field rebuilt from q (no reassembly) on the disk ``sector`` (``stress_mesh``). Returns
     (numbers, [picture])."""
-    from rotor37_rom.analysis import describe_location
-    from rotor37_rom.plotting import render_stress
+    from rotor37_rom.post.stress import describe_location
+    from rotor37_rom.viz.plotting import render_stress
 
     model, speed = scheme.model, result.peak_speed
     if not np.isfinite(speed):

@@ -10,7 +10,7 @@
 #
 # It prints what was read (cells converted, bounding box, mass: a unit slip shows there), the first clamped
 # modes, builds the Craig-Bampton model on the contact nodes (ordered LE -> TE along the tip chord), gives the
-# sprag-slip onset mu* of each contact node and of the LE half (rotor37_rom.friction), and runs a short rub on the
+# sprag-slip onset mu* of each contact node and of the LE half (rotor37_rom.dynamics.friction), and runs a short rub on the
 # paper's ovalised casing at one speed. Results: results/own_blade/summary.json. A bad option is one line on stderr,
 # exit status 2.
 
@@ -85,10 +85,10 @@ def load_blade(config: OwnBladeConfig):
 def run_own_blade(config: OwnBladeConfig) -> dict:
     """The whole scene; returns the summary written to results/own_blade/summary.json."""
     from rotor37_rom import fem
-    from rotor37_rom.builder import ReductionConfig, build_reduced_model
-    from rotor37_rom.casing import Casing, contact_matrices
-    from rotor37_rom.friction import sprag_slip_friction
-    from rotor37_rom.integrator import CentralDifference, simulate
+    from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
+    from rotor37_rom.dynamics.casing import Casing, contact_matrices
+    from rotor37_rom.dynamics.friction import sprag_slip_friction
+    from rotor37_rom.dynamics.explicit import CentralDifference, simulate
 
     t0 = time.perf_counter()
     blade = load_blade(config)

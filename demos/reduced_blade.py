@@ -29,10 +29,11 @@ from typing import Sequence
 import numpy as np
 
 from rotor37_rom.cli import TABLE_HELP, ArgumentParser, resolve_table, run_main
-from rotor37_rom.clearance import ClearanceCurves, delta_range_within, relative_error
+from rotor37_rom.post.clearance import ClearanceCurves, delta_range_within, relative_error
 from rotor37_rom.geometry.blade import MESH_PRESETS
-from rotor37_rom.model_choice import ModelChoice
-from rotor37_rom.reduction import CRITERIA, GLOBAL_MD_MAX, ReducedModel
+from rotor37_rom.studies.model_choice import ModelChoice
+from rotor37_rom.reduction.craig_bampton import CRITERIA, GLOBAL_MD_MAX
+from rotor37_rom.model.reduced import ReducedModel
 
 PAPER_LINEAR_RANGE = {"1B": (-0.25, 0.2), "1T": (-0.1, 0.1)}   # §2.3.2: linear within 10 % of GNL for delta in
 AMPLITUDES = {"1B": 1e-3, "1T": 0.5e-3}                       # zeta (m): LE displacement of the scaled mode
@@ -104,7 +105,7 @@ class ReducedBladeConfig:
     def _take_the_chosen_model(self) -> None:
         """Set r_c, r_md, criterion, global_md and forces from the study's cheapest reduced model within
         ``tolerance`` (a field given another value than its default or the chosen one is refused)."""
-        from rotor37_rom.model_choice import choose_model
+        from rotor37_rom.studies.model_choice import choose_model
 
         if not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
             raise ValueError(f"--tolerance must be in (0, 1) (a relative error: 0.05 = 5 %), got {self.tolerance}")
@@ -201,14 +202,14 @@ class ReducedBladeResult:
 
 # ## The models
 #
-# Built through `rotor37_rom.builder` (Craig-Bampton, modal derivatives, reduced forces) and cached under a key of
+# Built through `rotor37_rom.reduction.builder` (Craig-Bampton, modal derivatives, reduced forces) and cached under a key of
 # their parameters and mesh: a second run loads them.
 
 # +
 def build_models(config: ReducedBladeConfig, sector, ops) -> tuple[dict, dict, list[Path]]:
     """Every model of ``config``: ({name: model}, {name: seconds}, the weight charts)."""
-    from rotor37_rom.builder import ReductionConfig, build_reduced_model
-    from rotor37_rom.charts import plot_md_weights
+    from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
+    from rotor37_rom.viz.charts import plot_md_weights
 
     models, seconds, files = {}, {}, []
     for name, r_md, n_global in config.variants():
@@ -233,8 +234,8 @@ def build_models(config: ReducedBladeConfig, sector, ops) -> tuple[dict, dict, l
 # +
 def study_clearance(config: ReducedBladeConfig, sector, ops, models: dict) -> tuple[dict, list[Path]]:
     """The clearance studies of 1B and 1T and their charts."""
-    from rotor37_rom.builder import clearance_consumption_study
-    from rotor37_rom.charts import plot_clearance_consumption, plot_indicator_vs_rmd, plot_speed_accuracy
+    from rotor37_rom.reduction.builder import clearance_consumption_study
+    from rotor37_rom.viz.charts import plot_clearance_consumption, plot_indicator_vs_rmd, plot_speed_accuracy
 
     studies, files = {}, []
     for mode, zeta in AMPLITUDES.items():

@@ -44,10 +44,10 @@ from contact_map import (PAPER, ContactMapConfig, ContactMapResult, MapResult, c
 from reduced_blade import PAPER_LINEAR_RANGE, ReducedBladeConfig, ReducedBladeResult, run_reduced_blade  # noqa: E402
 
 from rotor37_rom.cli import TABLE_HELP, ArgumentParser, run_main  # noqa: E402
-from rotor37_rom.clearance import delta_range_within  # noqa: E402
+from rotor37_rom.post.clearance import delta_range_within  # noqa: E402
 from rotor37_rom.geometry.blade import MESH_PRESETS  # noqa: E402
-from rotor37_rom.modes import PAPER_CLAMPED_OMEGA  # noqa: E402
-from rotor37_rom.report import Section, Table, write_report  # noqa: E402
+from rotor37_rom.post.modes import PAPER_CLAMPED_OMEGA  # noqa: E402
+from rotor37_rom.viz.html import Section, Table, write_report  # noqa: E402
 
 SIGMA_Y_TEXT = "sigma_Y = 1.38 GPa"
 NORMALS = {"x": "e_x (the paper's)", "radial": "radial at each node",
@@ -222,7 +222,7 @@ class ReportResult:
 
 def resonance(run: MapResult, revolutions: float) -> float:
     """The map's 1B/EO4 resonance (rad/s; NaN if no bounded speed is dominated by engine order 4)."""
-    from rotor37_rom.sweep import engine_order_resonance
+    from rotor37_rom.studies.sweep import engine_order_resonance
 
     return engine_order_resonance(run.imap, 4, revolutions)
 
@@ -242,8 +242,8 @@ def amplitude_at(run: MapResult, speed: float) -> float:
 def peak_stress(config: ContactMapConfig, run: MapResult, sector, model, recovery, out: Path,
                 pictures: bool) -> PeakStress:
     """The stress at t_max of ``run``'s resonance (one revolution carried on from the map's final state)."""
-    from rotor37_rom.analysis import stress_at_peak
-    from rotor37_rom.sweep import sweep_folder
+    from rotor37_rom.post.stress import stress_at_peak
+    from rotor37_rom.studies.sweep import sweep_folder
 
     nonlinear = config.gnl == "on"
     speed = resonance(run, config.revolutions)
@@ -268,7 +268,7 @@ def draw_stress(sector, model, peak: dict, run: MapResult, speed: float, nonline
     from dolfinx import io
 
     from rotor37_rom import fem
-    from rotor37_rom.plotting import render_stress, write_xdmf
+    from rotor37_rom.viz.plotting import render_stress, write_xdmf
 
     tag = "gnl" if nonlinear else "linear"
     u = fem.displacement_function(sector, model.Phi, peak["q"])
@@ -298,8 +298,8 @@ def run_report(config: ReportConfig) -> ReportResult:
     from mpi4py import MPI
 
     from rotor37_rom import fem
-    from rotor37_rom.reduction import save_reduced_model
-    from rotor37_rom.stress import StressRecovery
+    from rotor37_rom.model.reduced import save_reduced_model
+    from rotor37_rom.post.recovery import StressRecovery
 
     if MPI.COMM_WORLD.size > 1:
         raise ValueError("demos/report.py runs serially (demos/contact_map.py runs a map under mpirun)")

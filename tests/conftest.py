@@ -85,7 +85,7 @@ def disk_cache(tmp_path_factory):
 def disk_model(ci_disk, ci_disk_ops, disk_cache):
     """A small disk model of the ci sector (LE only: r_b = 3, r_c = 8, 4 modal derivatives by MI 2b, 96 interface
     modes; r = 636), exact forces; (model, build report)."""
-    from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
+    from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model
 
     config = DiskReductionConfig(tip_nodes="LE", r_c=8, r_md=4, criterion="MI2b", r_cyclic=96)
     return build_disk_model(ci_disk, config, ops=ci_disk_ops, cache_dir=disk_cache)
@@ -112,7 +112,7 @@ def table_path():
 def ci_rom(ci_blade, ci_ops, tmp_path_factory):
     """r = 45 reduced model of the ci blade (24 tip DOFs, 15 fixed-interface modes, the 6 global MDs of 1B/1T/2B)
     with exact cubic tensors: the model of the contact tests."""
-    from rotor37_rom.builder import ReductionConfig, build_reduced_model
+    from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
 
     config = ReductionConfig(r_c=15, r_md=0, global_md_modes=3, forces="intrusive")
     model, _ = build_reduced_model(ci_blade, config, ops=ci_ops, cache_dir=tmp_path_factory.mktemp("rom"))
@@ -140,7 +140,7 @@ def random_sector(rng, r_s: int, n_l: int):
     ``from conftest import random_sector``."""
     import numpy as np
 
-    from rotor37_rom.disk import SectorMatrices
+    from rotor37_rom.disk.assembly import SectorMatrices
 
     n = r_s + 2 * n_l
     A, B = rng.standard_normal((n, n)), rng.standard_normal((n, n))

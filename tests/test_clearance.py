@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from rotor37_rom.clearance import clearance_change, delta_range_within, relative_error
+from rotor37_rom.post.clearance import clearance_change, delta_range_within, relative_error
 
 
 def test_clearance_change_geometry():
@@ -45,7 +45,7 @@ def test_clearance_consumption_full_and_reduced(ci_blade, ci_ops, ci_rom):
     coefficients up to ~3 (on [-1, 1] the curves depart from linear by O(1), so the coefficients are O(1); measured
     deviations 0.05-1.4 % and 0.25-0.8 %), while a wrong order (e.g. a difference linear in delta) gives 2 or 4.
     D(0.1) ~ 6e-6 m and A(0.1) >= 1.4e-7 m are far above the statics' error (Newton to 1e-10, ~1e-12 m)."""
-    from rotor37_rom.builder import ReductionConfig, build_reduced_model, clearance_consumption_study
+    from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model, clearance_consumption_study
 
     rom = ci_rom                                                          # exact cubic tensors (conftest)
     no_md, _ = build_reduced_model(ci_blade, ReductionConfig(r_c=15, r_md=0), ops=ci_ops)

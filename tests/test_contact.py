@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from rotor37_rom.casing import Casing, casing_profile, contact_frames, ramp_rate
-from rotor37_rom.integrator import CentralDifference, SimulationDiverged, simulate, tangent_highest_frequency
-from rotor37_rom.nonlinear_forces import PolynomialForces
-from rotor37_rom.modes import normalise_signs
-from rotor37_rom.reduction import load_reduced_model, save_reduced_model, with_force_precision
+from rotor37_rom.dynamics.casing import Casing, casing_profile, contact_frames, ramp_rate
+from rotor37_rom.dynamics.explicit import CentralDifference, SimulationDiverged, simulate, tangent_highest_frequency
+from rotor37_rom.forces.tensors import PolynomialForces
+from rotor37_rom.post.modes import normalise_signs
+from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model, with_force_precision
 
 
 def _le_x(model):
@@ -125,7 +125,7 @@ def _static_start(model, amplitude):
     physical start). The scale is signed: eigh returns the 1B vector with either sign depending on the LAPACK
     kernels, and the GNL state under +F is not minus the state under -F (scaling by |V[LE_x, 0]| deflected the
     blade the other way on an AMD machine, where the 0.5 mm tangent ratio was 1.0287 instead of 1.0551)."""
-    from rotor37_rom.reduction import solve_reduced_static
+    from rotor37_rom.model.reduced import solve_reduced_static
 
     lam, V = scipy.linalg.eigh(model.K, model.M)
     q_lin = V[:, 0] * amplitude / V[_le_x(model), 0]
@@ -204,7 +204,7 @@ def test_massless_boundary_variant(ci_rom):
     the condensed model (eta'' M_ii + K_c eta = f_i - K_ib K_bb^-1 f_b, u_b = K_bb^-1 (f_b - K_bi eta)) within 1 %.
     The price: the constraint modes of the 24 tip DOFs carry much of the blade's 1B inertia, so the massless model
     answers a point force at node LE differently from the full-inertia ROM (measured, printed; ~18 % on ci)."""
-    from rotor37_rom.reduction import simulate_linear_newmark
+    from rotor37_rom.dynamics.newmark import simulate_linear_newmark
 
     std = CentralDifference(ci_rom, nonlinear=False, damping=False)
     ml = CentralDifference(ci_rom, nonlinear=False, damping=False, massless_boundary=True)
@@ -256,7 +256,7 @@ def test_frequency_cap_mass_scaling(ci_rom):
 
     Round-off of the eigenvalues of (K, M): relative u lambda_max / lambda_i ~ 1e-16 x 7e5 for the lowest mode, so
     1e-9 on the eigenvalues below the cap and 1e-8 on the residual of their shapes."""
-    from rotor37_rom.integrator import capped_mass, largest_states
+    from rotor37_rom.dynamics.explicit import capped_mass, largest_states
 
     K, M = ci_rom.K, ci_rom.M
     cap = 2 * np.pi * 60e3
@@ -311,7 +311,7 @@ def test_frequency_cap_mass_scaling(ci_rom):
     # where it breaks: with GNL, stress stiffening raises the capped modes' tangent frequencies several times over the
     # cap on the states of these runs (from a short unscaled probe run), so 0.5 x 2/cap is beyond the tangent limit
     # there and blows up; the run is flagged at its step, no solver error
-    from rotor37_rom.integrator import gnl_time_step, probe_states
+    from rotor37_rom.dynamics.explicit import gnl_time_step, probe_states
 
     T = 5e-3
     states = probe_states(ci_rom, [1300.0, 1450.0], Casing(mu=0.15), duration=T)
@@ -343,8 +343,8 @@ def test_gnl_step_report_names_the_states_that_set_the_step(ci_rom, capsys):
     median tangent frequency on the ci blade at mu = 0.1) set the GNL step alone: ``gnl_step_report`` names them and
     gives the step without them, each equal to ``gnl_time_step`` on the states concerned."""
     from conftest import load_demo
-    from rotor37_rom.integrator import (capped_mass, gnl_step_report, gnl_time_step, highest_frequency, step_outliers,
-                                        tangent_highest_frequency)
+    from rotor37_rom.dynamics.explicit import (capped_mass, gnl_step_report, gnl_time_step, highest_frequency,
+        step_outliers, tangent_highest_frequency)
 
     assert step_outliers(np.array([1.0, 2.0, 3.0, 100.0])).tolist() == [3]
     assert step_outliers(np.array([1.0, 2.0, 19.0])).size == 0 and step_outliers(np.array([])).size == 0
@@ -509,8 +509,8 @@ def test_point_cubature_trained_on_contact_states(ci_blade, ci_rom, tmp_path):
     run: it reproduces the exact reduced force on the states of a run at another speed, keeps K~ exact, and a
     contact run with it follows the exact one. Weights >= 0 keep the force the gradient of a sum of SVK point
     energies (conservative)."""
-    from rotor37_rom.builder import hyper_reduce
-    from rotor37_rom.ecsw import state_errors
+    from rotor37_rom.reduction.builder import hyper_reduce
+    from rotor37_rom.forces.cubature import state_errors
 
     scheme = CentralDifference(ci_rom, nonlinear=True, safety=0.5)
     speeds = [1340.0, 1460.0]

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from rotor37_rom.cyclic import (CyclicPairs, assemble_full_structure, cyclic_projection, cyclic_projection_parts,
-                                expand_sector_mode, harmonic_indices, project_cyclic, rotation_z, to_global_frame)
+from rotor37_rom.disk.symmetry import (CyclicPairs, assemble_full_structure, cyclic_projection,
+    cyclic_projection_parts, expand_sector_mode, harmonic_indices, project_cyclic, rotation_z, to_global_frame)
 
 
 def _truss_sector(n_sectors: int, seed: int = 0, with_axis: bool = True):

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotor37_rom import sweep
-from rotor37_rom.reduction import save_reduced_model
+from rotor37_rom.studies import sweep
+from rotor37_rom.model.reduced import save_reduced_model
 from conftest import load_demo  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -9,7 +9,7 @@ import scipy.sparse.linalg
 from scipy import special
 
 from rotor37_rom import fem
-from rotor37_rom.cyclic import assemble_full_structure, harmonic_indices
+from rotor37_rom.disk.symmetry import assemble_full_structure, harmonic_indices
 
 PLATE = dict(inner=0.1, outer=0.2, thickness=4e-3)
 
@@ -187,7 +187,7 @@ def test_safe_families_and_full_disk_pictures(ci_disk, tmp_path):
     from PIL import Image
 
     from rotor37_rom.fem.safe import compute_safe_diagram
-    from rotor37_rom.plotting import render_cyclic_mode
+    from rotor37_rom.viz.plotting import render_cyclic_mode
 
     safe = compute_safe_diagram(ci_disk, 4, ks=(0, 18))
     print(safe.family, safe.omega, safe.blade_share)

@@ -22,9 +22,9 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from rotor37_rom.disk import (DiskBasis, assemble_disk_matrices, harmonic_coordinates,
-                              harmonic_frequencies, interface_modes, travelling_wave_backbone, wave_harmonic_order,
-                              wave_history)
+from rotor37_rom.disk.assembly import DiskBasis, assemble_disk_matrices, interface_modes
+from rotor37_rom.disk.harmonics import (harmonic_coordinates, harmonic_frequencies, travelling_wave_backbone,
+    wave_harmonic_order, wave_history)
 from conftest import random_sector  # noqa: E402
 
 N, RS, NL, K_WAVE = 12, 4, 3, 2

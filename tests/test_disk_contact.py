@@ -17,10 +17,12 @@ import dataclasses
 import numpy as np
 import pytest
 
-from rotor37_rom.casing import Casing
-from rotor37_rom.disk import assemble_disk_matrices, mistuning_factors, travelling_wave_departure
-from rotor37_rom.integrator import CentralDifference, simulate
-from rotor37_rom.reduction import load_reduced_model, modal_damping, save_reduced_model, with_force_precision
+from rotor37_rom.dynamics.casing import Casing
+from rotor37_rom.disk.assembly import assemble_disk_matrices, mistuning_factors
+from rotor37_rom.disk.harmonics import travelling_wave_departure
+from rotor37_rom.dynamics.explicit import CentralDifference, simulate
+from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model, with_force_precision
+from rotor37_rom.reduction.craig_bampton import modal_damping
 
 pytestmark = pytest.mark.slow
 
@@ -129,8 +131,8 @@ def test_contact_map_takes_a_disk_model(disk_model, tmp_path):
     continuation (§2.3.3) on the disk follows the same node: each branch's first run is the map's run at its start
     speed (from rest, as long), so it gives the map's amplitude there."""
     from conftest import load_demo
-    from rotor37_rom.reduction import save_reduced_model
-    from rotor37_rom.sweep import load_sweep
+    from rotor37_rom.model.reduced import save_reduced_model
+    from rotor37_rom.studies.sweep import load_sweep
 
     contact_map = load_demo("contact_map")
     model, _ = disk_model
@@ -160,7 +162,7 @@ def test_disk_gnl_map_probes_once(disk_model, tmp_path, monkeypatch):
     probe is cached with the map, so the map started again (a resumed multi-hour map) runs no simulation at all - its
     speeds are done and the probe is read back - and takes the same step, below the capped linear one."""
     from conftest import load_demo
-    from rotor37_rom.reduction import save_reduced_model
+    from rotor37_rom.model.reduced import save_reduced_model
 
     contact_map = load_demo("contact_map")
     model, _ = disk_model
@@ -192,7 +194,7 @@ def test_disk_point_cubature(ci_disk, disk_model, tmp_path):
     less than the cubature's own error; save/load keeps it. (Unlike the blade's test, no comparison of runs: this
     light-contact disk run amplifies any perturbation ~1e6-fold in 0.06 s - the batched and the single run at 1,500
     rad/s part at 2e-7 of the amplitude from round-off - so runs compare on the maps' statistics, in the benchmark.)"""
-    from rotor37_rom.builder import hyper_reduce
+    from rotor37_rom.reduction.builder import hyper_reduce
 
     model, _ = disk_model
     scheme = CentralDifference(model, nonlinear=True, h=SHIFT / (2 * STEPS_PER_SHIFT), frequency_cap=CAP)

@@ -18,14 +18,16 @@ import pytest
 import scipy.sparse.linalg as spla
 
 from rotor37_rom import fem
-from rotor37_rom.analysis import cyclic_harmonic_frequencies
-from rotor37_rom.cyclic import assemble_full_structure, to_global_frame
-from rotor37_rom.disk import (DiskBasis, assemble_disk_matrices, best_approximation, face_shapes,
-                              harmonic_field_load, harmonic_frequencies, harmonic_node_load, indicator_histories,
-                              interface_modes, performance_indicator, repeat_count, sector_force_basis,
-                              sector_harmonics)
-from rotor37_rom.disk_builder import DiskReductionConfig, build_disk_model
-from rotor37_rom.reduction import load_reduced_model, save_reduced_model, simulate_newmark
+from rotor37_rom.post.stress import cyclic_harmonic_frequencies
+from rotor37_rom.disk.symmetry import assemble_full_structure, to_global_frame
+from rotor37_rom.disk.assembly import (DiskBasis, assemble_disk_matrices, face_shapes, interface_modes,
+    sector_force_basis)
+from rotor37_rom.disk.indicators import best_approximation, indicator_histories, performance_indicator
+from rotor37_rom.disk.loads import harmonic_field_load, harmonic_node_load, repeat_count
+from rotor37_rom.disk.harmonics import harmonic_frequencies, sector_harmonics
+from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model
+from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model
+from rotor37_rom.dynamics.newmark import simulate_newmark
 from conftest import random_sector  # noqa: E402
 
 pytestmark = pytest.mark.slow
@@ -446,7 +448,7 @@ def test_disk_stress_of_a_tuned_state(ci_disk, disk_model):
     field and the same von Mises stress, sector by sector through the DiskBasis (the interface rows of sector n and
     n + 1, the last wrapping to the first), to round-off; a sector at rest in a state that moves only sector 3 has
     no stress, and GNL changes the stress (Green-Lagrange's quadratic term at ~2 mm)."""
-    from rotor37_rom.analysis import disk_stress, disk_stress_summary, tip_band
+    from rotor37_rom.post.stress import disk_stress, disk_stress_summary, tip_band
 
     model, report = disk_model
     basis = model.sectors
@@ -484,7 +486,7 @@ def test_disk_stress_of_a_tuned_state(ci_disk, disk_model):
         disk_stress_summary(ci_disk, model, values.max(axis=2))
     # a cell touching the junction is left out whole: a large value at its vertex farthest from the junction counts
     # for the corner, not off it
-    from rotor37_rom.analysis import ROOT_BAND, root_distance
+    from rotor37_rom.post.stress import ROOT_BAND, root_distance
     dist = root_distance(ci_disk, fem.cell_vertices(ci_disk))
     corner = np.flatnonzero((dist.min(axis=1) < 1e-9) & ~band)[0]
     far = int(np.argmax(dist[corner]))
@@ -506,8 +508,8 @@ def test_disk_stress_of_the_1b_mode_peaks_at_the_blade_root(ci_disk, disk_model)
     out) the
     largest is still the root's bending stress: in the blade, in the lowest third of the span, and below the
     corner's."""
-    from rotor37_rom.analysis import (ROOT_BAND, describe_location, disk_stress, disk_stress_summary, root_distance,
-                                      tip_band)
+    from rotor37_rom.post.stress import (ROOT_BAND, describe_location, disk_stress, disk_stress_summary, root_distance,
+        tip_band)
     from rotor37_rom.geometry.disk import hub_radius
     import scipy.linalg
 
@@ -549,7 +551,7 @@ def test_repeating_sectors_contact_rows_through_an_interface(ci_disk, ci_disk_op
     - with 3 mm patches, row (s, k) of N applied to x is n_k . (C_k u_s), u_s = sector s's field, to round-off."""
     import scipy.sparse as sp
 
-    from rotor37_rom.casing import Casing, contact_frames
+    from rotor37_rom.dynamics.casing import Casing, contact_frames
 
     system = fem.RepeatingSectors(ci_disk, 2, ci_disk_ops)
     casing = Casing(direction="cone", contact_nodes=(1, 6))
@@ -577,7 +579,7 @@ def test_von_mises_at_vertices_of_a_uniform_strain(ci_disk):
     F = I + A) to round-off; and the cells' vertices average to their midpoints."""
     from dolfinx import fem as dfem
 
-    from rotor37_rom.stress import svk_cauchy, von_mises
+    from rotor37_rom.post.recovery import svk_cauchy, von_mises
 
     A = 1e-3 * np.array([[0.3, -1.2, 0.5], [0.8, 0.1, -0.4], [0.2, 0.9, -0.6]])
     u = dfem.Function(ci_disk.V)
@@ -600,7 +602,7 @@ def test_root_junction_is_the_blade_root_on_the_hub_cone(ci_disk, ci_blade):
     43.05 mm), on the pressure and on the suction side, which are apart by the root's thickness at mid-chord; any
     point of an edge is within spacing / 2 of a sample, so ``root_distance`` is exact to 0.1 mm. A blade without a
     disk has no junction: an error."""
-    from rotor37_rom.analysis import root_distance
+    from rotor37_rom.post.stress import root_distance
     from rotor37_rom.geometry.disk import hub_radius
 
     edges = fem.root_junction(ci_disk, spacing=None)                       # (n, 2, 3)

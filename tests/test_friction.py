@@ -1,12 +1,12 @@
-"""Friction-induced instability of sliding tip contact (rotor37_rom.friction) against theory and the integrator.
+"""Friction-induced instability of sliding tip contact (rotor37_rom.dynamics.friction) against theory and the integrator.
 Model: the ci blade, r = 45 (the contact tests' model), linear operators."""
 import numpy as np
 import pytest
 import scipy.linalg
 
-from rotor37_rom.casing import Casing, contact_matrices
-from rotor37_rom.friction import critical_friction, sliding_contact_eigenvalues, sprag_slip_friction
-from rotor37_rom.integrator import CentralDifference, simulate
+from rotor37_rom.dynamics.casing import Casing, contact_matrices
+from rotor37_rom.dynamics.friction import critical_friction, sliding_contact_eigenvalues, sprag_slip_friction
+from rotor37_rom.dynamics.explicit import CentralDifference, simulate
 
 
 def _largest_real_root(ev):
@@ -129,7 +129,7 @@ def test_static_compliance_and_the_casing_cone_normal(ci_blade, ci_ops, ci_rom):
             assert (np.isinf(mu_rom) and np.isinf(mu_fom)) or mu_fom == pytest.approx(mu_rom, rel=1e-7), \
                 (direction, nodes, mu_rom, mu_fom)
         assert Nt.shape == (n_tip, 3 * n_tip)
-    from rotor37_rom.casing import CONE_SLOPE, contact_frames
+    from rotor37_rom.dynamics.casing import CONE_SLOPE, contact_frames
 
     normals, slide, theta = contact_frames(ci_blade.tip_nodes, "cone", -1)
     e_r = np.column_stack([np.cos(theta), np.sin(theta), 0 * theta])

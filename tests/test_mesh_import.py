@@ -240,8 +240,8 @@ def test_boundary_map_follows_the_boundary_dofs_in_any_order(tmp_path):
     (issue 24: 24 boundary DOFs used to meet 134 tip nodes): with the TE's DOFs first and only 3 of 4 contact nodes,
     q[q_index of LE] is node LE's displacement (Phi's rows at LE's DOFs are the identity there) and the contact
     matrices pick those entries."""
-    from rotor37_rom import casing
-    from rotor37_rom.builder import ReductionConfig, build_reduced_model
+    from rotor37_rom.dynamics import casing
+    from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
 
     sector = fem.create_sector_from_file(_bar(tmp_path / "bar.msh", "hex"), clamp="ROOT", tip="END", contact=4,
                                          verbose=False)

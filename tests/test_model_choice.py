@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotor37_rom.model_choice import STUDY_FILE, choose_model, load_study, pareto_front, scenes
+from rotor37_rom.studies.model_choice import STUDY_FILE, choose_model, load_study, pareto_front, scenes
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -345,7 +345,7 @@ def test_forced_response_bench_takes_the_chosen_model():
 def test_reference_model_is_the_yardstick():
     """The scene's reference (what a caller runs when no candidate meets its tolerance): its options as recorded,
     its error not measured."""
-    from rotor37_rom.model_choice import reference_model
+    from rotor37_rom.studies.model_choice import reference_model
 
     study = load_study()
     for scene in ("map-linear", "map-gnl"):

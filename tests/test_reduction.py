@@ -14,15 +14,15 @@ import scipy.linalg
 import scipy.sparse.linalg
 
 from rotor37_rom import fem
-from rotor37_rom.builder import (ReductionConfig, build_reduced_model, cached_model, compute_modal_derivatives,
-                                 training_states)
-from rotor37_rom.ecsw import state_errors, train_ecsw
-from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces
+from rotor37_rom.reduction.builder import (ReductionConfig, build_reduced_model, cached_model,
+    compute_modal_derivatives, training_states)
+from rotor37_rom.forces.cubature import state_errors, train_ecsw
+from rotor37_rom.forces.tensors import QuadratureForces, compute_polynomial_forces
 from rotor37_rom.npz import load_npz, save_json, save_npz
-from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, craig_bampton, fixed_interface_correction,
-                                   interface_transform, load_reduced_model, save_reduced_model, saved_model_key,
-                                   select_pairs, selection_weights)
-from rotor37_rom.step import identify_step
+from rotor37_rom.reduction.craig_bampton import (CRITERIA, CraigBamptonBasis, craig_bampton,
+    fixed_interface_correction, interface_transform, select_pairs, selection_weights)
+from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model, saved_model_key
+from rotor37_rom.forces.step import identify_step
 
 U = np.finfo(float).eps / 2  # unit round-off of float64
 
@@ -383,7 +383,7 @@ def test_c_kernel_equals_numpy_stress_and_forces():
     import os
     import shutil
 
-    from rotor37_rom.svk_kernel import pk_nonlinear_kernel
+    from rotor37_rom.forces.kernel import pk_nonlinear_kernel
 
     if os.environ.get("ROTOR37_C_KERNEL") == "0":
         pytest.skip("ROTOR37_C_KERNEL=0: the C kernel is switched off")
@@ -411,7 +411,7 @@ def test_c_kernel_equals_numpy_stress_and_forces():
 def test_trajectory_states_hold_out_other_instants():
     """Training instants: n_per_run spread after the first tenth plus the n_largest of largest boundary motion;
     held-out instants are other ones (never a training column); NaN instants (a blow-up) are dropped."""
-    from rotor37_rom.ecsw import trajectory_states
+    from rotor37_rom.forces.cubature import trajectory_states
 
     rng = np.random.default_rng(3)
     runs = [rng.standard_normal((6, 120)) * np.linspace(0.1, 1.0, 120), rng.standard_normal((6, 40))]
@@ -547,7 +547,7 @@ def test_bad_reduction_input(ci_blade, ci_ops, free_operators):
     with pytest.raises(ValueError, match="contact_patch: the patches replace"):
         build_reduced_model(ci_blade, ReductionConfig(r_c=2, r_md=0, forces="none", contact_patch=3e-3), ops=ci_ops,
                             boundary_dofs=ci_blade.tip_dofs.ravel()[:6])
-    from rotor37_rom.builder import _check_operators
+    from rotor37_rom.reduction.builder import _check_operators
 
     with pytest.raises(ValueError, match="not symmetric"):
         _check_operators(np.array([[2.0, 1.0], [0.0, 2.0]]), np.eye(2))
@@ -575,7 +575,7 @@ def test_nonlinear_newmark_is_second_order():
     simulate_linear_newmark exactly."""
     import scipy.integrate
 
-    from rotor37_rom.reduction import simulate_linear_newmark, simulate_newmark
+    from rotor37_rom.dynamics.newmark import simulate_linear_newmark, simulate_newmark
 
     M = np.diag([1.0, 2.0])
     K = np.array([[2.0, -1.0], [-1.0, 1.0]]) * 100.0
@@ -611,8 +611,8 @@ def test_perturbed_model_scales_the_internal_force(ci_rom):
     perturbation)."""
     import dataclasses
 
-    from rotor37_rom.disk import SectorForces
-    from rotor37_rom.reduction import perturbed_model
+    from rotor37_rom.forces.sector import SectorForces
+    from rotor37_rom.model.reduced import perturbed_model
 
     eps, rng, r = 1e-4, np.random.default_rng(11), ci_rom.r
     quad = QuadratureForces(rng.standard_normal((20, r, 3, 3)), rng.random(20), 1.1e11, 4.4e10)

@@ -56,8 +56,8 @@ def test_report_at_ci(report, tmp_path):
     from test_report_browser import CHROMIUM, check_figures_load, open_in_chromium
 
     from rotor37_rom import fem
-    from rotor37_rom.analysis import TIP_BAND
-    from rotor37_rom.casing import Casing
+    from rotor37_rom.post.stress import TIP_BAND
+    from rotor37_rom.dynamics.casing import Casing
 
     config = report.ReportConfig(preset="ci", table="none", r_c=15, speeds=(1400.0, 1400.0, 1), revolutions=1.5,
                                  levels=1, quiet=True, out=tmp_path / "report")
@@ -113,7 +113,7 @@ def test_report_at_ci(report, tmp_path):
 
 
 def test_stress_before_simulation(ci_blade, ci_rom):
-    from rotor37_rom.analysis import stress_at_peak
+    from rotor37_rom.post.stress import stress_at_peak
 
     with pytest.raises(ValueError, match="run the contact simulation first"):
         stress_at_peak(ci_blade, ci_rom, None, None, nonlinear=True)

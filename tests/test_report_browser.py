@@ -1,4 +1,4 @@
-"""The report in a real browser (#18): headless Chromium opens a report.html written by rotor37_rom.report from real
+"""The report in a real browser (#18): headless Chromium opens a report.html written by rotor37_rom.viz.html from real
 PNG charts and must find the summary table first, the flagged runs, and every figure loaded at its own size.
 
 Chromium is the Debian package `chromium`, which `make test` installs when apt can; where it cannot be found the
@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotor37_rom.report import Section, Table, write_report
+from rotor37_rom.viz.html import Section, Table, write_report
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
@@ -78,7 +78,7 @@ def test_report_opens_in_chromium(tmp_path):
     """A report with charts inside its folder and one outside it (copied to figures/), a summary table, a flagged
     run, and a missing figure (listed in words, never an image that fails to load). Control: a corrupt PNG, which
     the browser must report as not loaded (size 0), so that the check would see a figure that does not load."""
-    from rotor37_rom.charts import plot_nfrc, plot_time_history
+    from rotor37_rom.viz.charts import plot_nfrc, plot_time_history
 
     out = tmp_path / "report"
     speeds = np.linspace(1200.0, 1600.0, 11)

@@ -115,7 +115,7 @@ def test_full_order_newmark_with_casing_contact(ci_blade, ci_ops):
     37-38): gap >= 0 at every tip node, gap = 0 where the multiplier is positive (the constraint is linear in the
     displacements and solved exactly, so both to round-off: 1e-15 m against gaps of 1e-4 m), multipliers >= 0, and
     friction (mu = 0.15) opposing the sliding. At 3,000 rad/s the tip passes the first bump 0.52 ms in."""
-    from rotor37_rom.casing import Casing, casing_clearance, contact_frames, ramp_rate
+    from rotor37_rom.dynamics.casing import Casing, casing_clearance, contact_frames, ramp_rate
 
     casing = Casing(c0=0.5e-3, h_b=0.625e-3, mu=0.15)
     omega, h, n, duration = 3000.0, 2e-6, 400, 1e-3

@@ -9,7 +9,7 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from rotor37_rom import forms
-from rotor37_rom.stress import StressRecovery, svk_cauchy, von_mises
+from rotor37_rom.post.recovery import StressRecovery, svk_cauchy, von_mises
 
 LMBDA, MU = forms.MARAGING_200.lame
 
@@ -71,7 +71,7 @@ def _state(ci_rom, amplitude=1e-3):
     """1B + 0.3 x 1T of the reduced model, scaled so that the tip moves by ``amplitude`` (m)."""
     import scipy.linalg
 
-    from rotor37_rom.modes import normalise_signs
+    from rotor37_rom.post.modes import normalise_signs
 
     _, V = scipy.linalg.eigh(ci_rom.K, ci_rom.M)
     V = normalise_signs(V[:, :2])                         # the same state on every machine
@@ -117,7 +117,7 @@ def test_stress_picture(ci_blade, ci_rom, recovery, tmp_path):
     import matplotlib.image as mpimg
 
     from rotor37_rom import fem
-    from rotor37_rom.plotting import render_stress
+    from rotor37_rom.viz.plotting import render_stress
 
     q = _state(ci_rom)
     u = fem.displacement_function(ci_blade, ci_rom.Phi, q)

@@ -11,12 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotor37_rom import sweep as sweep_mod
-from rotor37_rom.casing import Casing
-from rotor37_rom.integrator import CentralDifference
-from rotor37_rom.reduction import load_reduced_model, save_reduced_model
-from rotor37_rom.sweep import (SweepSpec, interaction_map, is_steady, load_sweep, rerun_diverged, response_period,
-                               run_sweep, sweep_folder)
+from rotor37_rom.studies import sweep as sweep_mod
+from rotor37_rom.dynamics.casing import Casing
+from rotor37_rom.dynamics.explicit import CentralDifference
+from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model
+from rotor37_rom.studies.sweep import (SweepSpec, interaction_map, is_steady, load_sweep, rerun_diverged,
+    response_period, run_sweep, sweep_folder)
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEEDS = np.array([1300.0, 1600.0])
@@ -80,7 +80,7 @@ def test_killed_training_runs_resume(ci_rom, tmp_path, monkeypatch):
     states: killed after one speed has ended, before the other has, they resume at the killed step and give the
     uninterrupted runs' training and step states bit for bit. A checkpoint of other speeds or of another step is not
     resumed; a run that records its states refuses a state saved without them."""
-    from rotor37_rom import integrator
+    from rotor37_rom.dynamics import explicit as integrator
 
     scheme = CentralDifference(ci_rom, nonlinear=True, safety=0.5)
     casing = Casing(c0=2e-4)                                       # in contact within the quarter revolution
@@ -151,7 +151,7 @@ def test_sweep_folder_absorbs_the_steps_round_off(ci_rom, tmp_path):
 def test_mpi_sweep_equals_serial(ci_rom, tmp_path):
     """The demo under mpirun -n 2 gives the serial map, and its continuation branches (up on rank 0, down on rank 1,
     gathered on rank 0) equal serial ones."""
-    from rotor37_rom.sweep import continuation
+    from rotor37_rom.studies.sweep import continuation
 
     model_path = save_reduced_model(ci_rom, tmp_path / "rom.npz")
     speeds = np.linspace(1300.0, 1600.0, 4)
@@ -350,7 +350,7 @@ def test_continuation_carries_state_and_casing_angle(ci_rom):
     omega m h instead of omega (n1 + m) h, ~1e-16 rad), which 4000 steps with friction contact grow to 4e-12 to
     1.2e-11 of the amplitude (measured over the kernel variants of make test-kernels): 1e-9. Without the angle the
     bump sits omega n1 h = 2.3 rad away."""
-    from rotor37_rom.integrator import simulate
+    from rotor37_rom.dynamics.explicit import simulate
 
     scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
     casing, om, n1, n2 = Casing(mu=0.15), 1450.0, 6000, 4000
@@ -552,7 +552,7 @@ def test_contact_map_frequency_cap_flag(ci_rom, tmp_path):
     folder = run_sweep(scheme, [1400.0, 1450.0], SweepSpec(revolutions=2, casing=Casing()), tmp_path / "inproc",
                        progress=False)
     np.testing.assert_allclose(got["nfrc"], interaction_map(load_sweep(folder)).nfrc, rtol=1e-10)
-    # the contact works of each speed and the sprag-slip onsets of the model's tip (rotor37_rom.friction)
+    # the contact works of each speed and the sprag-slip onsets of the model's tip (rotor37_rom.dynamics.friction)
     works = [r["work"][:2] for r in load_sweep(folder)]
     np.testing.assert_allclose(np.column_stack([got["work_normal_J"], got["work_friction_J"]]), works, rtol=1e-10)
     assert 0.15 < summary["sprag_slip"]["weakest_node"] < 0.18 and summary["sprag_slip"]["per_node"][7] is None
@@ -633,7 +633,7 @@ def test_capped_training_trains_on_the_capped_probe_step(ci_rom, tmp_path):
     round-off (the same scheme, the same speeds, the same records) - and every step is within the capped linear one.
     Without the option the blade's training runs unscaled and no capped probe is made."""
     from conftest import load_demo
-    from rotor37_rom.integrator import contact_training_states
+    from rotor37_rom.dynamics.explicit import contact_training_states
 
     contact_map = load_demo("contact_map")
     model_path = save_reduced_model(ci_rom, tmp_path / "rom.npz")
@@ -692,10 +692,10 @@ def test_blown_up_speeds_run_again_with_half_the_step(ci_rom, tmp_path):
     script = (
         "import sys, json, numpy as np\n"
         "from mpi4py import MPI\n"
-        "from rotor37_rom.casing import Casing\n"
-        "from rotor37_rom.integrator import CentralDifference\n"
-        "from rotor37_rom.reduction import load_reduced_model\n"
-        "from rotor37_rom.sweep import SweepSpec, load_sweep, rerun_diverged, run_sweep\n"
+        "from rotor37_rom.dynamics.casing import Casing\n"
+        "from rotor37_rom.dynamics.explicit import CentralDifference\n"
+        "from rotor37_rom.model.reduced import load_reduced_model\n"
+        "from rotor37_rom.studies.sweep import SweepSpec, load_sweep, rerun_diverged, run_sweep\n"
         "comm, out = MPI.COMM_WORLD, sys.argv[2]\n"
         "m = load_reduced_model(sys.argv[1])\n"
         "fast = CentralDifference(m, nonlinear=False, h=1.05 * 2 / CentralDifference(m).omega_max, force=True)\n"
@@ -730,8 +730,8 @@ def test_zero_initial_condition_sweep_misses_the_high_branch(ci_rom):
     (15 revolutions per point) stays on the high branch (1.2-1.3 mm), steady. Two coexisting steady states differ
     by a factor ~6; the test asks for 2 and for the continuation's points to be steady (the 2 % criterion), so it
     fails if a zero-IC run finds the high branch or the continuation loses it."""
-    from rotor37_rom.integrator import simulate
-    from rotor37_rom.sweep import continuation, last_revolution_max
+    from rotor37_rom.dynamics.explicit import simulate
+    from rotor37_rom.studies.sweep import continuation, last_revolution_max
 
     scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.5, frequency_cap=2 * np.pi * 60e3)
     casing, speeds = Casing(mu=0.0), np.array([1460.0, 1480.0])
@@ -756,7 +756,7 @@ def test_idle_barrier_waits_asleep(tmp_path):
     script.write_text(
         "import sys, time\n"
         "from mpi4py import MPI\n"
-        "from rotor37_rom.sweep import idle_barrier\n"
+        "from rotor37_rom.studies.sweep import idle_barrier\n"
         "comm = MPI.COMM_WORLD\n"
         "wait = idle_barrier if sys.argv[1] == 'idle' else (lambda c: c.Barrier())\n"
         "comm.Barrier()\n"

@@ -3,7 +3,7 @@
 operators per harmonic index k (nodal diameter) and their modes through the SLEPc shift-invert path, and the
 expansion of a sector mode to the whole structure.
 
-Part of the dolfinx adapter (``rotor37_rom.fem``); the algebra of the projection is ``rotor37_rom.cyclic``. Runs under
+Part of the dolfinx adapter (``rotor37_rom.fem``); the algebra of the projection is ``rotor37_rom.disk.symmetry``. Runs under
 MPI: the pairing is computed on every rank from gathered face nodes (a few thousand), the projection T_k is a
 distributed PETSc matrix in the layout of [a; b] (each rank owns the a and b copies of its own DOFs), and
 K_k = T_k^T diag(K, K) T_k is PETSc's PtAP. Eliminated slots (the right face, constrained axis directions) get 1 on
@@ -20,7 +20,7 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from rotor37_rom.cyclic import cyclic_projection, cyclic_projection_parts
+from rotor37_rom.disk.symmetry import cyclic_projection, cyclic_projection_parts
 from rotor37_rom.forms import Material
 from rotor37_rom.geometry import blade as blade_geometry
 from rotor37_rom.geometry import disk as disk_geometry

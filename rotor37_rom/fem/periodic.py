@@ -23,9 +23,9 @@ from typing import Callable
 import numpy as np
 import scipy.sparse as sp
 
-from rotor37_rom.casing import (Casing, ContactSetError, ContactSolver, casing_clearance, contact_frames,
-                                friction_power, node_angles, ramp_rate)
-from rotor37_rom.cyclic import repeating_sector_maps
+from rotor37_rom.dynamics.casing import (Casing, ContactSetError, ContactSolver, casing_clearance, contact_frames,
+    friction_power, node_angles, ramp_rate)
+from rotor37_rom.disk.symmetry import repeating_sector_maps
 from rotor37_rom.npz import save_npz
 
 from .operators import (SvkOperators, _require_serial, assemble_mass, assemble_stiffness, assemble_tangent_scipy,

@@ -18,7 +18,7 @@ from dolfinx.io import gmshio
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from rotor37_rom.cyclic import CyclicPairs, rotation_z
+from rotor37_rom.disk.symmetry import CyclicPairs, rotation_z
 from rotor37_rom.forms import Material
 from rotor37_rom.geometry import blade as blade_geometry
 from rotor37_rom.geometry.tables import read_blade_table

@@ -33,7 +33,7 @@ def render_mode_shapes(sector, modes: Sequence, titles: Sequence[str], folder: s
     """One PNG per mode: the blade deformed so that the largest displacement is ``amplitude`` x blade span,
     coloured by the normalised displacement magnitude. Serial only (returns [] under MPI).
 
-    Rendering runs in a child process without dolfinx (see rotor37_rom._render for why).
+    Rendering runs in a child process without dolfinx (see rotor37_rom.viz._render for why).
     """
     if sector.comm.size > 1:
         LOG.warning("render_mode_shapes: pyvista rendering runs serially; skipped under MPI")
@@ -64,7 +64,7 @@ def run_render(scene: dict, scene_path: Path) -> None:
     import sys
 
     np.savez(scene_path, **scene)
-    proc = subprocess.run([sys.executable, "-m", "rotor37_rom._render", str(scene_path)], capture_output=True,
+    proc = subprocess.run([sys.executable, "-m", "rotor37_rom.viz._render", str(scene_path)], capture_output=True,
                           text=True)
     scene_path.unlink(missing_ok=True)
     if proc.returncode != 0:
@@ -135,7 +135,7 @@ def _check_serial(sector) -> None:
 def _sector_fields(sector, a, b, k: int) -> np.ndarray:
     """(N, n_nodes, 3) displacement of every sector, each turned to the common frame, of the mode (a, b) of index k
     (``cyclic.expand_sector_mode``)."""
-    from rotor37_rom.cyclic import expand_sector_mode
+    from rotor37_rom.disk.symmetry import expand_sector_mode
 
     n = sector.cyclic.n_sectors
     local = expand_sector_mode(a.x.array, None if b is None else b.x.array, k, n).reshape(n, -1, 3)

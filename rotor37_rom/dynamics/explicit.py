@@ -38,10 +38,10 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse
 
-from rotor37_rom.casing import (Casing, ContactSolver, casing_clearance, contact_matrices, friction_power, node_angles,
-                                ramp_rate)
-from rotor37_rom.disk import HarmonicBlocks
-from rotor37_rom.nonlinear_forces import PolynomialForces, cubic_monomial_indices, quadratic_monomial_indices
+from rotor37_rom.dynamics.casing import (Casing, ContactSolver, casing_clearance, contact_matrices, friction_power,
+    node_angles, ramp_rate)
+from rotor37_rom.disk.harmonics import HarmonicBlocks
+from rotor37_rom.forces.tensors import PolynomialForces, cubic_monomial_indices, quadratic_monomial_indices
 
 __all__ = ["CentralDifference", "SimulationResult", "SimulationDiverged", "capped_mass", "gnl_time_step",
            "gnl_step_report", "step_outliers", "tangent_frequencies",
@@ -171,7 +171,7 @@ def contact_training_states(scheme: "CentralDifference", speeds, casing, revolut
     resumed from when it holds the same runs (speeds, model, step, frequency cap, casing, length; exact runs of a
     large basis take an hour). It is left in place: the caller removes it once it has kept the result (a finished
     checkpoint resumed gives the result at once)."""
-    from rotor37_rom.ecsw import trajectory_states
+    from rotor37_rom.forces.cubature import trajectory_states
     from rotor37_rom.npz import load_npz
 
     speeds = np.atleast_1d(np.asarray(speeds, float))

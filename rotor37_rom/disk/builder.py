@@ -1,7 +1,7 @@
 """Build the reduced model of a bladed disk from one cyclic sector (paper §3.1): the sector's Craig-Bampton basis
 with its tip and both cyclic faces as boundary, modal derivatives of the sector clamped on that boundary, the
 sector's matrices on [q, u_L, u_L of the next sector], the interface reduction and the disk's matrices
-(``rotor37_rom.disk``), and the sector's reduced nonlinear force evaluated with the sectors as batch columns.
+(``rotor37_rom.disk.assembly``), and the sector's reduced nonlinear force evaluated with the sectors as batch columns.
 
 The FE work goes through ``rotor37_rom.fem`` and the steps the blade's builder already has (Craig-Bampton, the
 selection criteria, exact modal derivatives with the fixed-interface correction, quadrature forces and tensors).
@@ -16,16 +16,18 @@ from pathlib import Path
 import numpy as np
 
 from rotor37_rom import __version__, fem
-from rotor37_rom.builder import (Laps, _m_normalise, boundary_node_map, cached_model, compute_modal_derivatives,
-                                 mesh_signature)
-from rotor37_rom.cyclic import rotation_z
-from rotor37_rom.disk import (DiskBasis, SectorForces, SectorMatrices, assemble_disk_matrices, disk_node_map,
-                              face_shapes, interface_modes)
-from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces
+from rotor37_rom.reduction.builder import (Laps, _m_normalise, boundary_node_map, cached_model,
+    compute_modal_derivatives, mesh_signature)
+from rotor37_rom.disk.symmetry import rotation_z
+from rotor37_rom.disk.assembly import (DiskBasis, SectorMatrices, assemble_disk_matrices, disk_node_map, face_shapes,
+    interface_modes)
+from rotor37_rom.forces.sector import SectorForces
+from rotor37_rom.forces.tensors import QuadratureForces, compute_polynomial_forces
 from rotor37_rom.npz import load_npz, save_npz
-from rotor37_rom.reduction import (CRITERIA, CraigBamptonBasis, ReducedModel, craig_bampton, modal_damping,
-                                   reduced_model_key, save_reduced_model, select_pairs, selection_weights,
-                                   simulate_linear_newmark)
+from rotor37_rom.reduction.craig_bampton import (CRITERIA, CraigBamptonBasis, craig_bampton, modal_damping,
+    select_pairs, selection_weights)
+from rotor37_rom.model.reduced import ReducedModel, reduced_model_key, save_reduced_model
+from rotor37_rom.dynamics.newmark import simulate_linear_newmark
 
 __all__ = ["DiskReductionConfig", "build_disk_model"]
 

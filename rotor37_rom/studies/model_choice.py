@@ -23,7 +23,7 @@ import numpy as np
 __all__ = ["STUDY_FILE", "SCHEMA", "ModelChoice", "load_study", "pareto_front", "scene_floor", "expected_error",
            "choose_model", "reference_model", "scenes"]
 
-STUDY_FILE = Path(__file__).resolve().parent / "data" / "speed_accuracy.json"
+STUDY_FILE = Path(__file__).resolve().parents[1] / "data" / "speed_accuracy.json"
 SCHEMA = 1
 
 

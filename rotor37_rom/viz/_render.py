@@ -2,7 +2,7 @@
 
 VTK wheels crash (std::regex in vtkScalarBarActor) when Debian's dolfinx libraries were loaded first in the same
 process: both define the same weak libstdc++ template instantiations with different ABIs. So plotting.py writes
-the grid to an .npz and runs ``python -m rotor37_rom._render scene.npz``.
+the grid to an .npz and runs ``python -m rotor37_rom.viz._render scene.npz``.
 
 Scene file keys: topology, cell_types, points, displacement (n, 3) per frame as 'u_<k>', scalars as 's_<k>',
 'title_<k>', 'path_<k>', 'scalar_name', 'amplitude', 'clim' (optional).

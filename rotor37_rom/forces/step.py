@@ -7,7 +7,7 @@ from typing import Callable
 
 import numpy as np
 
-from rotor37_rom.nonlinear_forces import PolynomialForces, _pair_index, cubic_monomial_indices
+from rotor37_rom.forces.tensors import PolynomialForces, _pair_index, cubic_monomial_indices
 
 __all__ = ["step_displacement_sets", "identify_step"]
 

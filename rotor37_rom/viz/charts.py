@@ -21,7 +21,7 @@ def _pyplot():
 
 def plot_clearance_consumption(curves, path: str | Path, reference: str = "FOM nonlinear") -> Path:
     """Fig. 9/10 analogue: Delta (mm) vs delta for every curve, and the relative error to the reference."""
-    from rotor37_rom.clearance import relative_error
+    from rotor37_rom.post.clearance import relative_error
 
     plt = _pyplot()
     fig, (ax, ax_err) = plt.subplots(1, 2, figsize=(11, 4.2))
@@ -150,7 +150,7 @@ def plot_speed_accuracy(rows: list, path: str | Path, title: str = "", cost_labe
     the scene's ``floor`` (the error below which it cannot tell models apart) shaded below a dashed line;
     ``reference`` = (label, cost): the reference's cost as a vertical line (a full-order reference, whose error is 0 by
     construction). A run that diverged (error inf) is drawn on the top edge with a cross."""
-    from rotor37_rom.model_choice import pareto_front
+    from rotor37_rom.studies.model_choice import pareto_front
 
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7.2, 4.8))

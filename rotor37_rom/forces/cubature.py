@@ -13,7 +13,7 @@ import dataclasses
 import numpy as np
 import scipy.optimize
 
-from rotor37_rom.nonlinear_forces import QuadratureForces
+from rotor37_rom.forces.tensors import QuadratureForces
 
 __all__ = ["EcswResult", "cell_contributions", "train_ecsw", "state_errors", "trajectory_states", "spread_columns"]
 

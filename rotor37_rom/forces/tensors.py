@@ -19,7 +19,7 @@ import itertools
 
 import numpy as np
 
-from rotor37_rom.svk_kernel import pk_nonlinear_kernel
+from rotor37_rom.forces.kernel import pk_nonlinear_kernel
 
 __all__ = [
     "quadratic_monomial_indices",

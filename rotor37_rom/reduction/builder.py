@@ -14,14 +14,15 @@ from pathlib import Path
 import numpy as np
 
 from rotor37_rom import __version__, fem
-from rotor37_rom.ecsw import train_ecsw
-from rotor37_rom.modes import normalise_signs
-from rotor37_rom.nonlinear_forces import QuadratureForces, compute_polynomial_forces
-from rotor37_rom.reduction import (CRITERIA, GLOBAL_MD_MAX, CraigBamptonBasis, NodeMap, ReducedModel, craig_bampton,
-                                   fixed_interface_correction, lift_states, load_reduced_model, modal_damping,
-                                   reduced_model_key, save_reduced_model, select_pairs, selection_weights,
-                                   simulate_linear_newmark)
-from rotor37_rom.step import identify_step
+from rotor37_rom.forces.cubature import train_ecsw
+from rotor37_rom.post.modes import normalise_signs
+from rotor37_rom.forces.tensors import QuadratureForces, compute_polynomial_forces
+from rotor37_rom.reduction.craig_bampton import (CRITERIA, GLOBAL_MD_MAX, CraigBamptonBasis, craig_bampton,
+    fixed_interface_correction, lift_states, modal_damping, select_pairs, selection_weights)
+from rotor37_rom.model.nodes import NodeMap
+from rotor37_rom.model.reduced import ReducedModel, load_reduced_model, reduced_model_key, save_reduced_model
+from rotor37_rom.dynamics.newmark import simulate_linear_newmark
+from rotor37_rom.forces.step import identify_step
 
 __all__ = ["ReductionConfig", "build_reduced_model", "hyper_reduce", "release_freed_memory", "mesh_signature",
            "compute_modal_derivatives", "boundary_node_map",
@@ -373,8 +374,8 @@ def hyper_reduce(sector, model: ReducedModel, Q_train: np.ndarray, tol: float = 
                          "reach the casing); the cubature would have no points")
     t0 = time.perf_counter()
     if disk:
-        from rotor37_rom.disk import sector_force_basis
-        from rotor37_rom.ecsw import spread_columns
+        from rotor37_rom.disk.assembly import sector_force_basis
+        from rotor37_rom.forces.cubature import spread_columns
 
         fields = sector_force_basis(model.sectors, model.forces.faces)
         X = model.forces.sector_states(Q_train)
@@ -408,9 +409,9 @@ def clearance_consumption_study(sector, mode: str = "1B", zeta: float = 1e-3, n_
     """
     import time
 
-    from rotor37_rom.clearance import ClearanceCurves, clearance_change
-    from rotor37_rom.modes import classify_blade_modes
-    from rotor37_rom.reduction import solve_reduced_static
+    from rotor37_rom.post.clearance import ClearanceCurves, clearance_change
+    from rotor37_rom.post.modes import classify_blade_modes
+    from rotor37_rom.model.reduced import solve_reduced_static
 
     if mode not in ("1B", "1T"):
         raise ValueError(f"mode must be '1B' or '1T', got {mode!r}")

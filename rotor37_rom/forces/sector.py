@@ -1,0 +1,77 @@
+"""A disk's reduced nonlinear force: one sector's force (exact tensors or a quadrature) evaluated for every
+sector at once, the sectors as batch columns (eq. 61), optionally seeing the sector's faces."""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+
+@dataclasses.dataclass(frozen=True)
+class SectorForces:
+    """The disk's reduced nonlinear force: one sector's reduced force ``forces`` applied to every sector, the sectors
+    as batch columns (PolynomialForces or QuadratureForces).
+
+    Without ``faces`` (eq. 61, the paper's linear coupling) sector n's force acts on its q^n only (r_s in, r_s out).
+    With ``faces`` (n_f face coordinates per side) it acts on the sector's field including its faces:
+    x^n = [q^n; a_L^n; a_R^n], [a_L^n; a_R^n] = faces[n] @ eta, eta = q[blocks.size:] the interface coordinates
+    (a^n = L^T u_L^n on face shapes L, the right face's from the next sector), and its face rows are scattered back by
+    faces[n]^T: the force is the gradient of the sum of the sectors' strain energies on those fields.
+
+    Attributes:
+        forces: the sector's reduced force (r_s + 2 n_f in and out); blocks: (N, r_s) entries of q of each sector's
+            q^n; r: size of q; scales: (N,) factor of each sector's force (mistuning: a sector's E; 1 for a tuned
+            disk); faces: None, or (N, 2 n_f, r_cyclic) each sector's face coordinates from eta.
+    """
+
+    forces: object
+    blocks: np.ndarray
+    r: int
+    scales: np.ndarray
+    faces: np.ndarray | None = None
+
+    def _inputs(self, Q: np.ndarray) -> np.ndarray:
+        """(N, r_s [+ 2 n_f], P): each sector's force coordinates."""
+        N, rs = self.blocks.shape
+        X = Q[self.blocks.ravel()].reshape(N, rs, Q.shape[1])
+        if self.faces is None:
+            return X
+        return np.concatenate([X, np.einsum("nfc,cp->nfp", self.faces, Q[self.blocks.size:])], axis=1)
+
+    def sector_states(self, Q: np.ndarray) -> np.ndarray:
+        """(m, N P): the coordinates each sector's force acts on for the disk states Q (r, P), the sectors as
+        columns (sector-major: column n P + p is sector n of state p), m = r_s (+ 2 n_f with faces)."""
+        Q = np.asarray(Q, float).reshape(self.r, -1)
+        X = self._inputs(Q)
+        return X.transpose(1, 0, 2).reshape(X.shape[1], -1)
+
+    def evaluate(self, Q: np.ndarray) -> np.ndarray:
+        """g~(q) for Q (r,) or (r, P): (r, P); without ``faces`` the entries of the interface modes are 0."""
+        Q = np.asarray(Q, float).reshape(self.r, -1)
+        N, rs = self.blocks.shape
+        P = Q.shape[1]
+        X = self.sector_states(Q)
+        m = X.shape[0]
+        g = self.forces.evaluate(X).reshape(m, N, P) * self.scales[None, :, None]
+        out = np.zeros((self.r, P))
+        out[self.blocks.ravel()] = g[:rs].transpose(1, 0, 2).reshape(N * rs, P)
+        if self.faces is not None:
+            out[self.blocks.size:] = np.einsum("nfc,fnp->cp", self.faces, g[rs:])
+        return out
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        """dg~/dq (r, r) at one state: block-diagonal over the sectors (and their coupling through eta with faces)."""
+        q = np.asarray(q, float).ravel()
+        X = self._inputs(q[:, None])[:, :, 0]
+        rs = self.blocks.shape[1]
+        eta = slice(self.blocks.size, self.r)
+        J = np.zeros((self.r, self.r))
+        for n, block in enumerate(self.blocks):                # N small Jacobians, one per sector
+            Jn = self.scales[n] * self.forces.jacobian(X[n])
+            J[np.ix_(block, block)] = Jn[:rs, :rs]
+            if self.faces is not None:
+                E = self.faces[n]
+                J[block, eta] += Jn[:rs, rs:] @ E
+                J[eta, block] += E.T @ Jn[rs:, :rs]
+                J[eta, eta] += E.T @ Jn[rs:, rs:] @ E
+        return J

@@ -1,0 +1,1 @@
+"""The reduced model: its node map, its matrices and forces, its file."""

@@ -1,0 +1,253 @@
+"""The reduced model M~ q'' + C~ q' + K~ q + g~(q) = f~ (eq. 3): its data, its key, its file (saved
+atomically, read back with its key checked), its force precision and perturbation, and its static solve."""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import numbers
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from rotor37_rom.forces.tensors import PolynomialForces, QuadratureForces
+from rotor37_rom.model.nodes import NodeMap
+from rotor37_rom.npz import save_npz
+
+
+@dataclasses.dataclass(frozen=True)
+class ReducedModel:
+    """A reduced model M~ q'' + C~ q' + K~ q + g~(q) = f~ (eq. 3) with q = [u_b; eta_c; eta_MD] (eq. 22).
+
+    Attributes:
+        M, C, K: (r, r) reduced matrices.
+        forces: PolynomialForces (exact tensors) or QuadratureForces (exact or ECSW), or None (linear).
+        boundary_dofs: (r_b,) full-DOF indices (of one sector's mesh) kept physical in q.
+        nodes: NodeMap: which entries of q are which node's displacement (the contact nodes).
+        sizes: {'r_b', 'r_c', 'r_md'} per sector (a disk's also 'r_load', 'n_sectors', 'r_cyclic'); md_pairs:
+            (r_md, 2).
+        Phi: (n, r) basis to rebuild fields (optional).
+        metadata: parameters, mesh signature, version; ``key`` hashes them.
+        sectors: for a disk model, the per-sector basis that rebuilds each sector's field (``disk.DiskBasis``);
+            None for a blade.
+    """
+
+    M: np.ndarray
+    C: np.ndarray
+    K: np.ndarray
+    forces: object
+    boundary_dofs: np.ndarray
+    nodes: NodeMap
+    sizes: dict
+    md_pairs: np.ndarray
+    Phi: np.ndarray | None
+    metadata: dict
+    sectors: object = None
+
+    @property
+    def r(self) -> int:
+        return self.K.shape[0]
+
+    @property
+    def key(self) -> str:
+        return reduced_model_key(self.metadata)
+
+    def nonlinear_force(self, Q: np.ndarray) -> np.ndarray:
+        if self.forces is None:
+            return np.zeros_like(np.asarray(Q, float).reshape(self.r, -1))
+        return self.forces.evaluate(Q)
+
+
+def with_force_precision(model: ReducedModel, precision: str) -> ReducedModel:
+    """The model with its quadrature forces (exact or hyper-reduced) evaluated in ``precision``, 'double' or
+    'single'; the key changes with it (single: metadata 'force_precision'), so cached sweeps are not mixed up."""
+    sector = hasattr(model.forces, "blocks")                  # a disk's sector forces (disk.SectorForces)
+    inner = model.forces.forces if sector else model.forces
+    if not isinstance(inner, QuadratureForces):
+        raise ValueError("force precision applies to quadrature forces (exact or hyper-reduced), not to "
+                         f"{type(inner).__name__}")
+    forces = inner.with_precision(precision)                 # checks the name
+    if sector:
+        forces = dataclasses.replace(model.forces, forces=forces)
+    metadata = {k: v for k, v in model.metadata.items() if k != "force_precision"}
+    if precision != "double":
+        metadata["force_precision"] = precision
+    return dataclasses.replace(model, forces=forces, metadata=metadata)
+
+
+def perturbed_model(model: ReducedModel, eps: float) -> ReducedModel:
+    """The model with its internal force K q + g(q) scaled by 1 + ``eps`` (|eps| < 0.01), whatever evaluates g:
+    exact tensors, a quadrature or cubature (its weights), a disk's sector forces (their per-sector scales). A
+    perturbation as small as any force approximation's error: the speeds whose response it moves are those no
+    approximation can be judged on (the floor, docs/results.md). The key changes with it (metadata 'perturbation',
+    the product of the factors applied), so cached sweeps are not mixed up."""
+    if not (isinstance(eps, numbers.Real) and np.isfinite(eps) and abs(eps) < 0.01):
+        raise ValueError(f"perturbation must be a number with |eps| < 0.01, got {eps!r}")
+    eps = float(eps)
+    if eps == 0:
+        return model
+    scale, forces = 1.0 + eps, model.forces
+    if forces is None:
+        pass
+    elif hasattr(forces, "blocks"):                          # a disk's sector forces (disk.SectorForces)
+        forces = dataclasses.replace(forces, scales=np.asarray(forces.scales, float) * scale)
+    elif isinstance(forces, QuadratureForces):
+        forces = dataclasses.replace(forces, w=forces.w * scale)
+    elif isinstance(forces, PolynomialForces):
+        forces = PolynomialForces(forces.A * scale, forces.B * scale)
+    else:
+        raise ValueError(f"perturbation: cannot scale forces of type {type(forces).__name__}")
+    prior = model.metadata.get("perturbation")
+    total = eps if prior is None else (1.0 + float(prior)) * scale - 1.0
+    return dataclasses.replace(model, K=model.K * scale, forces=forces,
+                               metadata={**model.metadata, "perturbation": total})
+
+
+def reduced_model_key(metadata: dict) -> str:
+    """sha256 of the metadata (parameters, mesh signature, version) as canonical JSON."""
+    return hashlib.sha256(json.dumps(metadata, sort_keys=True, default=str).encode()).hexdigest()[:24]
+
+
+def save_reduced_model(model: ReducedModel, path: str | Path) -> Path:
+    """Write an .npz atomically (temporary file, then rename)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    arrays = {"M": model.M, "C": model.C, "K": model.K, "boundary_dofs": model.boundary_dofs,
+              **model.nodes.arrays(), "md_pairs": model.md_pairs,
+              "meta": np.array(json.dumps({"metadata": model.metadata, "sizes": model.sizes, "key": model.key},
+                                          sort_keys=True, default=str))}
+    if model.Phi is not None:
+        arrays["Phi"] = model.Phi
+    forces, kind = model.forces, "none"
+    if forces is not None and hasattr(forces, "blocks"):          # a disk's sector forces (disk.SectorForces)
+        arrays.update(sector_blocks=forces.blocks, sector_scales=forces.scales)
+        if forces.faces is not None:
+            arrays["sector_faces"] = forces.faces
+        forces, kind = forces.forces, "sector_"
+    if isinstance(forces, PolynomialForces):
+        arrays.update(forces=kind.replace("none", "") + "polynomial", A=forces.A, B=forces.B)
+    elif isinstance(forces, QuadratureForces):
+        arrays.update(forces=kind.replace("none", "") + "quadrature", H=forces.H, w=forces.w,
+                      lame=np.array([forces.lmbda, forces.mu]), precision=forces.precision)
+    else:
+        arrays["forces"] = "none"
+    if model.sectors is not None:
+        arrays.update({f"sectors_{name}": value for name, value in dataclasses.asdict(model.sectors).items()})
+    return save_npz(path, **arrays)
+
+
+def saved_model_key(path: str | Path) -> str:
+    """The key of the reduced model saved at ``path`` (``save_reduced_model``), read from its 'meta' entry alone
+    (np.load reads an .npz's arrays lazily: the matrices are not read); refuses a missing or corrupted file, or one
+    whose stored key does not match its metadata, as ``load_reduced_model`` does."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"reduced model file {path} does not exist")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            info = json.loads(str(data["meta"]))
+        if not {"metadata", "key"} <= info.keys():          # a 'meta' without them: not a reduced model
+            raise KeyError("metadata, key")
+    except Exception as exc:
+        raise ValueError(f"reduced model file {path} is corrupted or not a reduced model ({exc.__class__.__name__})"
+                         ) from None
+    return _checked_key(info, path)
+
+
+def _checked_key(info: dict, path: Path) -> str:
+    """The key stored in a saved model's 'meta' entry ``info``, refused if it does not match its metadata."""
+    key = reduced_model_key(info["metadata"])
+    if key != info["key"]:
+        raise ValueError(f"reduced model file {path}: stored key does not match its metadata (corrupted)")
+    return key
+
+
+def load_reduced_model(path: str | Path, expected_key: str | None = None) -> ReducedModel:
+    """Read a reduced model; refuse a corrupted file or one whose key differs from ``expected_key``."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"reduced model file {path} does not exist")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {k: data[k] for k in data.files}
+        info = json.loads(str(arrays["meta"]))
+        nodes = NodeMap.from_arrays(arrays)
+    except Exception as exc:
+        raise ValueError(f"reduced model file {path} is corrupted or not a reduced model ({exc.__class__.__name__})"
+                         ) from None
+    key = _checked_key(info, path)
+    if expected_key is not None and key != expected_key:
+        raise ValueError(f"reduced model file {path} was built for other parameters or another mesh "
+                         f"(key {key}, expected {expected_key}); it is stale: rebuild it")
+    kind = str(arrays["forces"])
+    forces = None
+    if kind.endswith("polynomial"):
+        forces = PolynomialForces(arrays["A"], arrays["B"])
+    elif kind.endswith("quadrature"):
+        forces = QuadratureForces(arrays["H"], arrays["w"], *arrays["lame"],
+                                  precision=str(arrays.get("precision", "double")))
+    if kind.startswith("sector_"):
+        from rotor37_rom.forces.sector import SectorForces
+
+        forces = SectorForces(forces, arrays["sector_blocks"], arrays["K"].shape[0], arrays["sector_scales"],
+                              arrays["sector_faces"] if "sector_faces" in arrays else None)
+    sectors = None
+    if "sectors_Pi" in arrays:
+        from rotor37_rom.disk.assembly import DiskBasis
+
+        sectors = DiskBasis(**{f.name: arrays[f"sectors_{f.name}"] for f in dataclasses.fields(DiskBasis)})
+    return ReducedModel(M=arrays["M"], C=arrays["C"], K=arrays["K"], forces=forces,
+                        boundary_dofs=arrays["boundary_dofs"], nodes=nodes,
+                        sizes=info["sizes"], md_pairs=arrays["md_pairs"], Phi=arrays.get("Phi"),
+                        metadata=info["metadata"], sectors=sectors)
+
+
+def solve_reduced_static(model: ReducedModel, f: np.ndarray, load_factors: Sequence[float],
+                         nonlinear: bool = True, rtol: float = 1e-10, max_iterations: int = 30,
+                         max_bisections: int = 8) -> np.ndarray:
+    """K~ q + g~(q) = lambda f for each lambda in order (continuation from q = 0).
+
+    Newton with the exact reduced Jacobian, refreshed only when the residual stops dropping fast (ratio > 0.3);
+    a load increment that does not converge is bisected (up to ``max_bisections`` times).
+    Returns q (len(load_factors), r).
+    """
+    f = np.asarray(f, float)
+    use_nl = nonlinear and model.forces is not None
+
+    def residual(q, lam):
+        res = model.K @ q - lam * f
+        if use_nl:
+            res += model.forces.evaluate(q)[:, 0]
+        return res
+
+    def newton(q, lam):
+        scale = max(np.linalg.norm(lam * f), 1e-300)
+        J, previous = None, np.inf
+        for _ in range(max_iterations):
+            res = residual(q, lam)
+            norm = np.linalg.norm(res)
+            if norm <= rtol * max(scale, np.linalg.norm(model.K @ q)):
+                return q
+            if J is None or norm > 0.3 * previous:
+                J = model.K + (model.forces.jacobian(q) if use_nl else 0.0)
+            previous = norm
+            q = q - np.linalg.solve(J, res)
+        return None
+
+    q, lam_done, out = np.zeros(model.r), 0.0, []
+    for target in load_factors:
+        step, bisections = target - lam_done, 0
+        while lam_done != target:
+            lam = target if abs(target - lam_done) <= abs(step) else lam_done + step
+            q_new = newton(q.copy(), lam)
+            if q_new is None:
+                bisections += 1
+                if bisections > max_bisections:
+                    raise RuntimeError(f"reduced Newton did not converge at load factor {lam:.4g} after "
+                                       f"{max_bisections} bisections of the increment")
+                step *= 0.5
+                continue
+            q, lam_done = q_new, lam
+        out.append(q.copy())
+    return np.array(out)

@@ -1,0 +1,1 @@
+"""Post-processing of reduced states: stress recovery and location, clearance, mode classification."""

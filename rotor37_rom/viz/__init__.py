@@ -1,0 +1,1 @@
+"""Pictures: pyvista fields, matplotlib charts, the HTML report."""
