@@ -35,10 +35,9 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import machine_description  # noqa: E402
-from bench_contact_convergence import compare, nfrc_run, speed_errors  # noqa: E402
+from rotor37_rom.machine import machine_description
 from rotor37_rom.npz import save_json  # noqa: E402
+from rotor37_rom.studies.convergence import compare, nfrc_run, speed_errors
 
 RESULTS = Path("results/bench_contact_ecsw.json")
 

@@ -41,14 +41,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import machine_description  # noqa: E402
+from rotor37_rom.machine import machine_description
 
 
 def reference_run(sector, ops, casing, omega, duration, h, gnl, checkpoint, rho_inf=None, interface=None):

@@ -24,10 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import machine_description  # noqa: E402
-from bench_contact_convergence import compare, nfrc_run, speed_errors  # noqa: E402
+from rotor37_rom.machine import machine_description
 from rotor37_rom.npz import save_json  # noqa: E402
+from rotor37_rom.studies.convergence import compare, nfrc_run, speed_errors
 
 RESULTS = Path("results/bench_contact_rom_size.json")
 ROBUST = [1200.0, 1240.0, 1280.0, 1520.0]      # bench_contact_ecsw: h/2 and forces x (1 + 1e-4) move these < 1 %

@@ -28,8 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import write_results  # noqa: E402
+from rotor37_rom.machine import write_results
 
 ROOT = Path(__file__).resolve().parent.parent
 RULES = ("smallest", "full")
@@ -81,9 +80,9 @@ def main(argv=None) -> int:
     if not args.model.is_file():
         print(f"error: --model {args.model} not found (make speed-accuracy builds it)", file=sys.stderr)
         return 2
-    from _common import load_demo
     from speed_accuracy import study_training_speeds
-    cm = load_demo("contact_map")             # the one copy speed_accuracy's study_training_speeds also loads
+
+    from rotor37_rom.studies import contact_map as cm
 
     from rotor37_rom.model.reduced import load_reduced_model
     from rotor37_rom.studies.sweep import continuation

@@ -30,36 +30,11 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import write_results  # noqa: E402
-
-from rotor37_rom import fem  # noqa: E402
+from rotor37_rom.machine import write_results
 from rotor37_rom.dynamics.casing import Casing  # noqa: E402
-from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model  # noqa: E402
 from rotor37_rom.dynamics.explicit import CentralDifference, gnl_time_step, largest_states, simulate  # noqa: E402
 from rotor37_rom.studies.sweep import SweepSpec, last_revolution_max, load_sweep, run_sweep  # noqa: E402
-
-MAP_SPEEDS, MAP_REVOLUTIONS = np.linspace(1200.0, 1650.0, 90), 200.0     # the issue's full-disk map
-
-
-def contact_disk_model(preset: str):
-    """(sector, model, seconds): the disk model of the contact maps (every sector's 8 tip nodes, r_c = 10, r_MD = 10
-    by MI 2b, r_cyclic = 144), cached in results/cache."""
-    t0 = time.perf_counter()
-    sector = fem.create_disk_sector(preset=preset)
-    model, _ = build_disk_model(sector, DiskReductionConfig(tip_nodes="all", r_c=10, r_md=10, criterion="MI2b",
-                                                            r_cyclic=144), cache_dir=Path("results/cache"))
-    offline = time.perf_counter() - t0
-    print(f"disk model r = {model.r} {model.sizes}, {len(model.nodes)} tip nodes; {offline:.0f} s", flush=True)
-    return sector, model, offline
-
-
-def cost_per_sim_step(scheme, casing, speeds, steps=2000) -> tuple[float, object]:
-    """Seconds per simulation-step of a batch run with contact (and the run, for its states)."""
-    t0 = time.perf_counter()
-    res = simulate(scheme, speeds, casing, n_steps=steps, duration=steps * scheme.h * 5, record_every=20,
-                   record_q=True, on_blowup="flag")
-    return (time.perf_counter() - t0) / (steps * len(speeds)), res
+from rotor37_rom.studies.disk_contact import MAP_REVOLUTIONS, MAP_SPEEDS, contact_disk_model, cost_per_sim_step
 
 
 def main(argv=None) -> int:

@@ -32,17 +32,14 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import write_results  # noqa: E402
-
+from rotor37_rom.machine import write_results
 from rotor37_rom.reduction.builder import hyper_reduce  # noqa: E402
 from rotor37_rom.dynamics.casing import Casing  # noqa: E402
 from rotor37_rom.dynamics.explicit import CentralDifference, contact_training_states, simulate  # noqa: E402
 from rotor37_rom.npz import load_npz, save_npz  # noqa: E402
 from rotor37_rom.model.reduced import with_force_precision  # noqa: E402
+from rotor37_rom.studies.disk_contact import MAP_REVOLUTIONS, MAP_SPEEDS, contact_disk_model, cost_per_sim_step
 from rotor37_rom.studies.sweep import last_revolution_max  # noqa: E402
-
-from bench_disk_contact import MAP_REVOLUTIONS, MAP_SPEEDS, contact_disk_model, cost_per_sim_step  # noqa: E402
 
 OUT = Path("results/bench_disk_cubature")
 

@@ -34,10 +34,6 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import write_results  # noqa: E402
-from bench_disk_forced import AMPLITUDE, reference, sector_load  # noqa: E402
-
 from rotor37_rom import fem  # noqa: E402
 from rotor37_rom.disk.indicators import best_approximation, performance_indicator  # noqa: E402
 from rotor37_rom.disk.assembly import face_shapes  # noqa: E402
@@ -47,6 +43,8 @@ from rotor37_rom.fem.periodic import RepeatingSectors  # noqa: E402
 from rotor37_rom.forces.tensors import QuadratureForces, compute_polynomial_forces  # noqa: E402
 from rotor37_rom.reduction.craig_bampton import CRITERIA  # noqa: E402
 from rotor37_rom.dynamics.newmark import simulate_newmark  # noqa: E402
+from rotor37_rom.machine import write_results
+from rotor37_rom.studies.forced_response import AMPLITUDE, reference, sector_load
 
 OMEGA, PERIODS, SPP, RAMP = 4000.0, 10, 100, 1.0
 

@@ -49,12 +49,10 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import load_demo, write_results  # noqa: E402
+from rotor37_rom.machine import write_results  # noqa: E402
 
-_demo = load_demo("contact_map")
-ContactMapConfig, reduced_model, run_contact_map, time_scheme, world_comm = (
-    _demo.ContactMapConfig, _demo.reduced_model, _demo.run_contact_map, _demo.time_scheme, _demo.world_comm)
+from rotor37_rom.studies.contact_map import (ContactMapConfig, reduced_model, run_contact_map,  # noqa: E402
+    time_scheme, world_comm)
 
 from rotor37_rom.dynamics.explicit import CentralDifference, training_speeds  # noqa: E402
 from rotor37_rom.studies.sweep import load_speed, run_sweep, sector_maxima, sweep_folder  # noqa: E402

@@ -37,12 +37,10 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import write_results  # noqa: E402
+from rotor37_rom.machine import write_results
 
 BANDS_MM = (2.0, 4.0, 8.0)
 LOAD_BALLS_MM = (8.0, 16.0, 24.0)

@@ -22,13 +22,10 @@ import argparse
 import dataclasses
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import write_results  # noqa: E402
-
+from rotor37_rom.machine import write_results
 from rotor37_rom import fem  # noqa: E402
 from rotor37_rom.dynamics.casing import Casing  # noqa: E402
 from rotor37_rom.disk.harmonics import travelling_wave_departure  # noqa: E402

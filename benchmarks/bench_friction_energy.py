@@ -24,12 +24,10 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import write_results  # noqa: E402
+from rotor37_rom.machine import write_results
 
 
 def _tail_rates(t, work, energy, omega, fraction=1.0 / 3.0):

@@ -13,10 +13,8 @@ import json
 import subprocess
 import sys
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import write_results  # noqa: E402
+from rotor37_rom.machine import write_results
 
 CHILD = r"""
 import json, resource, sys, time
@@ -51,7 +49,6 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--presets", nargs="+", default=["ci", "coarse", "paper"])
     args = parser.parse_args()
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
     from rotor37_rom.geometry.tables import default_data_dir
 
     data = default_data_dir()

@@ -60,8 +60,9 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import load_demo, mpirun_env, write_results  # noqa: E402
+from rotor37_rom.studies import contact_map  # noqa: E402
+from rotor37_rom.machine import mpirun_env, write_results  # noqa: E402
+from rotor37_rom.studies.gnl_vs_linear import check_speeds_error, grid_index, in_range, same_step  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 DEMO = ROOT / "demos" / "contact_map.py"
@@ -157,18 +158,6 @@ def setting_records(folder: Path, gnl: bool, revolutions: float, every: bool = F
     return (dict(sorted(records.items())) if every else {w: records[w] for w in entry["speeds"]}), entry
 
 
-def same_step(h_map: float, h: float) -> bool:
-    """Whether a sweep at step ``h`` belongs to a map run at ``h_map``: the same step or one of its retries' (halved
-    up to 8 times); a map run again at another step (e.g. --step-outliers) keeps its earlier sweeps beside it."""
-    return any(abs(h * 2 ** k / h_map - 1.0) < 1e-9 for k in range(9))
-
-
-def grid_index(grid, w: float) -> int | None:
-    """The index of speed ``w`` in ``grid`` up to round-off (linspace of another range), or None."""
-    hit = np.flatnonzero(np.isclose(np.asarray(grid, float), w, rtol=1e-12, atol=0))
-    return int(hit[0]) if hit.size else None
-
-
 def step_check(folder: Path, revolutions: float) -> list[dict]:
     """The GNL map in ``folder`` (run with --step-outliers drop) against its speeds run again in folder/step_check
     at the step from every state: per speed, the largest LE response of both (mm), their relative difference and
@@ -253,27 +242,6 @@ def map_row(folders: list[Path], mu: float, gnl: bool, revolutions: float, quart
         "nfrc_mm": (imap.nfrc * 1e3).tolist(), "speeds": speeds.tolist()}
 
 
-def in_range(check, speeds: tuple) -> bool:
-    """Whether the --step-check grid (START, STOP, N) is speeds of the range (START, STOP, N), up to round-off."""
-    grid = np.linspace(speeds[0], speeds[1], int(speeds[2]))
-    return speeds[0] <= check[0] and check[1] <= speeds[1] and all(
-        grid_index(grid, w) is not None for w in np.linspace(check[0], check[1], int(check[2])))
-
-
-def check_speeds_error(args, ranges: list[tuple]) -> str | None:
-    """Why the --step-check grid cannot be run (None: it can): it needs --step-outliers drop and GNL maps, and
-    each of its speeds must be one of a range's."""
-    if args.step_outliers != "drop" or args.gnl == "off":
-        return "needs --step-outliers drop and --gnl on or both (it checks the GNL maps' dropped step)"
-    start, stop, n = args.step_check
-    if not (0 < start <= stop and n >= 1 and float(n).is_integer()):
-        return f"need 0 < START <= STOP and an integer N >= 1, got {args.step_check}"
-    if not any(in_range(args.step_check, r) for r in ranges):
-        grid = np.linspace(start, stop, int(n))
-        return f"its speeds {grid.tolist()} must be speeds of one of the ranges {[list(r) for r in ranges]}"
-    return None
-
-
 def earlier_rows(rows: list[dict]) -> list[dict]:
     """The rows of results/bench_gnl_vs_linear.json that ``rows`` do not replace (another model size, friction value,
     setting, normal or training, e.g. from a run with --gnl off only), so that the file collects every run. A row
@@ -347,8 +315,7 @@ def build_model(path: Path, preset: str, r_c: int, global_md: int) -> None:
     ``path``."""
     from rotor37_rom.model.reduced import save_reduced_model
 
-    demo = load_demo("contact_map")
-    model = demo.build_model(demo.ContactMapConfig(preset=preset, r_c=r_c, global_md=global_md, out=OUT))
+    model = contact_map.build_model(contact_map.ContactMapConfig(preset=preset, r_c=r_c, global_md=global_md, out=OUT))
     path.parent.mkdir(parents=True, exist_ok=True)
     save_reduced_model(model, path)
 
@@ -423,7 +390,7 @@ def main(argv=None) -> int:
     if not args.model.is_file():
         build_model(args.model, args.preset, args.r_c, args.global_md)
     model = load_reduced_model(args.model)
-    quarter_omega1 = float(load_demo("contact_map").eigenfrequencies(model)[0]) / 4
+    quarter_omega1 = float(contact_map.eigenfrequencies(model)[0]) / 4
     env = mpirun_env(OPENBLAS_NUM_THREADS="1") if args.ranks > 1 else None    # one BLAS thread per rank
     rows, commands = [], []
     # the maps' r = 55 trained unscaled keeps its folders; another model or training its own

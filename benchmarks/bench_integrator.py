@@ -19,8 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import write_results  # noqa: E402
+from rotor37_rom.machine import write_results
 
 
 def gemm_rate(n: int = 2000) -> float:

@@ -14,10 +14,8 @@ import json
 import subprocess
 import sys
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import write_results  # noqa: E402
+from rotor37_rom.machine import write_results
 
 CHILD = r"""
 import json, resource, sys, time

@@ -13,10 +13,8 @@ import argparse
 import json
 import subprocess
 import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import mpirun_env, write_results  # noqa: E402
+from rotor37_rom.machine import mpirun_env, write_results
 
 CHILD = r"""
 import json, resource, sys, time

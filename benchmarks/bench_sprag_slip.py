@@ -30,13 +30,10 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import write_results  # noqa: E402
-
+from rotor37_rom.machine import write_results
 from rotor37_rom.dynamics.casing import contact_frames  # noqa: E402
 from rotor37_rom.dynamics.friction import sprag_slip_friction  # noqa: E402
 

@@ -25,8 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import write_results  # noqa: E402
+from rotor37_rom.machine import write_results
 
 DIRECTIONS = ("ex", "radial", "cone")
 DEFECT = 1e-2          # points whose ansatz defect is larger are marked (x), not joined

@@ -24,9 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import write_results  # noqa: E402
-
+from rotor37_rom.machine import write_results
 from rotor37_rom.studies.sweep import (engine_order_content, engine_order_resonance, interaction_map, load_sweep,
     record_row, sector_maxima, sector_rows)
 

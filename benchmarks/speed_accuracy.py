@@ -74,7 +74,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import load_demo, machine_description  # noqa: E402
+from _common import load_demo  # noqa: E402
+from rotor37_rom.machine import machine_description  # noqa: E402
 from rotor37_rom.npz import save_json  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -847,7 +848,7 @@ def forced_reference(case: tuple, gnl: bool) -> dict:
     """The full-order history of one case (bench_disk_forced.reference: the sectors of one repeat closed on
     themselves, implicit Newmark at the scene's step; cached under results/speed_accuracy/disk_forced/ci, a GNL run
     checkpointed and resumed)."""
-    import bench_disk_forced as bdf
+    from rotor37_rom.studies import forced_response as bdf
 
     sector, ops, *_ = _forced_sector()
     out = WORK / "disk_forced" / "ci"
@@ -881,7 +882,7 @@ def forced_error(model, case: tuple, gnl: bool, ref: dict) -> dict:
     """One reduced run of ``case`` against its reference (bench_disk_forced.reduced, the same Newmark and step), scored
     by the performance indicator's four criteria (loaded node, tip nodes, field, strain energy); ``error`` is their
     largest. Cached by the model's key: a re-run of the study reads it."""
-    import bench_disk_forced as bdf
+    from rotor37_rom.studies import forced_response as bdf
     from rotor37_rom.disk.indicators import performance_indicator
 
     sector, _, K_s, M_s = _forced_sector()

@@ -10,123 +10,23 @@
 #
 # It prints what was read (cells converted, bounding box, mass: a unit slip shows there), the first clamped
 # modes, builds the Craig-Bampton model on the contact nodes (ordered LE -> TE along the tip chord), gives the
-# sprag-slip onset mu* of each contact node and of the LE half (rotor37_rom.dynamics.friction), and runs a short rub on the
-# paper's ovalised casing at one speed. Results: results/own_blade/summary.json. A bad option is one line on stderr,
-# exit status 2.
+# sprag-slip onset mu* of each contact node and of the LE half (rotor37_rom.dynamics.friction), and runs a short rub on
+# the paper's ovalised casing at one speed. Results: results/own_blade/summary.json. A bad option is one line on
+# stderr, exit status 2.
+#
+# The scene is one library function, `run_own_blade(OwnBladeConfig(...))` of `rotor37_rom.studies.own_blade`, which
+# prints each step as it goes and returns the summary.
 
 # +
 from __future__ import annotations
 
-import dataclasses
-import json
 import sys
-import time
-from pathlib import Path
 from typing import Sequence
-
-import numpy as np
 
 from rotor37_rom.cli import ArgumentParser, run_main
 from rotor37_rom.geometry.mesh_import import MESH_SUFFIXES, UNITS
+from rotor37_rom.studies.own_blade import OwnBladeConfig, run_own_blade
 # -
-
-
-@dataclasses.dataclass(frozen=True)
-class OwnBladeConfig:
-    """What to run. mesh None: the project's ci blade written as a millimetre Abaqus deck (the example input)."""
-
-    mesh: str | None = None
-    clamp: str = "CLAMP"
-    tip: str = "TIP"
-    units: str = "mm"
-    contact: int = 8
-    modes: int = 6
-    r_c: int = 15
-    speed: float = 1400.0
-    revolutions: float = 2.0
-    mu: float = 0.0
-    out: str = "results/own_blade"
-
-    def __post_init__(self):
-        if self.mesh is not None and not Path(self.mesh).is_file():
-            raise ValueError(f"--mesh {self.mesh} does not exist")
-        if self.mesh is not None and Path(self.mesh).suffix.lower() not in MESH_SUFFIXES:
-            raise ValueError(f"--mesh must be one of {', '.join(MESH_SUFFIXES)}, got {Path(self.mesh).name}")
-        if self.units not in UNITS:
-            raise ValueError(f"--units must be one of {', '.join(UNITS)}, got {self.units!r}")
-        if not 2 <= self.contact <= 40:
-            raise ValueError(f"--contact must be in [2, 40] nodes along the tip camber line, got {self.contact}")
-        if not 1 <= self.modes <= 50:
-            raise ValueError(f"--modes must be in [1, 50], got {self.modes}")
-        if not 1 <= self.r_c <= 100:
-            raise ValueError(f"--r-c must be in [1, 100], got {self.r_c}")
-        if not 100.0 <= self.speed <= 5000.0:
-            raise ValueError(f"--speed must be in [100, 5000] rad/s, got {self.speed}")
-        if not 0.0 < self.revolutions <= 50.0:
-            raise ValueError(f"--revolutions must be in (0, 50], got {self.revolutions}")
-        if not 0.0 <= self.mu < 1.0:
-            raise ValueError(f"--mu must be in [0, 1), got {self.mu}")
-
-
-def load_blade(config: OwnBladeConfig):
-    """The user's sector (or the example deck, written first)."""
-    from rotor37_rom import fem
-
-    path = config.mesh
-    if path is None:
-        Path(config.out).mkdir(parents=True, exist_ok=True)
-        path = fem.write_sector_mesh(fem.create_blade_sector(preset="ci"), Path(config.out) / "example_blade_mm.inp",
-                                     units="mm")
-        print(f"no --mesh: the ci blade written as {path} (C3D4, mm, node sets CLAMP and TIP)")
-    return fem.create_sector_from_file(path, clamp=config.clamp, tip=config.tip, units=config.units,
-                                       contact=config.contact, preset="ci")
-
-
-def run_own_blade(config: OwnBladeConfig) -> dict:
-    """The whole scene; returns the summary written to results/own_blade/summary.json."""
-    from rotor37_rom import fem
-    from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
-    from rotor37_rom.dynamics.casing import Casing, contact_matrices
-    from rotor37_rom.dynamics.friction import sprag_slip_friction
-    from rotor37_rom.dynamics.explicit import CentralDifference, simulate
-
-    t0 = time.perf_counter()
-    blade = load_blade(config)
-    modes = fem.compute_clamped_modes(blade, config.modes)
-    print("clamped modes (Hz):", np.round(modes.omega / (2 * np.pi), 1).tolist())
-    print("contact nodes (LE -> TE), mm:", np.round(1e3 * blade.tip_nodes, 2).tolist())
-    model, _ = build_reduced_model(blade, ReductionConfig(r_c=config.r_c, r_md=0, global_md_modes=3,
-                                                          forces="intrusive", keep_basis=True))
-    print(f"reduced model: r = {model.r} {model.sizes}")
-    casing = Casing(mu=config.mu)
-    N, S, _, _ = contact_matrices(model.nodes, model.r, casing)
-    per_node = [sprag_slip_friction(model.K, N, S, [k]) for k in range(N.shape[0])]
-    le_half = sprag_slip_friction(model.K, N, S, list(range(max(1, N.shape[0] // 2))))
-    print("sprag-slip onset mu* per node (LE -> TE):", [round(m, 3) if np.isfinite(m) else None for m in per_node],
-          f"LE half {le_half:.3f}")
-    scheme = CentralDifference(model, nonlinear=True, safety=0.5)
-    run = simulate(scheme, [config.speed], casing, revolutions=config.revolutions, on_blowup="flag")
-    diverged = bool(run.diverged_step[0] >= 0)
-    le = run.row("0:LE")
-    summary = {
-        "mesh": blade.summary, "mass_kg": blade.volume * blade.material.rho, "dofs": blade.n_dofs,
-        "modes_hz": (modes.omega / (2 * np.pi)).tolist(), "contact_nodes_m": blade.tip_nodes.tolist(),
-        "r": model.r, "sizes": list(model.sizes), "mu_star_per_node": [m if np.isfinite(m) else None for m in per_node],
-        "mu_star_le_half": le_half if np.isfinite(le_half) else None, "speed": config.speed, "mu": config.mu,
-        "revolutions": config.revolutions, "diverged": diverged,
-        "le_max_radial_mm": None if diverged else 1e3 * float(np.max(run.u_r[0][le])),
-        "wall_s": time.perf_counter() - t0,
-    }
-    if diverged:
-        print(f"contact run at {config.speed} rad/s grew past the limit: no result shown")
-    else:
-        print(f"contact run at {config.speed} rad/s, mu = {config.mu}: max radial displacement of node LE "
-              f"{summary['le_max_radial_mm']:.3f} mm")
-    out = Path(config.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "summary.json").write_text(json.dumps(summary, indent=1))
-    print(f"wrote {out / 'summary.json'} ({summary['wall_s']:.0f} s)")
-    return summary
 
 
 def build_parser() -> ArgumentParser:

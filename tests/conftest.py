@@ -119,21 +119,6 @@ def ci_rom(ci_blade, ci_ops, tmp_path_factory):
     return model
 
 
-def load_demo(name: str):
-    """Import demos/<name>.py as a module (demos/ is not a package); tests import it with
-    ``from conftest import load_demo``."""
-    import importlib.util
-    import sys
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "demos" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(f"demo_{name}", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    return module
-
-
 def random_sector(rng, r_s: int, n_l: int):
     """A random sector's reduced matrices (``disk.SectorMatrices``: r_s interior coordinates, n_l DOFs per cyclic
     face, symmetric positive definite K and M) for the disk's algebra tests; tests import it with

@@ -342,7 +342,6 @@ def test_gnl_step_report_names_the_states_that_set_the_step(ci_rom, capsys):
     """A few states far stiffer than the rest (a St. Venant-Kirchhoff collapse under a point contact: 55 times the
     median tangent frequency on the ci blade at mu = 0.1) set the GNL step alone: ``gnl_step_report`` names them and
     gives the step without them, each equal to ``gnl_time_step`` on the states concerned."""
-    from conftest import load_demo
     from rotor37_rom.dynamics.explicit import (capped_mass, gnl_step_report, gnl_time_step, highest_frequency,
         step_outliers, tangent_highest_frequency)
 
@@ -365,7 +364,8 @@ def test_gnl_step_report_names_the_states_that_set_the_step(ci_rom, capsys):
         gnl_time_step(ci_rom, states, cap, safety=0.0)
     with pytest.raises(ValueError, match="finite tangent frequencies"):
         gnl_time_step(ci_rom, np.zeros((ci_rom.r, 0)), cap)
-    contact_map = load_demo("contact_map")                     # the demo's note names them, only when they bind
+    from rotor37_rom.studies import contact_map                # the map's note names them, only when they bind
+
     contact_map.print_step_outliers(rep)
     note = capsys.readouterr().out
     assert note.startswith("note: 1 of 7 states would set the GNL step") and \
@@ -405,11 +405,8 @@ def test_gnl_vs_linear_step_check_bad_input(tmp_path, args, says):
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 2 and len(lines) == 1 and lines[0].startswith("error: --step-check") and says in lines[0]
     assert not (tmp_path / "results").exists()
-    sys.path.insert(0, str(root / "benchmarks"))
-    try:
-        from bench_gnl_vs_linear import check_speeds_error, same_step
-    finally:
-        sys.path.remove(str(root / "benchmarks"))
+    from rotor37_rom.studies.gnl_vs_linear import check_speeds_error, same_step
+
     ranges = [(1300.0, 1600.0, 4), (1200.0, 1600.0, 21)]      # 1,320 rad/s: the second's, not the first's
     check = argparse.Namespace(step_outliers="drop", gnl="on", step_check=[1320.0, 1320.0, 1.0])
     assert check_speeds_error(check, ranges) is None

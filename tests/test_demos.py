@@ -1,6 +1,6 @@
-"""Importable demos (#18): demos/contact_map.py's work is run_contact_map(ContactMapConfig) -> ContactMapResult, which
-a test calls in-process; its command line is that configuration, and a bad input is one line on stderr naming the
-option, with exit status 2."""
+"""Demos as library calls (#18, #69): demos/contact_map.py's work is run_contact_map(ContactMapConfig) ->
+ContactMapResult of rotor37_rom.studies.contact_map, which a test calls in-process; its command line is that
+configuration, and a bad input is one line on stderr naming the option, with exit status 2."""
 import json
 import os
 import subprocess
@@ -10,21 +10,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotor37_rom.studies import sweep
+from rotor37_rom.studies import blade_report, contact_map, sweep
 from rotor37_rom.model.reduced import save_reduced_model
-from conftest import load_demo  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 
 
-@pytest.fixture(scope="module")
-def contact_map():
-    return load_demo("contact_map")
-
-
-def test_contact_map_perturbation_keeps_the_step(contact_map, ci_rom, tmp_path):
+def test_contact_map_perturbation_keeps_the_step(ci_rom, tmp_path):
     """--perturbation EPS: the map's scheme runs the model with K q + g(q) scaled by 1 + EPS (perturbed_model) at the
     unperturbed scheme's step, with its damping and cap, GNL off and on and with a cap; the force to round-off
     (1e-12, as in test_perturbed_model_scales_the_internal_force); the highest frequency EPS / 2 higher without a
@@ -53,7 +47,7 @@ def test_contact_map_perturbation_keeps_the_step(contact_map, ci_rom, tmp_path):
         contact_map.time_scheme(at_limit, ci_rom, False, None)
 
 
-def test_time_scheme_takes_a_record_step(contact_map, ci_rom, tmp_path):
+def test_time_scheme_takes_a_record_step(ci_rom, tmp_path):
     """time_scheme(..., h=H) runs at H (a record's own step, as the stress carry-ons use) with the setting's forces,
     cap and perturbation, the setting itself unchanged (its step is part of a disk cubature's training key); H = 0
     is a step, refused as one, not "no step"."""
@@ -70,7 +64,7 @@ def test_time_scheme_takes_a_record_step(contact_map, ci_rom, tmp_path):
         contact_map.time_scheme(config, ci_rom, False, None, h=0.0)
 
 
-def test_contact_map_runs_in_process(contact_map, ci_rom, tmp_path):
+def test_contact_map_runs_in_process(ci_rom, tmp_path):
     """run_contact_map on 2 speeds x 0.3 revolutions (GNL off): the result object holds what summary.json says, its
     NFRC is the map of the sweep folder it wrote, and it lists the files it wrote."""
     out = tmp_path / "map"
@@ -93,7 +87,7 @@ def test_contact_map_runs_in_process(contact_map, ci_rom, tmp_path):
     assert all(p.parent == out and p.is_file() for p in result.files)
 
 
-def test_contact_map_rerun_keeps_the_wall_time(contact_map, tmp_path):
+def test_contact_map_rerun_keeps_the_wall_time(tmp_path):
     """A call that finds every speed of a setting done (wall < 1 s, no rate) keeps the wall time and rate of the call
     that ran them; a run at another step, or one that ran, reports its own."""
     previous = tmp_path / "summary.json"
@@ -110,7 +104,7 @@ def test_contact_map_rerun_keeps_the_wall_time(contact_map, tmp_path):
     assert summary["runs"]["GNL"]["wall_s"] == 300.0 and summary["runs"]["no GNL"]["wall_s"] == 100.0
 
 
-def test_contact_map_command_line_is_the_config(contact_map, tmp_path):
+def test_contact_map_command_line_is_the_config(tmp_path):
     """The options parse into the config a Python caller writes (numbers as floats: the same cache keys)."""
     argv = ["--model", str(tmp_path / "rom.npz"), "--speeds", "1400", "1450", "2", "--revolutions", "0.3", "--gnl",
             "off", "--mu", "0", "--quiet", "--out", str(tmp_path)]
@@ -141,7 +135,7 @@ def test_contact_map_command_line_is_the_config(contact_map, tmp_path):
     ({"capped_training": True, "frequency_cap": 120.0}, "--capped-training"),
     ({"capped_training": True, "cubature": 1e-4}, "--capped-training"),
     ({"capped_training": True, "tolerance": 0.05}, "--capped-training")])
-def test_contact_map_config_names_the_option(contact_map, fields, flag):
+def test_contact_map_config_names_the_option(fields, flag):
     with pytest.raises(ValueError, match=f"^{flag}[ :]"):
         contact_map.ContactMapConfig(**fields)
 
@@ -167,7 +161,7 @@ def test_contact_map_bad_input_is_one_line(tmp_path, args, flag):
 def test_report_passes_the_contact_normal_to_both_maps():
     """The report's --direction reaches both maps' casing (the cone normal keeps the paper's mu = 0.15 bounded), and a
     normal it does not know is refused naming the option, before any work."""
-    report = load_demo("report")
+    report = blade_report
     config = report.ReportConfig(direction="cone", mu=0.15)
     assert [c.casing.direction for c in config.map_configs] == ["cone", "cone"]
     assert [c.casing.mu for c in config.map_configs] == [0.15, 0.15]

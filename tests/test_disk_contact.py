@@ -130,11 +130,10 @@ def test_contact_map_takes_a_disk_model(disk_model, tmp_path):
     asked sector's), the EO4 resonance from the 1B family's 4-diameter mode (above the family's lowest); its
     continuation (§2.3.3) on the disk follows the same node: each branch's first run is the map's run at its start
     speed (from rest, as long), so it gives the map's amplitude there."""
-    from conftest import load_demo
     from rotor37_rom.model.reduced import save_reduced_model
+    from rotor37_rom.studies import contact_map
     from rotor37_rom.studies.sweep import load_sweep
 
-    contact_map = load_demo("contact_map")
     model, _ = disk_model
     config = contact_map.ContactMapConfig(model=save_reduced_model(model, tmp_path / "disk.npz"), sector=5,
                                           speeds=(1400, 1500, 2), revolutions=1.0, gnl="off", frequency_cap=16.0,
@@ -161,10 +160,9 @@ def test_disk_gnl_map_probes_once(disk_model, tmp_path, monkeypatch):
     """A capped GNL disk map takes its step from a capped GNL probe run (the disk's unscaled step is ~5e-8 s); the
     probe is cached with the map, so the map started again (a resumed multi-hour map) runs no simulation at all - its
     speeds are done and the probe is read back - and takes the same step, below the capped linear one."""
-    from conftest import load_demo
     from rotor37_rom.model.reduced import save_reduced_model
+    from rotor37_rom.studies import contact_map, contact_scheme
 
-    contact_map = load_demo("contact_map")
     model, _ = disk_model
     config = contact_map.ContactMapConfig(model=save_reduced_model(model, tmp_path / "disk.npz"),
                                           speeds=(1400, 1500, 2), revolutions=0.2, gnl="on", frequency_cap=16.0,
@@ -175,10 +173,10 @@ def test_disk_gnl_map_probes_once(disk_model, tmp_path, monkeypatch):
     def no_simulation(*args, **kwargs):
         raise AssertionError("the resumed map simulated again")
 
-    monkeypatch.setattr(contact_map, "simulate", no_simulation)
+    for module in (contact_map, contact_scheme):                          # the study's own runs and the probe's
+        monkeypatch.setattr(module, "simulate", no_simulation)
     again = contact_map.run_contact_map(config).runs["GNL, cap 16 kHz"]
-    linear = contact_map.CentralDifference(model, nonlinear=False, safety=0.5,
-                                           frequency_cap=config.frequency_cap_rad_s)
+    linear = CentralDifference(model, nonlinear=False, safety=0.5, frequency_cap=config.frequency_cap_rad_s)
     assert again.h == first.h <= linear.h
     np.testing.assert_array_equal(again.imap.nfrc, first.imap.nfrc)
 

@@ -1,7 +1,6 @@
 """Bad input stops with one line naming the culprit; the demo runs at the ci preset and draws real pictures;
 the implicit Newmark reference conserves energy (average acceleration, linear, undamped)."""
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -112,23 +111,20 @@ def _timoshenko_first_bending(E, nu, rho, L, h, kappa, guess):
 
 
 def test_demo_runs_and_draws(tmp_path, ci_blade):
-    """demos/blade_modes.py's run_blade_modes at the ci preset, in-process: 1B and 1T found, XDMF written, three PNG
-    mode pictures (its bad inputs: tests/test_demo_errors.py).
+    """demos/blade_modes.py's study (rotor37_rom.studies.blade_modes.run_blade_modes) at the ci preset, in-process:
+    1B and 1T found, XDMF written, three PNG mode pictures (its bad inputs: tests/test_demo_errors.py).
 
     Pixels depend on VTK/OpenGL, so only 'not blank' is asserted on them (loose: any picture of the blade passes,
     a white or black frame or a single flat colour fails). What was drawn is checked through the renderer's
     .png.json sidecar: the whole ci mesh (its cell count) coloured by |u| normalised to 1, which is exactly 1 at
     its maximum (x / x) and 0 at the clamped root up to the eigen-solver's round-off on clamped rows (< 1e-12)."""
-    import importlib.util
     import json
 
     import matplotlib.image as mpimg
 
-    spec = importlib.util.spec_from_file_location("demo_blade_modes", REPO / "demos" / "blade_modes.py")
-    demo = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = demo
-    spec.loader.exec_module(demo)
-    result = demo.run_blade_modes(demo.BladeModesConfig(preset="ci", table="none", n_modes=3, out=tmp_path))
+    from rotor37_rom.studies.blade_modes import BladeModesConfig, run_blade_modes
+
+    result = run_blade_modes(BladeModesConfig(preset="ci", table="none", n_modes=3, out=tmp_path))
     (blade,) = result.blades
     assert blade.labels[:2] == ["1B", "1T"] and blade.dofs == ci_blade.n_dofs
     assert (tmp_path / "parametric_modes.xdmf").is_file() and (tmp_path / "parametric_summary.json").is_file()
@@ -193,13 +189,8 @@ def test_mistuning_bench_summarises_over_seeds(tmp_path):
     mean and largest over the seeds (a blown-up run's NaN left out), and each largest blade's rank among the
     stiffness factors (0: the softest); an earlier run's rows are kept when its settings are the same and the
     (sigma, seed) is not run again, dropped when a setting differs."""
-    import sys
+    from rotor37_rom.studies.mistuning import earlier_rows, over_seeds
 
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-    try:
-        from bench_disk_mistuning import earlier_rows, over_seeds
-    finally:
-        sys.path.pop(0)
     rows = [{"sigma": 0.0, "seed": 0, "amplification": [1.0, 1.0], "localisation": [1.1, 1.2], "factors": None,
              "largest_blade": [0, 1]},
             {"sigma": 0.05, "seed": 1, "amplification": [1.2, 0.9], "localisation": [1.5, 1.3],

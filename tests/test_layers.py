@@ -85,3 +85,77 @@ def test_openblas_runs_kernels_that_fit_the_cpu():
         pytest.skip("the BLAS is not OpenBLAS")
     assert suggested_coretype(core, cpu_flags()) is None, \
         f"OpenBLAS runs its generic '{core}' kernels on this CPU: run make setup (it sets OPENBLAS_CORETYPE)"
+
+
+def _package_graph() -> dict[str, set[str]]:
+    """The package's import graph: each module -> the modules of the package it imports (at any depth of its code,
+    deferred imports included; ``from a import b`` counts as a.b where a.b is a module, else as a)."""
+    modules = dict(_modules())
+    graph = {}
+    for name, path in modules.items():
+        edges = set()
+        for imported in _imports(path):
+            if imported in modules:
+                edges.add(imported)
+            elif imported.rsplit(".", 1)[0] in modules:
+                edges.add(imported.rsplit(".", 1)[0])
+        graph[name] = edges - {name}
+    return graph
+
+
+def _cycle(graph: dict[str, set[str]]) -> list[str] | None:
+    """One cycle of ``graph`` (a list of modules, the first repeated at the end), or None."""
+    state, stack = {}, []
+
+    def visit(node):
+        state[node] = "open"
+        stack.append(node)
+        for nxt in sorted(graph.get(node, ())):
+            if state.get(nxt) == "open":
+                return stack[stack.index(nxt):] + [nxt]
+            if nxt not in state:
+                found = visit(nxt)
+                if found:
+                    return found
+        state[node] = "closed"
+        stack.pop()
+        return None
+
+    for node in sorted(graph):
+        if node not in state:
+            found = visit(node)
+            if found:
+                return found
+    return None
+
+
+def test_the_package_has_no_import_cycle():
+    """Subpackages import one way: no module of rotor37_rom reaches itself through its imports (deferred ones too)."""
+    assert _cycle(_package_graph()) is None, " -> ".join(_cycle(_package_graph()))
+    # the test sees a cycle when there is one
+    assert _cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+    assert _cycle({"a": {"b"}, "b": set(), "c": {"a", "b"}}) is None
+
+
+def test_scripts_are_not_imported_and_do_not_touch_sys_path():
+    """The library holds the logic: no module of the package, no test, demo or benchmark imports a demo or a benchmark
+    (by name or by file), and no file changes sys.path to find one."""
+    scripts = {p.stem for folder in ("demos", "benchmarks") for p in (ROOT / folder).glob("*.py")}
+    offenders = []
+    for folder in ("rotor37_rom", "geometry", "forms", "tests", "demos", "benchmarks"):
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            text = path.read_text()
+            if path.name == "test_layers.py":
+                continue
+            if "sys.path" in text:
+                offenders.append(f"{path.relative_to(ROOT)}: sys.path")
+            if "spec_from_file_location" in text:
+                offenders.append(f"{path.relative_to(ROOT)}: loads a file as a module")
+            imported = {m.split(".")[0] for m in _imports(path)}
+            if folder in ("demos", "benchmarks", "tests"):
+                imported |= {n.module for n in ast.walk(ast.parse(text))
+                             if isinstance(n, ast.ImportFrom) and n.module and n.level == 0}
+            bad = sorted(imported & scripts - {"conftest"})
+            if bad:
+                offenders.append(f"{path.relative_to(ROOT)}: imports {bad}")
+    assert not offenders, offenders

@@ -181,10 +181,8 @@ def test_tolerance_errors(demo, argv, message):
 
 def test_contact_map_takes_the_chosen_options():
     """--tolerance sets each setting's options from the study (the command's own configuration, no run)."""
-    sys.path.insert(0, str(ROOT / "tests"))
-    from conftest import load_demo
+    from rotor37_rom.studies import contact_map as cm
 
-    cm = load_demo("contact_map")
     study = load_study()
     settings = {"map-linear": False, "map-gnl": True}
     for tol in (0.01, 0.05, 0.2):
@@ -209,10 +207,8 @@ def test_contact_map_takes_the_disk_choice():
     """With --disk, --tolerance builds the disk model (r_c, r_md, r_cyclic) and sets the cap (and with GNL the force
     evaluation) of the choice of the scene 'disk-map-linear' (GNL off) or 'disk-map-gnl' (on), read from the study
     file."""
-    sys.path.insert(0, str(ROOT / "tests"))
-    from conftest import load_demo
+    from rotor37_rom.studies import contact_map as cm
 
-    cm = load_demo("contact_map")
     study = load_study()
     for gnl, name in ((False, "disk-map-linear"), (True, "disk-map-gnl")):
         setting = "on" if gnl else "off"
@@ -244,10 +240,8 @@ def test_contact_map_takes_the_disk_choice():
 def test_reduced_blade_builds_the_chosen_model():
     """--tolerance builds only the study's cheapest reduced model of the clearance scene within it (one basis with
     its selected and global MDs), read from the study file; never the full-order linear candidate."""
-    sys.path.insert(0, str(ROOT / "tests"))
-    from conftest import load_demo
+    from rotor37_rom.studies import clearance_consumption as rb
 
-    rb = load_demo("reduced_blade")
     study = load_study()
     scene = study["scenes"]["clearance"]
     roms = [c for c in scene["candidates"] if "r_c" in c["options"]]
@@ -312,9 +306,8 @@ def test_forced_response_bench_tolerance_errors(tmp_path, argv, message):
 def test_forced_response_bench_takes_the_chosen_model():
     """bench_disk_forced.py --tolerance runs the study's choice: the linear scene's model with no GNL reference unless
     one is asked, the GNL scene's where it is (on the scene's 3 mm patch); without --tolerance, its own defaults."""
-    spec = importlib.util.spec_from_file_location("bench_disk_forced", ROOT / "benchmarks" / "bench_disk_forced.py")
-    bdf = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bdf)
+    from rotor37_rom.studies import forced_response as bdf
+
     models = ("r_c", "r_md", "r_cyclic", "criteria", "face_shapes")
 
     def expected(scene, tol):

@@ -1,23 +1,17 @@
-"""The report demo (demos/report.py, `make demo`): the whole single-blade story at a tiny size in-process, its report
-in a browser, and the rule that a stress is shown only for a bounded run."""
+"""The report (demos/report.py, `make demo`; rotor37_rom.studies.blade_report): the whole single-blade story at a tiny
+size in-process, its report in a browser, and the rule that a stress is shown only for a bounded run."""
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from conftest import load_demo  # noqa: E402
+
+from rotor37_rom.studies import blade_report as report
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-
-
-@pytest.fixture(scope="module")
-def report():
-    return load_demo("report")
-
-
-def test_unbounded_run_shows_no_stress(report):
+def test_unbounded_run_shows_no_stress():
     """An unbounded run's summary cell says so and carries no stress value; a bounded one gives its MPa and the
     ratio to sigma_Y; the flags list every map speed and stress run past the limit, and nothing else."""
     unbounded = report.PeakStress("GNL", True, 1450.0, False, t_diverged=0.0123)
@@ -35,7 +29,7 @@ def test_unbounded_run_shows_no_stress(report):
 
 
 @pytest.mark.slow
-def test_report_at_ci(report, tmp_path):
+def test_report_at_ci(tmp_path):
     """run_report at the ci preset on r = 45 (r_c = 15), one speed x 1.5 revolutions, one load level, mu = 0.
 
     The summary is the first table and states the results the objects hold; the report opens in Chromium with every
@@ -78,7 +72,7 @@ def test_report_at_ci(report, tmp_path):
     written = json.loads((config.out / "stress" / "summary.json").read_text())
     # the maps run the speed-accuracy study's choices at the default 5 %, or its reference setting where no measured
     # model meets 5 % (their labels name the cap and forces)
-    from contact_map import setting_names
+    from rotor37_rom.studies.contact_scheme import setting_names
 
     for (c, run), gnl in zip(result.runs, (False, True)):
         chosen = config.choice(gnl).options

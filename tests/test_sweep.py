@@ -36,7 +36,7 @@ def test_killed_sweep_resumes(ci_rom, tmp_path, monkeypatch, capsys):
     def killed_simulate(*args, checkpoint=None, **kwargs):
         def save_then_die(st):
             checkpoint(st)
-            if st["n"] >= kill_at:
+            if st.n >= kill_at:
                 raise _Killed
 
         return real(*args, checkpoint=save_then_die, **kwargs)
@@ -50,7 +50,7 @@ def test_killed_sweep_resumes(ci_rom, tmp_path, monkeypatch, capsys):
     resumed_from = []
 
     def spy(*args, state=None, **kwargs):
-        resumed_from.append(None if state is None else state["n"])
+        resumed_from.append(None if state is None else state.n)
         return real(*args, state=state, **kwargs)
 
     monkeypatch.setattr(sweep_mod, "simulate", spy)
@@ -91,7 +91,7 @@ def test_killed_training_runs_resume(ci_rom, tmp_path, monkeypatch):
 
     def killed_simulate(*args, checkpoint=None, **kwargs):
         def save_then_die(st):
-            if st["n"] >= kill_at:
+            if st.n >= kill_at:
                 checkpoint(st)
                 raise _Killed
 
@@ -100,7 +100,7 @@ def test_killed_training_runs_resume(ci_rom, tmp_path, monkeypatch):
     resumed_from = []
 
     def spy(*args, state=None, **kwargs):
-        resumed_from.append(None if state is None else state["n"])
+        resumed_from.append(None if state is None else state.n)
         return real(*args, state=state, **kwargs)
 
     def run(resumer, speeds):
@@ -121,7 +121,7 @@ def test_killed_training_runs_resume(ci_rom, tmp_path, monkeypatch):
     assert (real(scheme, SPEEDS, casing, revolutions=0.25).min_multiplier < np.inf).all()   # both touched
     with np.load(ckpt) as data:                                   # the killed step's state ...
         state = integrator.loop_state(data, SPEEDS.size)
-    state["q_rec"] = None                                         # ... as a sweep saves it: no full states
+    state.q_rec = None                                             # ... as a sweep saves it: no full states
     with pytest.raises(ValueError, match="record_q=True cannot resume"):
         real(scheme, SPEEDS, casing, revolutions=0.25, record_q=True, state=state)
     run(scheme, SPEEDS[:1])                                       # other speeds
@@ -632,10 +632,9 @@ def test_capped_training_trains_on_the_capped_probe_step(ci_rom, tmp_path):
     the tangent limit on that probe's states - the training states equal those of that capped run redone here, to
     round-off (the same scheme, the same speeds, the same records) - and every step is within the capped linear one.
     Without the option the blade's training runs unscaled and no capped probe is made."""
-    from conftest import load_demo
     from rotor37_rom.dynamics.explicit import contact_training_states
+    from rotor37_rom.studies import contact_map
 
-    contact_map = load_demo("contact_map")
     model_path = save_reduced_model(ci_rom, tmp_path / "rom.npz")
     config = contact_map.ContactMapConfig(model=model_path, speeds=(1400, 1450, 2), revolutions=0.5, gnl="on",
                                           mu=0.0, frequency_cap=120.0, cubature=1e-3, capped_training=True,

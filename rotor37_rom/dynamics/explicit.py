@@ -38,15 +38,15 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse
 
-from rotor37_rom.dynamics.casing import (Casing, ContactSolver, casing_clearance, contact_matrices, friction_power,
-    node_angles, ramp_rate)
+from rotor37_rom.dynamics.casing import Casing, contact_matrices
+from rotor37_rom.dynamics.contact_step import ContactStep, per_simulation_casings, row_operator
+from rotor37_rom.dynamics.recorder import LoopState, Recorder, loop_state, save_loop_state
 from rotor37_rom.disk.harmonics import HarmonicBlocks
-from rotor37_rom.forces.tensors import PolynomialForces, cubic_monomial_indices, quadratic_monomial_indices
 
 __all__ = ["CentralDifference", "SimulationResult", "SimulationDiverged", "capped_mass", "gnl_time_step",
            "gnl_step_report", "step_outliers", "tangent_frequencies",
            "highest_frequency", "largest_states", "probe_states", "simulate", "tangent_highest_frequency",
-           "discrete_energy", "polynomial_potential", "WORK_TERMS"]
+           "discrete_energy", "WORK_TERMS"]
 
 
 class SimulationDiverged(RuntimeError):
@@ -200,52 +200,12 @@ def contact_training_states(scheme: "CentralDifference", speeds, casing, revolut
     return Q_train, np.hstack([largest_states(res, scheme.boundary_rows, n_largest), Q_train])
 
 
-def save_loop_state(path: "str | Path", st: dict, speeds: np.ndarray, **extra) -> None:
-    """``simulate``'s loop state ``st`` (what its ``checkpoint`` receives) to ``path`` (``save_npz``: whole or not at
-    all), with the speeds it runs and the arrays ``extra`` (what identifies the runs); the full states too when the
-    run records them (``record_q``)."""
-    from rotor37_rom.npz import save_npz
-
-    arrays = {**extra, "speeds": np.asarray(speeds, float), "n": st["n"], "Q": st["Q"], "Qp": st["Qp"],
-              "done": st["done"], "max_pen": st["max_pen"], "min_lam": st["min_lam"], "fric_pow": st["fric_pow"],
-              "contact_steps": st["contact_steps"], "diverged": st["diverged"], "work": st["work"]}
-    for p in range(len(st["u_r"])):
-        arrays[f"u_r{p}"] = st["u_r"][p]
-        arrays[f"lam{p}"] = st["lam"][p]
-        if st.get("q_rec") is not None:
-            arrays[f"q_rec{p}"] = st["q_rec"][p]
-    save_npz(path, **arrays)
-
-
-def loop_state(data, P: int) -> dict:
-    """The loop state of ``save_loop_state``'s file (any mapping of its arrays) for ``simulate(state=...)``; P
-    simulations. Energies are not kept (a run with ``energy=True`` starts over)."""
-    st = {k: data[k] for k in ("Q", "Qp", "done", "max_pen", "min_lam", "fric_pow", "contact_steps", "diverged")}
-    st["n"] = int(data["n"])
-    if "work" in data:                         # older checkpoints: the works count from the resumed step
-        st["work"] = data["work"]
-    st["u_r"] = [data[f"u_r{p}"] for p in range(P)]
-    st["lam"] = [data[f"lam{p}"] for p in range(P)]
-    st["q_rec"] = [data[f"q_rec{p}"] for p in range(P)] if "q_rec0" in data else None
-    st["energy"] = None
-    return st
-
-
 def largest_states(result: "SimulationResult", boundary_rows: np.ndarray, n: int) -> np.ndarray:
     """The n finite recorded states (r, n) of a run (``record_q=True``) with the largest motion of the entries
     ``boundary_rows`` of q (the node displacements: ``NodeMap.boundary_rows``)."""
     Q = np.hstack(result.records_q)
     Q = Q[:, np.isfinite(Q).all(axis=0)]
     return Q[:, np.argsort(-np.abs(Q[np.asarray(boundary_rows)]).max(axis=0))[:n]]
-
-
-def polynomial_potential(forces: PolynomialForces, Q: np.ndarray) -> np.ndarray:
-    """V(q) with grad V = g~ (SVK forces derive from a potential): V = q.A m2 / 3 + q.B m3 / 4, per column."""
-    Q = np.asarray(Q, float).reshape(forces.r, -1)
-    a, b = quadratic_monomial_indices(forces.r)
-    ca, cb, cc = cubic_monomial_indices(forces.r)
-    return (np.sum(Q * (forces.A @ (Q[a] * Q[b])), axis=0) / 3.0
-            + np.sum(Q * (forces.B @ (Q[ca] * Q[cb] * Q[cc])), axis=0) / 4.0)
 
 
 def discrete_energy(M, K, forces, q_next, q_now, h) -> np.ndarray:
@@ -256,7 +216,7 @@ def discrete_energy(M, K, forces, q_next, q_now, h) -> np.ndarray:
     v = (q_next - q_now) / h
     e = 0.5 * np.sum(v * (M @ v), axis=0) + 0.5 * np.sum(q_next * (K @ q_now), axis=0)
     if forces is not None:
-        e = e + 0.5 * (polynomial_potential(forces, q_next) + polynomial_potential(forces, q_now))
+        e = e + 0.5 * (forces.potential(q_next) + forces.potential(q_now))
     return e
 
 
@@ -343,17 +303,16 @@ class CentralDifference:
             self.X1 = 2.0 * np.eye(r) - scipy.linalg.cho_solve(S, 2.0 * h * C + 2.0 * h * h * K)
             self.X2 = -np.eye(r) + (2.0 * h * scipy.linalg.cho_solve(S, C) if np.any(C) else 0.0)
             self.W = self.X0
-            self.Xg = None
+            # the force's step: premultiplied by -X0 where that is cheaper (exact tensors: X3, X4 of eqs. 32-33),
+            # else evaluated, then mapped (quadrature, cubature, a disk's sector forces)
+            self.Xg = self.g = None
             if self.nonlinear:
-                forces = self.model.forces
-                if isinstance(forces, PolynomialForces):
-                    self.Xg = PolynomialForces(A=-self.X0 @ forces.A, B=-self.X0 @ forces.B)
-                else:                                      # quadrature (exact or ECSW): evaluate, then map
-                    self.Xg = forces
+                self.Xg = self.model.forces.premultiplied(-self.X0)
+                self.g = self.model.forces if self.Xg is None else None
             # a tuned disk: X1, X2, X0 per harmonic index (block-circulant), None for a blade or a mistuned disk
             sectors = getattr(self.model, "sectors", None)
             self.harmonic = None
-            if sectors is not None and not isinstance(self.Xg, PolynomialForces):
+            if sectors is not None and self.Xg is None:
                 self.harmonic = HarmonicBlocks.from_operators(sectors.blocks, [self.X1, self.X2, self.X0],
                                                               [self.model.K, self.model.M])
             return
@@ -378,13 +337,13 @@ class CentralDifference:
         self.X0[np.ix_(b, b)] += self.Kbb_inv                           # f_b taken at t_n
         self.W = np.zeros((r, r))
         self.W[np.ix_(b, b)] = self.Kbb_inv                             # contact moves the massless boundary only
-        self.Xg = None
+        self.Xg = self.g = None
 
     def predict(self, Q: np.ndarray, Qp: np.ndarray, F: np.ndarray | None) -> np.ndarray:
         if self.harmonic is not None:                     # tuned disk: one batched product over the harmonics
             G = None if F is None else (F if F.ndim == 2 else np.repeat(F[:, None], Q.shape[1], axis=1))
-            if self.Xg is not None:
-                g = self.Xg.evaluate(Q)
+            if self.g is not None:
+                g = self.g.evaluate(Q)
                 G = -g if G is None else G - g
             return self.harmonic.apply(Q, Qp) if G is None else self.harmonic.apply(Q, Qp, G)
         out = self.X1 @ Q
@@ -392,10 +351,9 @@ class CentralDifference:
         if F is not None:
             out += self.X0 @ F if F.ndim == 2 else (self.X0 @ F)[:, None]
         if self.Xg is not None:
-            if isinstance(self.Xg, PolynomialForces):
-                out += self.Xg.evaluate(Q)
-            else:
-                out -= self.X0 @ self.Xg.evaluate(Q)
+            out += self.Xg.evaluate(Q)
+        elif self.g is not None:
+            out -= self.X0 @ self.g.evaluate(Q)
         return out
 
 
@@ -453,23 +411,6 @@ class SimulationResult:
 WORK_TERMS = ("normal", "friction", "forcing", "damping")
 
 
-def _per_sim(casings, P):
-    if casings is None:
-        return None
-    if isinstance(casings, Casing):
-        casings = [casings] * P
-    casings = list(casings)
-    if len(casings) != P:
-        raise ValueError(f"casing: give one Casing or one per simulation ({P}), got {len(casings)}")
-    first = casings[0]
-    for c in casings:
-        if (c.direction, c.rotation_sense, c.contact_nodes, c.ramp_fraction, c.ramp_level, c.width, c.cone_slope) != \
-                (first.direction, first.rotation_sense, first.contact_nodes, first.ramp_fraction, first.ramp_level,
-                 first.width, first.cone_slope):
-            raise ValueError("casing: the simulations of one batch may differ in c0, h_b and mu only")
-    return casings
-
-
 def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: Casing | Sequence[Casing] | None = None,
              revolutions: float | None = None, n_steps: int | Sequence[int] | None = None,
              forcing: Callable[[float], np.ndarray] | None = None, initial: tuple | None = None,
@@ -510,97 +451,35 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         raise ValueError(f"on_blowup must be 'raise' or 'flag', got {on_blowup!r}")
     if record_every < 1:
         raise ValueError(f"record_every must be >= 1, got {record_every}")
-    h, r, brows = scheme.h, scheme.r, scheme.boundary_rows
-    if revolutions is not None:
-        if not revolutions > 0:
-            raise ValueError(f"revolutions must be > 0, got {revolutions}")
-        steps = np.ceil(revolutions * 2.0 * np.pi / omega / h).astype(np.int64)
-    elif n_steps is not None:
-        steps = np.broadcast_to(np.asarray(n_steps, dtype=np.int64), (P,)).copy()
-    else:
-        raise ValueError("give revolutions or n_steps")
-    if steps.min() < 1:
-        raise ValueError(f"n_steps must be >= 1, got {steps.min()}")
+    h, r = scheme.h, scheme.r
+    steps = _run_steps(omega, h, revolutions, n_steps)
     run_length = steps * h if duration is None else np.broadcast_to(np.asarray(duration, float), (P,))
-    casings = _per_sim(casing, P)
+    casings = per_simulation_casings(casing, P)
     phase = np.broadcast_to(np.asarray(phase, float), (P,)).copy()
+    contact = ContactStep(scheme, casings, run_length)
     nodes = scheme.model.nodes
-    # u_n = N q at the contact nodes, S q along the sliding; the monitored nodes' normal displacements Nm q
-    # (dense for a blade's few nodes, CSR for a disk's hundreds: one node's three entries of q per row; _row_operator)
-    N, S, theta0, cidx = contact_matrices(nodes, r, None if casings is None else casings[0])
-    N, S = _row_operator(N), _row_operator(S)
-    nc = len(cidx)
     monitor = np.arange(len(nodes)) if monitor is None else np.asarray(monitor, dtype=np.int64).ravel()
-    Nm = _row_operator(contact_matrices(nodes, r, None if casings is None else casings[0], rows=monitor)[0])
-    nm = len(monitor)
-    labels = tuple(nodes.labels[k] for k in monitor)
-    if casings is not None:
-        c0 = np.array([c.c0 for c in casings])
-        mu = np.array([c.mu for c in casings])
-        p0 = np.array([c.p0 for c in casings])
-        alpha = ramp_rate(run_length, casings[0].ramp_fraction, casings[0].ramp_level)
-        sense = casings[0].rotation_sense
-        radius = np.hypot(nodes.coordinates[cidx, 0], nodes.coordinates[cidx, 1])
-        # response to unit multipliers: normal force -n_k, friction force -s_k (times mu)
-        WN = -np.asarray((N @ scheme.W.T).T)                    # (r, nc)
-        WT = -np.asarray((S @ scheme.W.T).T)                    # (r, nc)
-        DN, DT = np.asarray(N @ WN), np.asarray(N @ WT)         # (nc, nc)
-        contact = ContactSolver(DN, DT)
-
-    # state
-    if state is None:
-        Q = np.zeros((r, P))
-        Qp = np.zeros((r, P))
-        if initial is not None:
-            Q[:] = np.asarray(initial[0], float).reshape(r, -1)
-            Qp[:] = np.asarray(initial[1], float).reshape(r, -1)
-        n_rec = steps // record_every + 1
-        st = {"n": 0, "Q": Q, "Qp": Qp, "done": np.zeros(P, bool),
-              "u_r": [np.full((nm, n_rec[p]), np.nan) for p in range(P)],
-              "lam": [np.zeros((nc, n_rec[p])) for p in range(P)],
-              "energy": [np.full(n_rec[p], np.nan) for p in range(P)] if energy else None,
-              "q_rec": [np.full((r, n_rec[p]), np.nan) for p in range(P)] if record_q else None,
-              "max_pen": np.full(P, -np.inf), "min_lam": np.full(P, np.inf), "fric_pow": np.full(P, -np.inf),
-              "contact_steps": np.zeros(P, np.int64), "diverged": np.full(P, -1, np.int64)}
-        for p in range(P):
-            st["u_r"][p][:, 0] = Nm @ Q[:, p]
-            if record_q:
-                st["q_rec"][p][:, 0] = Q[:, p]
-    else:
-        st = state
-        if record_q and st.get("q_rec") is None:
-            raise ValueError("record_q=True cannot resume from a state saved without the full states (q_rec)")
-        if energy and st.get("energy") is None:
-            raise ValueError("energy=True cannot resume from a saved state (its energies are not kept)")
-    Q, Qp = st["Q"], st["Qp"]
+    Nm = row_operator(contact_matrices(nodes, r, None if casings is None else casings[0], rows=monitor)[0])
+    rec = Recorder(Nm, tuple(nodes.labels[k] for k in monitor), steps, h, record_every, omega, contact.n_contact,
+                   record_q, energy)
+    st = rec.fresh(r, initial) if state is None else rec.check_resumable(state)
     energy_forces = scheme.model.forces if (energy and scheme.nonlinear) else None
-    if energy and scheme.nonlinear and not isinstance(energy_forces, PolynomialForces):
+    if energy and scheme.nonlinear and not energy_forces.has_potential:
         raise ValueError("energy=True with nonlinear forces needs the polynomial (intrusive) tensors")
-    if "work" not in st:                       # also a checkpoint written before the works were kept: from its step on
-        st["work"] = np.zeros((4, P))
-        st["work"][3] = 0.0 if energy else np.nan
-        st["work"][2] = 0.0 if (energy or forcing is not None) else np.nan
-        if energy:
-            st["work_rec"] = [np.full((4, n), np.nan) for n in steps // record_every + 1]
-            i0 = st["n"] // record_every
-            E0 = discrete_energy(scheme.M, scheme.K, energy_forces, Q, Qp, h)
-            for p in range(P):
-                st["work_rec"][p][:, i0] = st["work"][:, p]
-                if st["n"] == 0:
-                    st["energy"][p][0] = E0[p]
-    work = st["work"]
+    if st.work is None:                        # also a checkpoint written before the works were kept: from its step on
+        _start_works(st, scheme, energy_forces, energy, forcing is not None, steps, record_every)
+    Q, Qp, work = st.Q, st.Qp, st.work
 
     with np.errstate(over="ignore", invalid="ignore"):     # a blow-up is detected and reported below
         t_wall = time.perf_counter()
         last_ckpt, ckpt_interval = t_wall, checkpoint_seconds
-        active = np.nonzero(~st["done"])[0]
+        active = np.nonzero(~st.done)[0]
         n_max = int(steps.max())
         ends = set(steps.tolist())
-        lam_now = np.zeros((nc, P))
+        lam_now = np.zeros((contact.n_contact, P))
         stepped = 0                                     # simulation-steps since the last progress call
-        while st["n"] < n_max and active.size:
-            n = st["n"]
-            t1 = (n + 1) * h
+        while st.n < n_max and active.size:
+            n = st.n
             Qa, Qpa = Q[:, active], Qp[:, active]
             F = None
             if forcing is not None:
@@ -609,36 +488,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
             Qn = scheme.predict(Qa, Qpa, F)
             lam_now[:, active] = 0.0
             if casings is not None:
-                om = omega[active]
-                ur = N @ Qn
-                theta = node_angles(theta0[:, None], om[None, :], t1, sense, phase[active][None, :])
-                g = casing_clearance(theta, t1, c0[active], p0[active], alpha[active], casings[0].width) - ur
-                # a run already past the blow-up limit gets no contact solve (it is stopped at the next check)
-                sane = np.isfinite(g).all(axis=0) & (np.abs(ur).max(axis=0) <= blowup_limit)
-                hits = np.nonzero((g < 0.0).any(axis=0) & sane)[0]
-                if hits.size:
-                    ps = active[hits]
-                    mus = mu[ps]
-                    lam, gap_after = np.empty((nc, hits.size)), np.empty((nc, hits.size))
-                    for k, j in enumerate(hits):
-                        lam[:, k], gap_after[:, k] = contact.solve(mus[k], g[:, j])
-                    mlam = lam * mus                       # friction multipliers mu lambda
-                    act = np.nonzero((lam > 0).any(axis=1))[0]  # the nodes pushed (a few of a disk's hundreds)
-                    Qn[:, hits] += WN[:, act] @ lam[act] + WT[:, act] @ mlam[act]
-                    dq = Qn[:, hits] - Qpa[:, hits]        # q_n+1 - q_n-1: the force of step n works over dq / 2
-                    work[0, ps] -= 0.5 * np.sum(lam * (N @ dq), axis=0)
-                    work[1, ps] -= 0.5 * np.sum(mlam * (S @ dq), axis=0)
-                    st["max_pen"][ps] = np.maximum(st["max_pen"][ps], -gap_after.min(axis=0))
-                    on = lam > 0
-                    touched = on.any(axis=0)
-                    st["min_lam"][ps] = np.minimum(st["min_lam"][ps], np.where(on, lam, np.inf).min(axis=0))
-                    st["contact_steps"][ps] += touched
-                    # sliding velocity of the node on the casing: rotation + its own tangential velocity along s_k
-                    v = (S @ (Qn[:, hits] - Qa[:, hits])) / h
-                    power = friction_power(mlam, om[hits][None, :], radius[:, None], v)
-                    power = np.where(on, power, -np.inf).max(axis=0)
-                    st["fric_pow"][ps] = np.where(touched, np.maximum(st["fric_pow"][ps], power), st["fric_pow"][ps])
-                    lam_now[:, ps] = lam
+                contact.correct(st, Qn, Qa, Qpa, active, omega, phase, (n + 1) * h, h, blowup_limit, lam_now)
             if F is not None or energy:
                 dq = Qn - Qpa
                 if F is not None:
@@ -647,42 +497,13 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                     work[3, active] += np.sum(dq * (scheme.C @ dq), axis=0) / (4.0 * h)
             Qp[:, active] = Qa
             Q[:, active] = Qn
-            st["n"] = n = n + 1
+            st.n = n = n + 1
             stepped += active.size
-            # records
             if n % record_every == 0:
-                i = n // record_every
-                ur_all = Nm @ Qn
-                E = discrete_energy(scheme.M, scheme.K, energy_forces, Qn, Qa, h) if energy else None
-                for j, p in enumerate(active):
-                    if n <= steps[p]:
-                        st["u_r"][p][:, i] = ur_all[:, j]
-                        st["lam"][p][:, i] = lam_now[:, p]
-                        if energy:
-                            st["energy"][p][i] = E[j]
-                            st["work_rec"][p][:, i] = work[:, p]
-                        if record_q:
-                            st["q_rec"][p][:, i] = Qn[:, j]
+                rec.record(st, active, Qn, lam_now,
+                           discrete_energy(scheme.M, scheme.K, energy_forces, Qn, Qa, h) if energy else None)
             if n % check_every == 0 or n in ends:
-                bad = ~np.isfinite(Qn[brows]).all(axis=0) | (np.abs(Qn[brows]).max(axis=0) > blowup_limit)
-                for j in np.nonzero(bad)[0]:
-                    p = active[j]
-                    st["diverged"][p] = n
-                    if on_blowup == "raise":
-                        raise SimulationDiverged(
-                            f"simulation {p} (Omega = {omega[p]:g} rad/s) diverged at step {n} (t = {n * h:.6g} s): "
-                            f"boundary displacement NaN or above {blowup_limit:g} m; h = {h:.4g} s, "
-                            f"stability limit 2/omega_max = {scheme.h_crit:.4g} s")
-                    st["done"][p] = True
-                    if on_finish is not None:          # a diverged run is a result too (marked, kept)
-                        on_finish(p, _record(st, p, steps, h, record_every, omega, labels))
-                finished = [p for p in active if n >= steps[p] and not st["done"][p]]
-                for p in finished:
-                    st["done"][p] = True
-                    if on_finish is not None:
-                        on_finish(p, _record(st, p, steps, h, record_every, omega, labels))
-                if finished or bad.any():
-                    active = np.nonzero(~st["done"])[0]
+                active = _end_runs(st, active, Qn, scheme, steps, blowup_limit, on_blowup, on_finish, rec)
             if progress is not None and (n % check_every == 0 or not active.size):
                 progress(stepped)
                 stepped = 0
@@ -693,31 +514,73 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                 if checkpoint_seconds > 0:                 # 0: every step (as asked); else <= 2 % of the wall
                     ckpt_interval = max(checkpoint_seconds, 50.0 * (last_ckpt - t_save))
     wall = time.perf_counter() - t_wall
-    recs = [_record(st, p, steps, h, record_every, omega, labels) for p in range(P)]
+    recs = [rec.record_of(st, p) for p in range(P)]
     return SimulationResult(
-        omega=omega, h=h, n_steps=np.minimum(steps, st["n"]), t=[x["t"] for x in recs], u_r=[x["u_r"] for x in recs],
+        omega=omega, h=h, n_steps=np.minimum(steps, st.n), t=[x["t"] for x in recs], u_r=[x["u_r"] for x in recs],
         lam=[x["lam"] for x in recs], q_final=Q.copy(), q_prev=Qp.copy(),
         energy=[x["energy"] for x in recs] if energy else None,
-        max_penetration=np.maximum(st["max_pen"], 0.0), min_multiplier=st["min_lam"], friction_power=st["fric_pow"],
-        contact_steps=st["contact_steps"], diverged_step=st["diverged"], wall=wall,
-        records_q=[st["q_rec"][p] for p in range(P)] if record_q else None, work=work.T.copy(),
-        work_history=[st["work_rec"][p] for p in range(P)] if energy else None, monitor=monitor, labels=labels,
-        contact_rows=cidx)
+        max_penetration=np.maximum(st.max_pen, 0.0), min_multiplier=st.min_lam, friction_power=st.fric_pow,
+        contact_steps=st.contact_steps, diverged_step=st.diverged, wall=wall,
+        records_q=[st.q_rec[p] for p in range(P)] if record_q else None, work=work.T.copy(),
+        work_history=[st.work_rec[p] for p in range(P)] if energy else None, monitor=monitor, labels=rec.labels,
+        contact_rows=contact.rows)
 
 
-def _row_operator(A: np.ndarray, dense_limit: int = 1 << 16):
-    """A node-row operator (n_c, r) for products with the states: dense for a blade's few nodes (a sparse product
-    costs ~13 us of call overhead per step, a third of a single run's step), CSR for a disk's hundreds of nodes over
-    thousands of entries of q."""
-    return np.ascontiguousarray(A) if A.size <= dense_limit else scipy.sparse.csr_matrix(A)
+def _run_steps(omega: np.ndarray, h: float, revolutions: float | None, n_steps) -> np.ndarray:
+    """(P,) steps of each run: ``revolutions`` at its speed, or ``n_steps`` (one for all or one per run)."""
+    if revolutions is not None:
+        if not revolutions > 0:
+            raise ValueError(f"revolutions must be > 0, got {revolutions}")
+        steps = np.ceil(revolutions * 2.0 * np.pi / omega / h).astype(np.int64)
+    elif n_steps is not None:
+        steps = np.broadcast_to(np.asarray(n_steps, dtype=np.int64), (omega.size,)).copy()
+    else:
+        raise ValueError("give revolutions or n_steps")
+    if steps.min() < 1:
+        raise ValueError(f"n_steps must be >= 1, got {steps.min()}")
+    return steps
 
 
-def _record(st, p, steps, h, record_every, omega, labels):
-    n_rec = steps[p] // record_every + 1
-    return {"t": np.arange(n_rec) * record_every * h, "u_r": st["u_r"][p], "lam": st["lam"][p],
-            "labels": np.array(labels, dtype=str),
-            "energy": None if st["energy"] is None else st["energy"][p], "q_final": st["Q"][:, p].copy(),
-            "q_prev": st["Qp"][:, p].copy(), "omega": float(omega[p]), "max_penetration": float(st["max_pen"][p]),
-            "min_multiplier": float(st["min_lam"][p]), "friction_power": float(st["fric_pow"][p]),
-            "contact_steps": int(st["contact_steps"][p]), "diverged_step": int(st["diverged"][p]),
-            "work": st["work"][:, p].copy()}
+def _start_works(st: LoopState, scheme: CentralDifference, energy_forces, energy: bool, forced: bool,
+                 steps: np.ndarray, record_every: int) -> None:
+    """The running works of ``st`` from its step on (``WORK_TERMS``: damping with energy, forcing when forced or with
+    energy, else NaN), and with energy their records and the energy at step 0."""
+    P = st.Q.shape[1]
+    st.work = np.zeros((4, P))
+    st.work[3] = 0.0 if energy else np.nan
+    st.work[2] = 0.0 if (energy or forced) else np.nan
+    if energy:
+        st.work_rec = [np.full((4, n), np.nan) for n in steps // record_every + 1]
+        i0 = st.n // record_every
+        E0 = discrete_energy(scheme.M, scheme.K, energy_forces, st.Q, st.Qp, scheme.h)
+        for p in range(P):
+            st.work_rec[p][:, i0] = st.work[:, p]
+            if st.n == 0:
+                st.energy[p][0] = E0[p]
+
+
+def _end_runs(st: LoopState, active: np.ndarray, Qn: np.ndarray, scheme: CentralDifference, steps: np.ndarray,
+              blowup_limit: float, on_blowup: str, on_finish, rec: Recorder) -> np.ndarray:
+    """Stop the runs ``active`` (states Qn at step st.n) that blew up (raise, or mark them: ``on_blowup``) or reached
+    their length, handing each one's record to ``on_finish``; returns the runs still active."""
+    n, h, brows = st.n, scheme.h, scheme.boundary_rows
+    bad = ~np.isfinite(Qn[brows]).all(axis=0) | (np.abs(Qn[brows]).max(axis=0) > blowup_limit)
+    for j in np.nonzero(bad)[0]:
+        p = active[j]
+        st.diverged[p] = n
+        if on_blowup == "raise":
+            raise SimulationDiverged(
+                f"simulation {p} (Omega = {rec.omega[p]:g} rad/s) diverged at step {n} (t = {n * h:.6g} s): "
+                f"boundary displacement NaN or above {blowup_limit:g} m; h = {h:.4g} s, "
+                f"stability limit 2/omega_max = {scheme.h_crit:.4g} s")
+        st.done[p] = True
+        if on_finish is not None:          # a diverged run is a result too (marked, kept)
+            on_finish(p, rec.record_of(st, p))
+    finished = [p for p in active if n >= steps[p] and not st.done[p]]
+    for p in finished:
+        st.done[p] = True
+        if on_finish is not None:
+            on_finish(p, rec.record_of(st, p))
+    if finished or bad.any():
+        return np.nonzero(~st.done)[0]
+    return active

@@ -6,6 +6,8 @@ import dataclasses
 
 import numpy as np
 
+from rotor37_rom.forces.protocol import NonlinearForce
+
 
 @dataclasses.dataclass(frozen=True)
 class SectorForces:
@@ -24,11 +26,46 @@ class SectorForces:
             disk); faces: None, or (N, 2 n_f, r_cyclic) each sector's face coordinates from eta.
     """
 
-    forces: object
+    forces: NonlinearForce
     blocks: np.ndarray
     r: int
     scales: np.ndarray
     faces: np.ndarray | None = None
+
+    has_potential = False
+
+    @property
+    def precision(self) -> str:
+        return self.forces.precision
+
+    def with_precision(self, precision: str) -> "SectorForces":
+        """The sector's force evaluated in ``precision`` (refused as the sector's force refuses it)."""
+        return dataclasses.replace(self, forces=self.forces.with_precision(precision))
+
+    def scaled(self, factor: float) -> "SectorForces":
+        """The force times ``factor``: every sector's scale."""
+        return dataclasses.replace(self, scales=np.asarray(self.scales, float) * factor)
+
+    def premultiplied(self, X: np.ndarray) -> None:
+        """None: the sectors' forces are evaluated, then mapped (on a tuned disk, per harmonic)."""
+        return None
+
+    def potential(self, Q: np.ndarray) -> np.ndarray:
+        raise NotImplementedError("the potential of a disk's sector forces is not formed (has_potential is False)")
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """Its entries in a model's file: the sectors' blocks, scales and faces, then the sector's force's entries
+        with its kind prefixed 'sector_' (``protocol.load_force``)."""
+        out = {"sector_blocks": self.blocks, "sector_scales": self.scales}
+        if self.faces is not None:
+            out["sector_faces"] = self.faces
+        inner = self.forces.arrays()
+        return {**out, **inner, "forces": "sector_" + inner["forces"]}
+
+    @classmethod
+    def from_arrays(cls, arrays, forces: NonlinearForce, r: int) -> "SectorForces":
+        return cls(forces, arrays["sector_blocks"], r, arrays["sector_scales"],
+                   arrays["sector_faces"] if "sector_faces" in arrays else None)
 
     def _inputs(self, Q: np.ndarray) -> np.ndarray:
         """(N, r_s [+ 2 n_f], P): each sector's force coordinates."""

@@ -117,9 +117,31 @@ class QuadratureForces:
     def r(self) -> int:
         return self.H.shape[1]
 
+    has_potential = False                              # the strain energy of a quadrature is not formed here
+
     def with_precision(self, precision: str) -> "QuadratureForces":
         """The same quadrature evaluated in ``precision`` ('double' or 'single')."""
         return dataclasses.replace(self, precision=precision)
+
+    def scaled(self, factor: float) -> "QuadratureForces":
+        """The force times ``factor``: its weights scaled."""
+        return dataclasses.replace(self, w=self.w * factor)
+
+    def premultiplied(self, X: np.ndarray) -> None:
+        """None: a quadrature's force is evaluated, then mapped (no premultiplied form is cheaper)."""
+        return None
+
+    def potential(self, Q: np.ndarray) -> np.ndarray:
+        raise NotImplementedError("the potential of quadrature forces is not formed (has_potential is False)")
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """Its entries in a model's file (``protocol.load_force``)."""
+        return {"forces": "quadrature", "H": self.H, "w": self.w, "lame": np.array([self.lmbda, self.mu]),
+                "precision": self.precision}
+
+    @classmethod
+    def from_arrays(cls, arrays) -> "QuadratureForces":
+        return cls(arrays["H"], arrays["w"], *arrays["lame"], precision=str(arrays.get("precision", "double")))
 
     @functools.cached_property
     def _planes(self) -> tuple[np.ndarray, np.ndarray]:
@@ -295,9 +317,40 @@ class PolynomialForces:
     A: np.ndarray
     B: np.ndarray
 
+    precision = "double"
+    has_potential = True
+
     @property
     def r(self) -> int:
         return self.A.shape[0]
+
+    def with_precision(self, precision: str) -> "PolynomialForces":
+        raise ValueError("force precision applies to quadrature forces (exact or hyper-reduced), not to "
+                         f"{type(self).__name__}")
+
+    def scaled(self, factor: float) -> "PolynomialForces":
+        """The force times ``factor``: both tensors scaled."""
+        return PolynomialForces(self.A * factor, self.B * factor)
+
+    def premultiplied(self, X: np.ndarray) -> "PolynomialForces":
+        """X @ g~ as tensors X A~, X B~ (the explicit scheme's X3, X4 of eqs. 32-33: one GEMM per step less)."""
+        return PolynomialForces(A=X @ self.A, B=X @ self.B)
+
+    def potential(self, Q: np.ndarray) -> np.ndarray:
+        """V(q) with grad V = g~ (SVK forces derive from a potential): V = q.A m2 / 3 + q.B m3 / 4, per column."""
+        Q = np.asarray(Q, float).reshape(self.r, -1)
+        a, b = quadratic_monomial_indices(self.r)
+        ca, cb, cc = cubic_monomial_indices(self.r)
+        return (np.sum(Q * (self.A @ (Q[a] * Q[b])), axis=0) / 3.0
+                + np.sum(Q * (self.B @ (Q[ca] * Q[cb] * Q[cc])), axis=0) / 4.0)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """Its entries in a model's file (``protocol.load_force``)."""
+        return {"forces": "polynomial", "A": self.A, "B": self.B}
+
+    @classmethod
+    def from_arrays(cls, arrays) -> "PolynomialForces":
+        return cls(arrays["A"], arrays["B"])
 
     def __post_init__(self):
         r = self.A.shape[0]

@@ -11,9 +11,16 @@ from typing import Sequence
 
 import numpy as np
 
+from rotor37_rom.disk.assembly import DiskBasis
+from rotor37_rom.forces.protocol import NonlinearForce
+from rotor37_rom.forces.sector import SectorForces
 from rotor37_rom.forces.tensors import PolynomialForces, QuadratureForces
 from rotor37_rom.model.nodes import NodeMap
 from rotor37_rom.npz import save_npz
+
+
+# how a model's file names its force's kind (``NonlinearForce.arrays``); a disk's sector forces prefix it 'sector_'
+FORCE_KINDS = {"polynomial": PolynomialForces, "quadrature": QuadratureForces}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -22,28 +29,29 @@ class ReducedModel:
 
     Attributes:
         M, C, K: (r, r) reduced matrices.
-        forces: PolynomialForces (exact tensors) or QuadratureForces (exact or ECSW), or None (linear).
+        forces: the nonlinear force g~ (``forces.protocol.NonlinearForce``: exact tensors, a quadrature or cubature, a
+            disk's sector forces), or None (linear).
         boundary_dofs: (r_b,) full-DOF indices (of one sector's mesh) kept physical in q.
         nodes: NodeMap: which entries of q are which node's displacement (the contact nodes).
         sizes: {'r_b', 'r_c', 'r_md'} per sector (a disk's also 'r_load', 'n_sectors', 'r_cyclic'); md_pairs:
             (r_md, 2).
         Phi: (n, r) basis to rebuild fields (optional).
         metadata: parameters, mesh signature, version; ``key`` hashes them.
-        sectors: for a disk model, the per-sector basis that rebuilds each sector's field (``disk.DiskBasis``);
+        sectors: for a disk model, the per-sector basis that rebuilds each sector's field (``disk.assembly.DiskBasis``);
             None for a blade.
     """
 
     M: np.ndarray
     C: np.ndarray
     K: np.ndarray
-    forces: object
+    forces: NonlinearForce | None
     boundary_dofs: np.ndarray
     nodes: NodeMap
     sizes: dict
     md_pairs: np.ndarray
     Phi: np.ndarray | None
     metadata: dict
-    sectors: object = None
+    sectors: DiskBasis | None = None
 
     @property
     def r(self) -> int:
@@ -62,14 +70,9 @@ class ReducedModel:
 def with_force_precision(model: ReducedModel, precision: str) -> ReducedModel:
     """The model with its quadrature forces (exact or hyper-reduced) evaluated in ``precision``, 'double' or
     'single'; the key changes with it (single: metadata 'force_precision'), so cached sweeps are not mixed up."""
-    sector = hasattr(model.forces, "blocks")                  # a disk's sector forces (disk.SectorForces)
-    inner = model.forces.forces if sector else model.forces
-    if not isinstance(inner, QuadratureForces):
-        raise ValueError("force precision applies to quadrature forces (exact or hyper-reduced), not to "
-                         f"{type(inner).__name__}")
-    forces = inner.with_precision(precision)                 # checks the name
-    if sector:
-        forces = dataclasses.replace(model.forces, forces=forces)
+    if model.forces is None:
+        raise ValueError("force precision applies to quadrature forces (exact or hyper-reduced), not to NoneType")
+    forces = model.forces.with_precision(precision)           # refused by exact tensors; checks the name
     metadata = {k: v for k, v in model.metadata.items() if k != "force_precision"}
     if precision != "double":
         metadata["force_precision"] = precision
@@ -87,17 +90,8 @@ def perturbed_model(model: ReducedModel, eps: float) -> ReducedModel:
     eps = float(eps)
     if eps == 0:
         return model
-    scale, forces = 1.0 + eps, model.forces
-    if forces is None:
-        pass
-    elif hasattr(forces, "blocks"):                          # a disk's sector forces (disk.SectorForces)
-        forces = dataclasses.replace(forces, scales=np.asarray(forces.scales, float) * scale)
-    elif isinstance(forces, QuadratureForces):
-        forces = dataclasses.replace(forces, w=forces.w * scale)
-    elif isinstance(forces, PolynomialForces):
-        forces = PolynomialForces(forces.A * scale, forces.B * scale)
-    else:
-        raise ValueError(f"perturbation: cannot scale forces of type {type(forces).__name__}")
+    scale = 1.0 + eps
+    forces = None if model.forces is None else model.forces.scaled(scale)
     prior = model.metadata.get("perturbation")
     total = eps if prior is None else (1.0 + float(prior)) * scale - 1.0
     return dataclasses.replace(model, K=model.K * scale, forces=forces,
@@ -119,19 +113,7 @@ def save_reduced_model(model: ReducedModel, path: str | Path) -> Path:
                                           sort_keys=True, default=str))}
     if model.Phi is not None:
         arrays["Phi"] = model.Phi
-    forces, kind = model.forces, "none"
-    if forces is not None and hasattr(forces, "blocks"):          # a disk's sector forces (disk.SectorForces)
-        arrays.update(sector_blocks=forces.blocks, sector_scales=forces.scales)
-        if forces.faces is not None:
-            arrays["sector_faces"] = forces.faces
-        forces, kind = forces.forces, "sector_"
-    if isinstance(forces, PolynomialForces):
-        arrays.update(forces=kind.replace("none", "") + "polynomial", A=forces.A, B=forces.B)
-    elif isinstance(forces, QuadratureForces):
-        arrays.update(forces=kind.replace("none", "") + "quadrature", H=forces.H, w=forces.w,
-                      lame=np.array([forces.lmbda, forces.mu]), precision=forces.precision)
-    else:
-        arrays["forces"] = "none"
+    arrays.update({"forces": "none"} if model.forces is None else model.forces.arrays())
     if model.sectors is not None:
         arrays.update({f"sectors_{name}": value for name, value in dataclasses.asdict(model.sectors).items()})
     return save_npz(path, **arrays)
@@ -180,27 +162,27 @@ def load_reduced_model(path: str | Path, expected_key: str | None = None) -> Red
     if expected_key is not None and key != expected_key:
         raise ValueError(f"reduced model file {path} was built for other parameters or another mesh "
                          f"(key {key}, expected {expected_key}); it is stale: rebuild it")
-    kind = str(arrays["forces"])
-    forces = None
-    if kind.endswith("polynomial"):
-        forces = PolynomialForces(arrays["A"], arrays["B"])
-    elif kind.endswith("quadrature"):
-        forces = QuadratureForces(arrays["H"], arrays["w"], *arrays["lame"],
-                                  precision=str(arrays.get("precision", "double")))
-    if kind.startswith("sector_"):
-        from rotor37_rom.forces.sector import SectorForces
-
-        forces = SectorForces(forces, arrays["sector_blocks"], arrays["K"].shape[0], arrays["sector_scales"],
-                              arrays["sector_faces"] if "sector_faces" in arrays else None)
+    try:
+        forces = _load_force(arrays, arrays["K"].shape[0])
+    except KeyError as exc:
+        raise ValueError(f"reduced model file {path} is corrupted or not a reduced model ({exc.__class__.__name__})"
+                         ) from None
     sectors = None
     if "sectors_Pi" in arrays:
-        from rotor37_rom.disk.assembly import DiskBasis
-
         sectors = DiskBasis(**{f.name: arrays[f"sectors_{f.name}"] for f in dataclasses.fields(DiskBasis)})
     return ReducedModel(M=arrays["M"], C=arrays["C"], K=arrays["K"], forces=forces,
                         boundary_dofs=arrays["boundary_dofs"], nodes=nodes,
                         sizes=info["sizes"], md_pairs=arrays["md_pairs"], Phi=arrays.get("Phi"),
                         metadata=info["metadata"], sectors=sectors)
+
+
+def _load_force(arrays, r: int) -> NonlinearForce | None:
+    """The force a model's file holds (its arrays; ``NonlinearForce.arrays``), for a model of size ``r``; None for a
+    linear model. KeyError for missing entries (a damaged file)."""
+    kind = str(arrays["forces"])
+    inner = FORCE_KINDS.get(kind.removeprefix("sector_"))
+    force = None if inner is None else inner.from_arrays(arrays)
+    return SectorForces.from_arrays(arrays, force, r) if kind.startswith("sector_") else force
 
 
 def solve_reduced_static(model: ReducedModel, f: np.ndarray, load_factors: Sequence[float],

@@ -360,7 +360,7 @@ def hyper_reduce(sector, model: ReducedModel, Q_train: np.ndarray, tol: float = 
     mixed up with the exact model's.
     """
     disk = model.sectors is not None
-    if disk and not hasattr(model.forces, "sector_states"):
+    if disk and model.forces is None:
         raise ValueError("hyper_reduce: this disk model has no nonlinear forces (built with forces='none')")
     if not disk and model.Phi is None:
         raise ValueError("hyper_reduce needs the model's basis: build it with keep_basis=True")

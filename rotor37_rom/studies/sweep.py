@@ -256,7 +256,7 @@ def _load_state(path: Path, P: int) -> dict | None:
     if data is None:
         return None
     st = loop_state(data, P)
-    LOG.info("resuming batch from %s at step %d", path, st["n"])
+    LOG.info("resuming batch from %s at step %d", path, st.n)
     return st
 
 

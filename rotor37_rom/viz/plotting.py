@@ -7,7 +7,8 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["write_xdmf", "render_mode_shapes", "render_stress", "vtk_grid", "render_cyclic_mode", "write_cyclic_xdmf"]
+__all__ = ["write_xdmf", "write_function_xdmf", "render_mode_shapes", "render_stress", "vtk_grid", "render_cyclic_mode",
+           "write_cyclic_xdmf"]
 
 LOG = logging.getLogger(__name__)
 
@@ -25,6 +26,18 @@ def write_xdmf(sector, functions: Sequence, path: str | Path) -> Path:
         for k, f in enumerate(functions):
             out.interpolate(f)
             xdmf.write_function(out, float(k))
+    return path
+
+
+def write_function_xdmf(sector, function, path: str | Path) -> Path:
+    """Write one function in its own space (e.g. a cell-wise von Mises field) to an XDMF/HDF5 pair for ParaView."""
+    from dolfinx import io
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with io.XDMFFile(sector.comm, str(path), "w") as xdmf:
+        xdmf.write_mesh(sector.mesh)
+        xdmf.write_function(function)
     return path
 
 

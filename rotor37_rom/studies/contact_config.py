@@ -1,0 +1,507 @@
+"""The contact-map study's configuration (demos/contact_map.py): ``ContactMapConfig``, one field per command-line
+option with the same defaults, and that command line (``build_parser``).
+
+Every check names the option it concerns, so that the command line can report it as is. Numbers are stored as floats,
+as the command line gives them: the cache keys of sweeps and cubatures hash them, and a run from Python then reuses the
+files of the same run from the shell. With ``tolerance`` each setting's options are the speed-accuracy study's choice
+(``map_model``).
+
+Pure Python and NumPy (no dolfinx): a bad option is refused before any meshing.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import functools
+import numbers
+from pathlib import Path
+
+import numpy as np
+
+from rotor37_rom.cli import ArgumentParser
+from rotor37_rom.dynamics.casing import Casing
+from rotor37_rom.geometry.blade import MESH_PRESETS
+from rotor37_rom.model.reduced import ReducedModel
+from rotor37_rom.reduction.craig_bampton import GLOBAL_MD_MAX
+from rotor37_rom.studies.sweep import SweepSpec
+
+__all__ = ["ContactMapConfig", "build_parser", "map_model", "continued_revolutions", "GNL_SETTINGS", "PRECISIONS",
+           "N_SECTORS"]
+
+GNL_SETTINGS = {"off": (False,), "on": (True,), "both": (False, True)}
+PRECISIONS = ("double", "single")
+N_SECTORS = 36                                     # rotor 37's blades (the disk sector of fem.create_disk_sector)
+
+
+def map_model(tolerance: float, gnl: bool, fallback: bool = False, disk: bool = False):
+    """The speed-accuracy study's model of a map (scene 'map-gnl' or 'map-linear'; a disk's: 'disk-map-gnl' or
+    'disk-map-linear') within ``tolerance``; with ``fallback`` the study's reference where no measured model meets it.
+    Errors name --tolerance."""
+    from rotor37_rom.studies.model_choice import STUDY_FILE, choose_model
+
+    scene = ("disk-map-gnl" if gnl else "disk-map-linear") if disk else "map-gnl" if gnl else "map-linear"
+    try:
+        stamp = STUDY_FILE.stat().st_mtime_ns if STUDY_FILE.is_file() else None
+        return choose_model(scene, tolerance, _study(stamp), fallback=fallback)
+    except ValueError as exc:
+        raise ValueError(f"--tolerance: {exc}") from None
+
+
+@functools.lru_cache(maxsize=2)
+def _study(stamp: int | None) -> dict:
+    """The shipped study file, read once per version (``stamp``: its modification time; a study rewritten in the same
+    process is read again). Read-only: ``choose_model`` does not change it."""
+    from rotor37_rom.studies.model_choice import load_study
+
+    return load_study()
+
+
+def continued_revolutions(revolutions: float) -> float:
+    """Length of each continued run: 15 % of the first (the paper: 200 then 30), at least 5 revolutions."""
+    return max(5.0, revolutions * 0.15)
+
+
+@dataclasses.dataclass(frozen=True)
+class ContactMapConfig:
+    """What to compute: the reduced model, the speeds, the scheme, the casing and the continuation.
+
+    Attributes:
+        preset: mesh preset of the blade the model is built on (and the cubature trained on): ci, coarse, paper.
+        model: a saved reduced model (.npz) to load instead of building one (under MPI rank 0 builds it, the
+            others load it).
+        disk: build the model of the 36-sector bladed disk (``disk_builder``: every sector's 8 tip nodes, modal
+            derivatives by MI 2b, ``r_cyclic`` interface modes) instead of the clamped blade's.
+        r_c: fixed-interface modes (per sector) of the model built (>= 1). None: 15 for the blade, 10 for the disk.
+        r_md: modal derivatives (per sector) selected by the criterion (>= 0). None: 0 for the blade, 10 for the disk.
+        global_md: also the modal derivatives of the first N clamped modes (0..20; the blade's).
+        contact_patch: 0 (point contact at the tip nodes, the paper's), or a radius (m, at most 0.01) of the tip
+            patches over which each node's contact force spreads (``ReductionConfig.contact_patch``; the blade's
+            model built here, not a --model or the disk's).
+        r_cyclic: the disk's interface modes (eq. 51, >= 1; the paper's 144).
+        mistuning: the disk's blade-to-blade stiffness scatter, a standard deviation in [0, 1) (0: tuned).
+        seed: of the mistuning's random factors.
+        sector: the sector whose node LE makes the map and the NFRC (0 .. 35; the blade: 0).
+        stress: a disk's von Mises stress at t_max of each map's largest response, every sector rebuilt from q (the
+            blade's: demos/report.py).
+        speeds: (START, STOP, N): N angular speeds (rad/s) from START to STOP.
+        revolutions: rotor revolutions simulated at each speed (> 0).
+        gnl: geometric nonlinearity: 'off', 'on' or 'both' (one map each).
+        safety: h = safety x 2 / omega_max of the linear model, in (0, 1].
+        h: time step (s); overrides ``safety``. None: from ``safety``.
+        frequency_cap: spectral mass scaling (kHz): the modes above it are slowed to it; a GNL step then comes from
+            the tangent limit on a short unscaled probe run. None: no scaling.
+        tangent_safety: with a cap, the GNL step is this x 2 / the largest tangent frequency, in (0, 1].
+        step_outliers: with a cap, 'keep' (the GNL step from every step state) or 'drop' (from the states other than
+            ``integrator.step_outliers``, those above 10 times the median tangent frequency: on the ci blade at
+            mu = 0.1 over 1,620-2,000 rad/s one of 204, a St. Venant-Kirchhoff collapse that alone sets a step 19
+            times smaller). With 'drop' a run that stays near such a state at the larger step blows up and is
+            flagged; its retries (``retry_diverged``) halve that step, which may still be above the one from every
+            state, and the demo then says so. A brief pass may not blow up, so benchmarks/bench_gnl_vs_linear.py
+            --step-check measures the dropped step's error against runs at the kept one.
+        perturbation: the internal force K q + g(q) of the runs scaled by 1 + this, |.| < 0.01 (0: none), after
+            the cubature is trained and the step set (``reduction.perturbed_model``; the same cubature and step,
+            the cap applied to the perturbed model): a map again with 1e-4 shows the speeds whose response any
+            force approximation's error moves (the floor; docs/results.md). A step at the unperturbed limit is
+            refused, the perturbed model's being eps / 2 lower.
+        cubature: GNL forces by point cubature trained to this relative tolerance, in (0, 1). None: exact tensors.
+        precision: arithmetic of the cubature forces: 'double' or 'single' (float32; needs ``cubature``).
+        cubature_speeds: the speeds (rad/s) of the exact GNL runs the cubature is trained on (needs ``cubature``).
+            None: 6 of the map's speeds, both ends included. A map on other speeds with the same training speeds
+            reuses the same cubature (a held-out check runs the model as trained, not one retrained on its speeds).
+        capped_training: the blade's cubature training runs (and the GNL step's probe) run with the frequency cap,
+            at the tangent limit on a capped probe's states (exact forces), as a disk's always do (needs
+            ``cubature`` and ``frequency_cap``). For bases whose unscaled GNL step makes the exact runs hours long
+            (the modal derivatives of 10 clamped modes, r = 104); the cubature is then trained on the capped
+            dynamics the map runs. False: unscaled training runs (the headline maps').
+        tolerance: choose r_c, the frequency cap, the step and the force evaluation of each setting (GNL off, on) as
+            the cheapest model of the speed-accuracy study within this relative error (``model_choice.choose_model``
+            on the scenes 'map-linear' and 'map-gnl', read from rotor37_rom/data/speed_accuracy.json), in (0, 1);
+            with ``disk`` (tuned) r_c, r_md, r_cyclic, the cap and the force evaluation from the scenes
+            'disk-map-linear' and 'disk-map-gnl' (measured with the cone normal and mu = 0.15). The options it sets
+            must not be given with it. None: the options as given.
+        retry_diverged: runs that blew up run again with the step halved, up to this many times (0..4).
+        mu: Coulomb friction coefficient of the casing contact (paper 0.15).
+        c0: clearance at rest (m).
+        hb: height h_b of the casing's two bumps (m).
+        direction: contact normal: 'x' (the paper's e_x), 'radial' or 'cone' (the conical casing's normal, 15.3 deg
+            from radial: no sprag-slip divergence at any mu on this blade, docs/results.md).
+        batch: speeds integrated together in one batch (>= 1).
+        continuation: speed step (rad/s) of a continuation up and down (0: none).
+        continuation_range: (LOW, HIGH) speeds (rad/s) of the continuation; None: the map's range.
+        steady_window: a continued run is steady when its max over the last N revolutions and the N before agree.
+        unsteady_step: the continuation's point when no halving is steady: 'smallest' (the paper read literally:
+            the step stays divided) or 'full' (the full step, marked not steady; ``sweep.continuation``).
+        out: folder of the charts, summary.json, the sweeps' records and the caches.
+        cache: folder of the model, cubature, training-run and probe caches; None: OUT/cache. Maps in other folders
+            given the same cache share its cubature (e.g. a few speeds run again at another step).
+        quiet: no progress bars and no sprag-slip note.
+    """
+
+    preset: str = "ci"
+    model: Path | None = None
+    disk: bool = False
+    r_c: int | None = None
+    r_md: int | None = None
+    global_md: int = 3
+    contact_patch: float = 0.0
+    r_cyclic: int = 144
+    mistuning: float = 0.0
+    seed: int = 0
+    sector: int = 0
+    stress: bool = False
+    speeds: tuple[float, float, int] = (1200.0, 1600.0, 21)
+    revolutions: float = 20.0
+    gnl: str = "both"
+    safety: float = 0.5
+    h: float | None = None
+    frequency_cap: float | None = None
+    tangent_safety: float = 0.5
+    step_outliers: str = "keep"
+    perturbation: float = 0.0
+    cubature: float | None = None
+    precision: str = "double"
+    cubature_speeds: tuple[float, ...] | None = None
+    capped_training: bool = False
+    tolerance: float | None = None
+    retry_diverged: int = 0
+    mu: float = 0.15
+    c0: float = 0.5e-3
+    hb: float = 0.625e-3
+    direction: str = "x"
+    batch: int = 16
+    continuation: float = 0.0
+    continuation_range: tuple[float, float] | None = None
+    steady_window: int = 1
+    unsteady_step: str = "smallest"
+    out: Path = Path("results/contact_map")
+    cache: Path | None = None
+    quiet: bool = False
+
+    def __post_init__(self):
+        """Check every option (ValueError naming it) and store the numbers as the command line gives them."""
+        self._check_model()
+        self._check_sweep()
+        self._check_casing()
+        self._check_scheme()
+        self._check_continuation()
+        self._normalise()
+
+    def _check_model(self) -> None:
+        """The mesh preset and the sizes of a model to build."""
+        if self.preset not in MESH_PRESETS:
+            raise ValueError(f"--preset must be one of {', '.join(MESH_PRESETS)}, got {self.preset!r}")
+        if self.r_c is not None and not self.r_c >= 1:
+            raise ValueError(f"--r-c must be >= 1, got {self.r_c}")
+        if self.r_md is not None and not self.r_md >= 0:
+            raise ValueError(f"--r-md must be >= 0, got {self.r_md}")
+        if not 0 <= self.global_md <= GLOBAL_MD_MAX:
+            raise ValueError(f"--global-md must be in 0..{GLOBAL_MD_MAX}, got {self.global_md}")
+        if not self.r_cyclic >= 1:
+            raise ValueError(f"--r-cyclic must be >= 1, got {self.r_cyclic}")
+        if not (np.isfinite(self.contact_patch) and 0 <= self.contact_patch <= 0.01):
+            raise ValueError(f"--contact-patch must be in [0, 0.01] m, got {self.contact_patch}")
+        if self.contact_patch and (self.disk or self.model is not None):
+            raise ValueError("--contact-patch shapes the blade's model built here: not with --disk or --model")
+        if not 0 <= self.mistuning < 1:
+            raise ValueError(f"--mistuning must be in [0, 1) (standard deviation of the blades' stiffness factors), "
+                             f"got {self.mistuning}")
+        if self.mistuning > 0 and not self.disk:
+            raise ValueError("--mistuning needs --disk (it scatters the disk's blades)")
+        limit = N_SECTORS - 1 if self.disk or self.model is not None else 0
+        if not 0 <= self.sector <= limit:
+            raise ValueError(f"--sector must be in [0, {limit}] ({'the disk' if limit else 'a single blade'}'s "
+                             f"sectors), got {self.sector}")
+        if self.stress and not (self.disk or self.model is not None):
+            raise ValueError("--stress is the disk's (--disk or a disk --model); the blade's stress at t_max is "
+                             "demos/report.py's")
+
+    @property
+    def modes(self) -> tuple[int, int]:
+        """(r_c, r_md) of the model built: the options, or 15, 0 for the blade and 10, 10 for the disk; with
+        ``tolerance`` the largest r_c (and r_md, a disk's) the settings' choices need."""
+        r_c, r_md = (self.r_c if self.r_c is not None else (10 if self.disk else 15),
+                     self.r_md if self.r_md is not None else (10 if self.disk else 0))
+        if self.tolerance is not None and self.r_c is None:
+            chosen = [self.choice(gnl).options for gnl in GNL_SETTINGS[self.gnl]]
+            return max(c.get("r_c", r_c) for c in chosen), max(c.get("r_md", r_md) for c in chosen)
+        return r_c, r_md
+
+    @property
+    def interface_modes(self) -> int:
+        """r_cyclic of the disk model built: the option, or with ``tolerance`` the largest the settings' choices
+        need (one model serves GNL off and on)."""
+        if self.tolerance is not None and self.disk:
+            return max(self.choice(gnl).options.get("r_cyclic", self.r_cyclic) for gnl in GNL_SETTINGS[self.gnl])
+        return self.r_cyclic
+
+    def choice(self, gnl: bool):
+        """The speed-accuracy study's cheapest model within ``tolerance`` for one setting (a ModelChoice)."""
+        return map_model(self.tolerance, gnl, disk=self.disk)
+
+    def model_beyond_choice(self, gnl: bool) -> dict:
+        """The options of the model built (r_c, r_md, a disk's r_cyclic) where they exceed one setting's choice: one
+        model serves GNL off and on, the larger of their choices. Empty without ``tolerance`` or where they agree."""
+        if self.tolerance is None:
+            return {}
+        built = {"r_c": self.modes[0], "r_md": self.modes[1], **({"r_cyclic": self.interface_modes} if self.disk
+                                                                  else {})}
+        chosen = self.choice(gnl).options
+        return {k: v for k, v in built.items() if k in chosen and chosen[k] != v}
+
+    def setting(self, gnl: bool) -> "ContactMapConfig":
+        """The configuration one setting (GNL off or on) runs with: with ``tolerance``, its chosen options."""
+        if self.tolerance is None:
+            return self
+        options = {k: v for k, v in self.choice(gnl).options.items() if k != "r_c"}
+        return dataclasses.replace(self, tolerance=None, **options)
+
+    def _check_sweep(self) -> None:
+        """Speeds, run length, batches and retries."""
+        if len(self.speeds) != 3 or not 0 < self.speeds[0] <= self.speeds[1] or not self.speeds[2] >= 1 \
+                or not float(self.speeds[2]).is_integer():
+            raise ValueError(f"--speeds: need 0 < START <= STOP and an integer N >= 1, got {list(self.speeds)}")
+        if not self.revolutions > 0:
+            raise ValueError(f"--revolutions must be > 0, got {self.revolutions}")
+        if self.gnl not in GNL_SETTINGS:
+            raise ValueError(f"--gnl must be one of {', '.join(GNL_SETTINGS)}, got {self.gnl!r}")
+        if not self.batch >= 1:
+            raise ValueError(f"--batch must be >= 1, got {self.batch}")
+        if not 0 <= self.retry_diverged <= 4:
+            raise ValueError(f"--retry-diverged must be in 0..4, got {self.retry_diverged}")
+
+    def _check_casing(self) -> None:
+        """Each casing option alone through rotor37_rom.dynamics.casing.Casing (its checks are per field)."""
+        for flag, name, value in (("--c0", "c0", self.c0), ("--hb", "h_b", self.hb), ("--mu", "mu", self.mu),
+                                  ("--direction", "direction", self.direction)):
+            try:
+                Casing(**{name: value})
+            except ValueError as exc:
+                raise ValueError(f"{flag}: {exc}") from None
+
+    def _check_scheme(self) -> None:
+        """Time step, frequency cap and the GNL forces."""
+        if not 0 < self.safety <= 1:
+            raise ValueError(f"--safety must be in (0, 1], got {self.safety}")
+        if self.h is not None and not self.h > 0:
+            raise ValueError(f"--h must be > 0 s, got {self.h}")
+        if self.frequency_cap is not None and not self.frequency_cap > 0:
+            raise ValueError(f"--frequency-cap must be > 0 kHz, got {self.frequency_cap}")
+        if not 0 < self.tangent_safety <= 1:
+            raise ValueError(f"--tangent-safety must be in (0, 1], got {self.tangent_safety}")
+        if self.step_outliers not in ("keep", "drop"):
+            raise ValueError(f"--step-outliers must be 'keep' or 'drop', got {self.step_outliers!r}")
+        if self.step_outliers == "drop" and (self.frequency_cap is None or self.h is not None):
+            raise ValueError("--step-outliers drop needs --frequency-cap and no --h (it chooses the GNL step from "
+                             "the tangent limit)")
+        if not (isinstance(self.perturbation, numbers.Real) and abs(self.perturbation) < 0.01):
+            raise ValueError(f"--perturbation must be a number with |eps| < 0.01, got {self.perturbation}")
+        if self.cubature is not None and not 0 < self.cubature < 1:
+            raise ValueError(f"--cubature must be in (0, 1), got {self.cubature}")
+        if self.precision not in PRECISIONS:
+            raise ValueError(f"--precision must be one of {', '.join(PRECISIONS)}, got {self.precision!r}")
+        if self.precision != "double" and self.cubature is None:
+            raise ValueError("--precision single needs --cubature (the exact cubic tensors are evaluated in double)")
+        if self.cubature_speeds is not None:
+            if self.cubature is None:
+                raise ValueError("--cubature-speeds needs --cubature (they are the cubature's training runs)")
+            speeds = self.cubature_speeds
+            if not (isinstance(speeds, (tuple, list, np.ndarray)) and len(speeds) >= 1
+                    and all(isinstance(w, numbers.Real) and np.isfinite(w) and w > 0 for w in speeds)):
+                raise ValueError(f"--cubature-speeds must be one or more finite speeds > 0 rad/s, got "
+                                 f"{self.cubature_speeds!r}")
+        if self.capped_training and self.tolerance is not None:
+            raise ValueError("--capped-training: not with --tolerance (the study measured the chosen models trained "
+                             "unscaled)")
+        if self.capped_training and (self.cubature is None or self.frequency_cap is None):
+            raise ValueError("--capped-training needs --cubature and --frequency-cap (it runs the cubature's training "
+                             "runs with the cap)")
+        if self.tolerance is not None:
+            if not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
+                raise ValueError(f"--tolerance must be in (0, 1) (a relative error: 0.05 = 5 %), got {self.tolerance}")
+            if self.disk and self.mistuning > 0:
+                raise ValueError("--tolerance with --mistuning: the speed-accuracy study measured the tuned disk; "
+                                 "give the options")
+            chosen = set().union(*(self.choice(gnl).options for gnl in GNL_SETTINGS[self.gnl]))
+            defaults = {f.name: f.default for f in dataclasses.fields(self)}
+            given = [name for name in sorted(chosen - {"r_c"}) if getattr(self, name) != defaults[name]]
+            if self.r_c is not None:
+                given.append("r_c")
+            if given or self.model is not None or self.h is not None:
+                names = [f"--{n.replace('_', '-')}" for n in given] + (["--model"] if self.model else []) \
+                    + (["--h"] if self.h is not None else [])
+                raise ValueError(f"--tolerance chooses {', '.join(names)}: give either the tolerance or the options")
+
+    def _check_continuation(self) -> None:
+        """Continuation step, range and steadiness window."""
+        if not self.continuation >= 0:
+            raise ValueError(f"--continuation must be >= 0 rad/s (0: none), got {self.continuation}")
+        if self.continuation_range is not None and (len(self.continuation_range) != 2
+                                                    or not 0 < self.continuation_range[0] < self.continuation_range[1]):
+            raise ValueError(f"--continuation-range: need 0 < LOW < HIGH rad/s, got {list(self.continuation_range)}")
+        half = continued_revolutions(self.revolutions) / 2
+        if not 1 <= self.steady_window <= half:
+            raise ValueError(f"--steady-window must be in 1..{int(half)} revolutions (half of a continued run), got "
+                             f"{self.steady_window}")
+        if self.unsteady_step not in ("smallest", "full"):
+            raise ValueError(f"--unsteady-step must be 'smallest' or 'full', got {self.unsteady_step!r}")
+
+    def _normalise(self) -> None:
+        """Floats, tuples and paths, as the command line gives them (same cache keys from Python and the shell)."""
+        for name in ("revolutions", "safety", "h", "frequency_cap", "tangent_safety", "cubature", "mu", "c0", "hb",
+                     "continuation", "mistuning", "perturbation"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, float(getattr(self, name)))
+        start, stop, n = self.speeds
+        object.__setattr__(self, "speeds", (float(start), float(stop), int(n)))
+        if self.continuation_range is not None:
+            object.__setattr__(self, "continuation_range", tuple(float(w) for w in self.continuation_range))
+        if self.cubature_speeds is not None:
+            object.__setattr__(self, "cubature_speeds", tuple(sorted({float(w) for w in self.cubature_speeds})))
+        object.__setattr__(self, "out", Path(self.out))
+        if self.cache is not None:
+            object.__setattr__(self, "cache", Path(self.cache))
+        if self.model is not None:
+            object.__setattr__(self, "model", Path(self.model))
+
+    @property
+    def cache_dir(self) -> Path:
+        """The caches' folder: ``cache``, or OUT/cache."""
+        return self.cache if self.cache is not None else self.out / "cache"
+
+    @property
+    def speed_grid(self) -> np.ndarray:
+        """The map's angular speeds (rad/s)."""
+        start, stop, n = self.speeds
+        return np.linspace(start, stop, n)
+
+    @property
+    def continuation_span(self) -> tuple[float, float]:
+        """(LOW, HIGH) of the continuation (rad/s): ``continuation_range`` or the map's range."""
+        return self.continuation_range or self.speeds[:2]
+
+    @property
+    def casing(self) -> Casing:
+        """The casing and contact law."""
+        return Casing(c0=self.c0, h_b=self.hb, mu=self.mu, direction=self.direction)
+
+    @property
+    def node(self) -> str:
+        """The node whose response makes the map: LE of ``sector`` (a NodeMap label)."""
+        return f"{self.sector}:LE"
+
+    def sweep_spec(self, model: ReducedModel) -> SweepSpec:
+        """The contact scenario each speed runs; a disk records node LE of every sector and TE of ``sector``."""
+        monitor = None
+        if model.nodes.n_sectors > 1:
+            try:
+                rows = [model.nodes.row("LE", s) for s in range(model.nodes.n_sectors)]
+                rows += [model.nodes.row("TE", self.sector)] if "TE" in model.nodes.names else []
+                monitor = tuple(rows)
+            except ValueError as exc:
+                raise ValueError(f"--sector: {exc}") from None
+        elif self.sector != 0:
+            raise ValueError(f"--sector must be 0 for a single blade's model, got {self.sector}")
+        return SweepSpec(revolutions=self.revolutions, casing=self.casing, batch_size=self.batch, monitor=monitor)
+
+    @property
+    def frequency_cap_rad_s(self) -> float | None:
+        """``frequency_cap`` in rad/s (None: no cap)."""
+        return None if self.frequency_cap is None else 2 * np.pi * 1e3 * self.frequency_cap
+
+
+def build_parser() -> ArgumentParser:
+    """The command line: one option per ContactMapConfig field (defaults: the dataclass's)."""
+    parser = ArgumentParser(description="interaction maps of the reduced blade with casing contact",
+                            argument_default=argparse.SUPPRESS)
+    parser.add_argument("--preset", help=f"mesh preset: {', '.join(MESH_PRESETS)} (default ci)")
+    parser.add_argument("--model", type=Path, help="load this reduced model (.npz) instead of building one")
+    parser.add_argument("--disk", action="store_true",
+                        help="the 36-sector bladed disk (every blade's 8 tip nodes in contact) instead of the blade")
+    parser.add_argument("--r-c", type=int, help="fixed-interface modes (per sector) of the model built (default 15; "
+                                                "disk 10)")
+    parser.add_argument("--r-md", type=int, help="modal derivatives (per sector) of the model built (default 0; disk "
+                                                 "10, by MI 2b)")
+    parser.add_argument("--global-md", type=int, help="modal derivatives of the first N clamped modes (default 3)")
+    parser.add_argument("--contact-patch", type=float, metavar="RADIUS",
+                        help="spread each tip node's contact force over the tip facets within RADIUS (m, <= 0.01; "
+                             "default 0: point contact)")
+    parser.add_argument("--r-cyclic", type=int, help="the disk's interface modes (default 144, the paper's)")
+    parser.add_argument("--mistuning", type=float, metavar="SIGMA",
+                        help="the disk's blade stiffness scatter: standard deviation in [0, 1) of log-normal factors "
+                             "(default 0: tuned)")
+    parser.add_argument("--seed", type=int, help="seed of the mistuning factors (default 0)")
+    parser.add_argument("--sector", type=int, help="sector whose node LE makes the map (0..35; default 0)")
+    parser.add_argument("--stress", action="store_true",
+                        help="the disk's von Mises stress at t_max of each map's largest response (all sectors)")
+    parser.add_argument("--speeds", type=float, nargs=3, metavar=("START", "STOP", "N"),
+                        help="N angular speeds (rad/s) from START to STOP (default 1200 1600 21)")
+    parser.add_argument("--revolutions", type=float, help="revolutions per speed (default 20)")
+    parser.add_argument("--gnl", choices=list(GNL_SETTINGS), help="geometric nonlinearity (default both)")
+    parser.add_argument("--safety", type=float, help="h = safety * 2 / omega_max (linear model; default 0.5)")
+    parser.add_argument("--h", type=float, help="time step (s); overrides --safety")
+    parser.add_argument("--frequency-cap", type=float, metavar="KHZ",
+                        help="spectral mass scaling: slow the modes above this frequency (kHz) to it; the GNL step "
+                             "then comes from the tangent limit on a short unscaled probe run "
+                             "(benchmarks/bench_contact_convergence.py measures the error: 60 kHz is within 3 %%)")
+    parser.add_argument("--tangent-safety", type=float,
+                        help="GNL with a cap: h = this x 2 / tangent omega_max on the probe's largest states "
+                             "(default 0.5; 0.7 lost speeds at 120 kHz in bench_contact_convergence, 0.5 none in "
+                             "bench_contact_ecsw)")
+    parser.add_argument("--step-outliers", choices=["keep", "drop"],
+                        help="with a cap: the GNL step from every probe/training state (keep, the default) or "
+                             "without the few whose tangent frequency is above 10x the median (drop: St. Venant-"
+                             "Kirchhoff collapse states; a run that stays near one blows up and is flagged)")
+    parser.add_argument("--perturbation", type=float, metavar="EPS",
+                        help="scale the runs' internal force K q + g(q) by 1 + EPS, |EPS| < 0.01, after the cubature "
+                             "and the step are set: the map again with 1e-4 shows the speeds whose response a "
+                             "force error that small moves (the floor; default 0)")
+    parser.add_argument("--cubature", type=float, metavar="TOL",
+                        help="GNL: replace the exact cubic forces by point cubature trained to this relative "
+                             "tolerance on exact GNL runs at 6 of the speeds (min(revolutions, 12) each; "
+                             "bench_contact_ecsw: 1e-4 with a 120 kHz cap is the cheapest setting within the "
+                             "problem's own sensitivity)")
+    parser.add_argument("--precision", choices=PRECISIONS,
+                        help="with --cubature: arithmetic of the cubature forces (single: float32, 1.6-2.1x faster "
+                             "in bench_contact_ecsw, within 4e-7 of the double force; default double)")
+    parser.add_argument("--cubature-speeds", type=float, nargs="+", metavar="OMEGA",
+                        help="with --cubature: train it on exact GNL runs at these speeds (rad/s) instead of 6 of the "
+                             "map's own")
+    parser.add_argument("--capped-training", action="store_true",
+                        help="with --cubature and --frequency-cap: the training runs and the GNL step's probe run "
+                             "capped (a disk's always do), for bases whose unscaled GNL step makes the exact runs "
+                             "hours long (--global-md 10)")
+    parser.add_argument("--tolerance", type=float, metavar="TOL",
+                        help="choose r_c, the frequency cap, the step and the GNL forces (with --disk: r_c, r_md, "
+                             "r_cyclic, the cap and the GNL forces; GNL once the study has measured the disk's GNL "
+                             "map) as the cheapest model within this relative error in "
+                             "the speed-accuracy study (docs/choosing-a-model.md), in (0, 1)")
+    parser.add_argument("--retry-diverged", type=int, metavar="N",
+                        help="run the speeds that blew up again with the step halved, up to N times (0..4, default 0)")
+    parser.add_argument("--mu", type=float, help="friction coefficient (default 0.15)")
+    parser.add_argument("--c0", type=float, help="clearance at rest (m, default 0.5e-3)")
+    parser.add_argument("--hb", type=float, help="height of the casing's bumps (m, default 0.625e-3)")
+    parser.add_argument("--direction", choices=["x", "radial", "cone"],
+                        help="contact normal: x (the paper's e_x, default), radial, cone (the casing cone's normal)")
+    parser.add_argument("--batch", type=int, help="speeds integrated together (default 16)")
+    parser.add_argument("--continuation", type=float,
+                        help="speed step (rad/s) of a continuation up and down over the map's range (0: none, the "
+                             "default); under mpirun the two branches run on ranks 0 and 1; resumable")
+    parser.add_argument("--continuation-range", type=float, nargs=2, metavar=("LOW", "HIGH"),
+                        help="run the continuation over this speed range (rad/s) instead of the map's: up from LOW, "
+                             "down from HIGH (each first run as long as the map's, 15 %% of it after); a higher "
+                             "HIGH with the same LOW extends the saved up branch from its last point (a lower LOW "
+                             "with the same HIGH, the down branch)")
+    parser.add_argument("--steady-window", type=int, metavar="N",
+                        help="a continued run is steady when its max over the last N revolutions and the N before "
+                             "agree to 2 %% (1, the paper's and the default: periodic with the rotor; N: periods up to "
+                             "N T)")
+    parser.add_argument("--unsteady-step", choices=["smallest", "full"],
+                        help="the continuation's point where no halved step is steady: smallest (the paper read "
+                             "literally, the default: the step stays divided) or full (the full step, marked not "
+                             "steady: 8 times fewer points across an unsteady stretch)")
+    parser.add_argument("--out", type=Path, help="output folder (default results/contact_map)")
+    parser.add_argument("--cache", type=Path, help="folder of the model, cubature and probe caches (default "
+                                                   "OUT/cache; another map's to share its cubature)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    return parser
+
