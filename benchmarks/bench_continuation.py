@@ -80,11 +80,9 @@ def main(argv=None) -> int:
     if not args.model.is_file():
         print(f"error: --model {args.model} not found (make speed-accuracy builds it)", file=sys.stderr)
         return 2
-    from speed_accuracy import study_training_speeds
-
-    from rotor37_rom.studies import contact_map as cm
-
     from rotor37_rom.model.reduced import load_reduced_model
+    from rotor37_rom.studies import contact_map as cm
+    from rotor37_rom.studies.speed_accuracy.maps import study_training_speeds
     from rotor37_rom.studies.sweep import continuation
 
     comm = cm.world_comm()

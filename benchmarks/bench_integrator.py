@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from rotor37_rom.machine import write_results
+from rotor37_rom.studies.speed_accuracy.cost import synthetic_model, time_per_step
 
 
 def gemm_rate(n: int = 2000) -> float:
@@ -29,24 +30,6 @@ def gemm_rate(n: int = 2000) -> float:
     for _ in range(3):
         a @ b
     return 3 * 2 * n**3 / (time.perf_counter() - t0) / 1e9
-
-
-def synthetic_model(r: int, seed: int = 0):
-    from rotor37_rom.forces.tensors import PolynomialForces
-    from rotor37_rom.model.nodes import NodeMap
-    from rotor37_rom.model.reduced import ReducedModel
-
-    rng = np.random.default_rng(seed)
-    X = rng.standard_normal((r, r))
-    M = X @ X.T / r + np.eye(r)
-    K = 1e8 * (X.T @ X / r + np.eye(r))
-    A = rng.standard_normal((r, r * (r + 1) // 2))
-    B = rng.standard_normal((r, r * (r + 1) * (r + 2) // 6))
-    nodes = np.column_stack([np.full(8, 0.25), np.linspace(-0.025, 0.023, 8), np.linspace(0.006, 0.034, 8)])
-    return ReducedModel(M=M, C=np.zeros_like(M), K=K, forces=PolynomialForces(A, B), boundary_dofs=np.arange(24),
-                        nodes=NodeMap.for_nodes(nodes, np.arange(24).reshape(8, 3)),
-                        sizes={"r_b": 24, "r_c": r - 24, "r_md": 0}, md_pairs=np.zeros((0, 2)),
-                        Phi=None, metadata={"synthetic": r})
 
 
 def full_tensors(forces):
@@ -61,15 +44,6 @@ def full_tensors(forces):
     ca, cb, cc = cubic_monomial_indices(r)
     B4[:, ca, cb, cc] = forces.B
     return A3, B4
-
-
-def time_per_step(fn, min_time: float = 0.5) -> float:
-    fn()
-    n, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < min_time:
-        fn()
-        n += 1
-    return (time.perf_counter() - t0) / n
 
 
 def _headline_cubature(headline: str) -> tuple[str | None, float | None]:

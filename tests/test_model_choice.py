@@ -1,6 +1,5 @@
 """The model for a tolerance (issue #22): the chooser's rule on the shipped study file, the Pareto front, the docs
 page generated from the same file, and the refusals."""
-import importlib.util
 import subprocess
 import sys
 from pathlib import Path
@@ -11,14 +10,6 @@ import pytest
 from rotor37_rom.studies.model_choice import STUDY_FILE, choose_model, load_study, pareto_front, scenes
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _study_script():
-    spec = importlib.util.spec_from_file_location("speed_accuracy", ROOT / "benchmarks" / "speed_accuracy.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    return module
 
 
 def test_pareto_front_is_the_set_of_undominated_points():
@@ -120,22 +111,53 @@ def test_held_out_checks_ran_for_three_scenes():
 def test_held_out_maps_run_the_cubature_as_trained():
     """A cubature candidate's held-out map reuses the cubature trained on the study's speeds (none of them a held-out
     speed): retrained on runs at the held-out speeds it would be judged on its own training cases."""
-    module = _study_script()
-    options = module.held_out_options({"r_c": 15, "cubature": 1e-4, "precision": "single"})
-    start, stop, n = module.MAP["speeds"]
+    from rotor37_rom.studies.speed_accuracy.context import HELD_OUT_SPEEDS, MAP
+    from rotor37_rom.studies.speed_accuracy.maps import held_out_options
+
+    options = held_out_options({"r_c": 15, "cubature": 1e-4, "precision": "single"})
+    start, stop, n = MAP["speeds"]
     study_speeds = np.linspace(start, stop, int(n))
-    held_out = np.linspace(*module.HELD_OUT_SPEEDS[:2], int(module.HELD_OUT_SPEEDS[2]))
+    held_out = np.linspace(*HELD_OUT_SPEEDS[:2], int(HELD_OUT_SPEEDS[2]))
     train = np.asarray(options["cubature_speeds"])
     assert train.size == 6 and np.isin(train, study_speeds).all() and not np.isin(train, held_out).any()
-    assert module.held_out_options({"r_c": 25, "frequency_cap": 60.0}) == {"r_c": 25, "frequency_cap": 60.0}
+    assert held_out_options({"r_c": 25, "frequency_cap": 60.0}) == {"r_c": 25, "frequency_cap": 60.0}
 
 
 def test_docs_page_is_the_study_file():
-    """docs/choosing-a-model.md's generated block is what the study script renders from the shipped file."""
-    module = _study_script()
+    """docs/choosing-a-model.md's generated block is what the study (benchmarks/speed_accuracy.py, through
+    ``speed_accuracy.docs``) renders from the shipped file."""
+    from rotor37_rom.studies.speed_accuracy.docs import BEGIN, END, render_markdown
+
     text = (ROOT / "docs" / "choosing-a-model.md").read_text()
-    block = text.split(module.BEGIN, 1)[1].split(module.END, 1)[0].strip()
-    assert block == module.render_markdown(load_study()).strip()
+    block = text.split(BEGIN, 1)[1].split(END, 1)[0].strip()
+    assert block == render_markdown(load_study(), ROOT / "docs" / "img").strip()
+
+
+def test_study_options_are_the_library_configurations_fields():
+    """The study file is keyed on the library's own configuration names: every option of every candidate and
+    reference is a field of the configuration its scene measured (``study_file.SCENE_CONFIG``), and a choice's options
+    map onto another configuration in one place (``ModelChoice.config_options``: ``global_md`` is
+    ``ReductionConfig.global_md_modes``)."""
+    import dataclasses
+    import importlib
+
+    from rotor37_rom.reduction.builder import ReductionConfig
+    from rotor37_rom.studies.speed_accuracy.study_file import SCENE_CONFIG, config_options
+
+    study = load_study()
+    assert set(scenes(study)) <= set(SCENE_CONFIG)
+    for scene in scenes(study):
+        module, name = SCENE_CONFIG[scene]
+        config = getattr(importlib.import_module(module), name)
+        data = study["scenes"][scene]
+        for options in [c["options"] for c in data["candidates"]] + [data["reference"].get("options", {})]:
+            if "model" in options:               # a full-order model: no reduced configuration
+                continue
+            assert set(config_options(options, config)) <= {f.name for f in dataclasses.fields(config)}, scene
+    choice = choose_model("clearance", 0.2, study, where=lambda c: "r_c" in c["options"])
+    assert ReductionConfig(**choice.config_options(ReductionConfig)).global_md_modes == choice.options["global_md"]
+    with pytest.raises(ValueError, match="model are not fields of ReductionConfig"):
+        config_options({"model": "full-order linear"}, ReductionConfig)
 
 
 def test_refusals(tmp_path):
@@ -350,3 +372,40 @@ def test_reference_model_is_the_yardstick():
     assert forced.cost == study["scenes"]["disk-forced-linear"]["reference"]["cost"] > 0
     with pytest.raises(ValueError, match="scene must be one of"):
         reference_model("no-such-scene", study)
+
+
+def test_run_study_on_a_toy_scene(tmp_path, monkeypatch):
+    """One run of the study through the registry on a toy scene (no model built): the scene's record and its
+    choices in the study file, the other scenes kept, the run's note of what it computed, its chart, and the docs
+    block rewritten between its markers with the text around them kept."""
+    from rotor37_rom.studies.speed_accuracy import scenes as registry
+    from rotor37_rom.studies.speed_accuracy.context import PREFIX, StudyContext
+    from rotor37_rom.studies.speed_accuracy.docs import BEGIN, END, render_markdown
+    from rotor37_rom.studies.speed_accuracy.study_file import read_study, write_study
+
+    def toy(ctx, study, t0):
+        study["scenes"]["toy"] = dict(description="a toy scene", cost_unit="s", reference={"options": {"r_c": 40}},
+                                      held_out_case=None, candidates=[
+                                          dict(name="cheap", options={"r_c": 5}, cost=1.0, error=0.1,
+                                               held_out_error=None),
+                                          dict(name="dear", options={"r_c": 15}, cost=3.0, error=0.02,
+                                               held_out_error=0.03)])
+        ctx.fresh.append("toy 0 s")
+
+    monkeypatch.setitem(registry.REGISTRY, "toy", registry.Scene("blade", toy))
+    ctx = StudyContext(work=tmp_path / "work", img=tmp_path / "img", doc=tmp_path / "page.md",
+                       study_file=tmp_path / "study.json")
+    ctx.img.mkdir()
+    ctx.doc.write_text(f"# Page\n\nbefore\n{BEGIN}\nold\n{END}\nafter\n")
+    shipped = load_study()
+    write_study(ctx.study_file, {**shipped, "scenes": {"modes": shipped["scenes"]["modes"]}})
+    study = registry.run_study(ctx, ["toy"])
+    assert read_study(ctx.study_file) == study and set(study["scenes"]) == {"modes", "toy"}
+    choices = study["scenes"]["toy"]["choices"]
+    assert choices["0.01"]["name"] is None and choices["0.05"]["name"] == "dear" and choices["0.2"]["name"] == "cheap"
+    assert study["runs"][-1]["scenes"] == ["toy"] and study["runs"][-1]["note"] == PREFIX + "toy 0 s"
+    assert (ctx.img / "speed_accuracy_toy.png").is_file() and ctx.work.is_dir()
+    text = ctx.doc.read_text()
+    assert text.startswith("# Page\n\nbefore\n") and text.endswith(f"{END}\nafter\n")
+    assert text.split(BEGIN, 1)[1].split(END, 1)[0].strip() == render_markdown(study, ctx.img).strip()
+    assert registry.expand_scenes(["modes", "disk", "modes"]) == ("modes",) + registry.DISK_SCENES

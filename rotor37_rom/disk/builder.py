@@ -118,6 +118,71 @@ def _positions(free: np.ndarray, dofs: np.ndarray, what: str) -> np.ndarray:
     return pos
 
 
+def _disk_metadata(sector, config: DiskReductionConfig) -> dict:
+    """What a disk model's key hashes: its configuration, mesh, version, damping and training load."""
+    config_meta = dataclasses.asdict(config)
+    if not config.face_shapes:                     # eq. 61's models keep the keys they were cached under
+        config_meta.pop("face_shapes")
+    metadata = {"config": config_meta, "mesh": mesh_signature(sector), "source": sector.source,
+                "version": __version__, "kind": "disk", "n_sectors": sector.cyclic.n_sectors,
+                "damping": "5e-4 on the 3 N lowest modes"}
+    if config.load_patch:
+        metadata["load_correction"] = "one static vector per sector, its modal derivatives among the candidates"
+    else:                                    # models cached before the point load was put on node LE are not read
+        metadata["training_load"] = "node LE, e_z"
+    return metadata
+
+
+def _sector_craig_bampton(sector, config: DiskReductionConfig, K_f, M_f, free: np.ndarray, boundary: np.ndarray,
+                          pos: np.ndarray, mesh: str, cache_dir, factorised: list):
+    """(Psi_f, Theta_f, omega_c): the sector's constraint and fixed-interface modes on its free DOFs, computed or read
+    from their cache; K_ii's factorisation appended to ``factorised`` when a load patch needs it.
+
+    The sector's Craig-Bampton modes depend on the mesh, the boundary and r_c only: models that differ in r_MD, face
+    shapes, the load patch or mistuning share them (a cache beside the models': n_free x (r_b + 2 n_L + r_c))."""
+    def solve(A):
+        factorised.append(fem.mumps_solver(A))
+        return factorised[-1]
+
+    cb_meta = {"mesh": mesh, "source": sector.source, "r_c": config.r_c, "version": __version__,
+               "kind": "disk Craig-Bampton", "boundary": boundary.tolist(),
+               "free": hashlib.sha256(np.ascontiguousarray(free, np.int64).tobytes()).hexdigest()}
+    cb_file = Path(cache_dir) / f"disk_cb_{reduced_model_key(cb_meta)}.npz" if cache_dir else None
+
+    def shapes(arrays: dict) -> None:
+        if arrays["Psi"].shape != (free.size, boundary.size) or arrays["Theta"].shape != (free.size, config.r_c):
+            raise ValueError(f"shapes {arrays['Psi'].shape}, {arrays['Theta'].shape}")
+
+    cb = load_npz(cb_file, ("Psi", "Theta", "omega_c"), shapes, what="Craig-Bampton cache")
+    if cb is not None:
+        LOG.info("Craig-Bampton modes read from %s", cb_file)
+        if config.load_patch:               # the correction's solve on the interior DOFs
+            interior = np.setdiff1d(np.arange(free.size), pos)
+            factorised.append(fem.mumps_solver(K_f[interior][:, interior]))
+        return cb["Psi"], cb["Theta"], cb["omega_c"]
+    Psi_f, Theta_f, omega_c = craig_bampton(K_f, M_f, pos, config.r_c, solve=solve, eigensolve=fem.slepc_eigenpairs)
+    if cb_file is not None:
+        save_npz(cb_file, Psi=Psi_f, Theta=Theta_f, omega_c=omega_c)
+    return Psi_f, Theta_f, omega_c
+
+
+def _sector_forces(sector, config: DiskReductionConfig, Phi_s, Psi_L, Psi_Rr, Pi, omega_pi, free, blocks, r: int,
+                   scales) -> SectorForces:
+    """The disk's nonlinear force: the sector's exact quadrature (or its tensors) on Phi_s, with ``face_shapes`` also
+    on the faces' shapes [Phi_s, Psi_L L, Psi_R' L], applied to every sector (eq. 61)."""
+    N, r_s, n_full = blocks.shape[0], Phi_s.shape[1], Phi_s.shape[0]
+    Phi_nl, faces = Phi_s, None
+    if config.face_shapes:               # the faces in the force, on a few shapes: [Phi_s, Psi_L L, Psi_R' L]
+        L, faces = face_shapes(Pi, omega_pi, N, config.face_shapes)
+        Phi_nl = np.zeros((n_full, r_s + 2 * L.shape[1]))
+        Phi_nl[:, :r_s] = Phi_s
+        Phi_nl[free, r_s:] = np.hstack([Psi_L @ L, Psi_Rr @ L])
+    H, w, _ = fem.quadrature_gradients(sector, Phi_nl.T)
+    exact = QuadratureForces(H, w, *sector.material.lame)
+    sector_forces = compute_polynomial_forces(exact) if config.forces == "intrusive" else exact
+    return SectorForces(sector_forces, blocks, r, scales, faces)
+
+
 def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig(), ops=None,
                      cache_dir: str | Path | None = None) -> tuple[ReducedModel, dict]:
     """The disk's reduced model (r = N (r_b + r_c + r_load + r_MD) + r_cyclic, eq. 53) from a cyclic sector (serial).
@@ -137,16 +202,7 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     ops = ops or fem.create_svk_operators(sector)
     tip_rows = [sector.tip_names.index("LE")] if config.tip_nodes == "LE" else list(range(len(sector.tip_names)))
     tip_dofs = np.asarray(sector.tip_dofs)[tip_rows].ravel()
-    config_meta = dataclasses.asdict(config)
-    if not config.face_shapes:                     # eq. 61's models keep the keys they were cached under
-        config_meta.pop("face_shapes")
-    metadata = {"config": config_meta, "mesh": mesh_signature(sector), "source": sector.source,
-                "version": __version__, "kind": "disk", "n_sectors": N,
-                "damping": "5e-4 on the 3 N lowest modes"}
-    if config.load_patch:
-        metadata["load_correction"] = "one static vector per sector, its modal derivatives among the candidates"
-    else:                                    # models cached before the point load was put on node LE are not read
-        metadata["training_load"] = "node LE, e_z"
+    metadata = _disk_metadata(sector, config)
     cache, cached = cached_model(metadata, cache_dir, "disk")
     if cached is not None:
         return cached, {"cached": True}
@@ -158,33 +214,8 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     boundary = np.concatenate([tip_dofs, left, right])
     pos = _positions(free, boundary, "tip and cyclic DOFs")
     factorised = []                          # K_ii's factorisation, kept for the load correction below
-
-    def solve(A):
-        factorised.append(fem.mumps_solver(A))
-        return factorised[-1]
-    # the sector's Craig-Bampton modes depend on the mesh, the boundary and r_c only: models that differ in r_MD,
-    # face shapes, the load patch or mistuning share them (a cache beside the models': n_free x (r_b + 2 n_L + r_c))
-    cb_meta = {"mesh": metadata["mesh"], "source": sector.source, "r_c": config.r_c, "version": __version__,
-               "kind": "disk Craig-Bampton", "boundary": boundary.tolist(),
-               "free": hashlib.sha256(np.ascontiguousarray(free, np.int64).tobytes()).hexdigest()}
-    cb_file = Path(cache_dir) / f"disk_cb_{reduced_model_key(cb_meta)}.npz" if cache_dir else None
-
-    def shapes(arrays: dict) -> None:
-        if arrays["Psi"].shape != (free.size, boundary.size) or arrays["Theta"].shape != (free.size, config.r_c):
-            raise ValueError(f"shapes {arrays['Psi'].shape}, {arrays['Theta'].shape}")
-
-    cb = load_npz(cb_file, ("Psi", "Theta", "omega_c"), shapes, what="Craig-Bampton cache")
-    if cb is not None:
-        LOG.info("Craig-Bampton modes read from %s", cb_file)
-        Psi_f, Theta_f, omega_c = cb["Psi"], cb["Theta"], cb["omega_c"]
-        if config.load_patch:               # the correction's solve on the interior DOFs
-            interior = np.setdiff1d(np.arange(free.size), pos)
-            factorised.append(fem.mumps_solver(K_f[interior][:, interior]))
-    else:
-        Psi_f, Theta_f, omega_c = craig_bampton(K_f, M_f, pos, config.r_c, solve=solve,
-                                                eigensolve=fem.slepc_eigenpairs)
-        if cb_file is not None:
-            save_npz(cb_file, Psi=Psi_f, Theta=Theta_f, omega_c=omega_c)
+    Psi_f, Theta_f, omega_c = _sector_craig_bampton(sector, config, K_f, M_f, free, boundary, pos, metadata["mesh"],
+                                                    cache_dir, factorised)
     nb, nL = tip_dofs.size, left.size
     R_blk = np.kron(np.eye(nL // 3), rotation_z(pairs.angle))          # u_R = R u_L of the next sector, per node
     Psi_tip, Psi_L, Psi_Rr = Psi_f[:, :nb], Psi_f[:, nb:nb + nL], Psi_f[:, nb + nL:] @ R_blk
@@ -241,16 +272,7 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     blocks = np.arange(N * r_s).reshape(N, r_s)
     forces = None
     if config.forces != "none":
-        Phi_nl, faces = Phi_s, None
-        if config.face_shapes:               # the faces in the force, on a few shapes: [Phi_s, Psi_L L, Psi_R' L]
-            L, faces = face_shapes(Pi, omega_pi, N, config.face_shapes)
-            Phi_nl = np.zeros((n_full, r_s + 2 * L.shape[1]))
-            Phi_nl[:, :r_s] = Phi_s
-            Phi_nl[free, r_s:] = np.hstack([Psi_L @ L, Psi_Rr @ L])
-        H, w, _ = fem.quadrature_gradients(sector, Phi_nl.T)
-        exact = QuadratureForces(H, w, *sector.material.lame)
-        sector_forces = compute_polynomial_forces(exact) if config.forces == "intrusive" else exact
-        forces = SectorForces(sector_forces, blocks, K.shape[0], scales, faces)
+        forces = _sector_forces(sector, config, Phi_s, Psi_L, Psi_Rr, Pi, omega_pi, free, blocks, K.shape[0], scales)
         lap("forces")
     sector_nodes = boundary_node_map(sector, tip_dofs)
     Psi_L_full, Psi_Rr_full = np.zeros((n_full, nL)), np.zeros((n_full, nL))

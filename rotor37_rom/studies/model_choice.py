@@ -6,32 +6,34 @@ speed_accuracy.json`` (versioned with the code). ``choose_model(scene, tolerance
 typed here — and returns the cheapest candidate whose *expected* error is within the tolerance: the largest of the
 error measured on the study's cases, when the study ran the candidate on held-out cases (other speeds, another mode
 or amplitude) the error there, and the scene's floor where it states one (the error below which its reference cannot
-tell models apart). A candidate that missed on held-out cases is thereby passed over for the next cheapest.
+tell models apart). A candidate that missed on held-out cases is thereby passed over for the next cheapest. The
+file's schema, its reader and the options' mapping onto a configuration's fields: ``speed_accuracy.study_file``.
 
 Pure Python and NumPy (no dolfinx): the demos call it before any meshing.
 """
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
 
+from rotor37_rom.studies.speed_accuracy.study_file import SCHEMA, config_options, read_study
+
 __all__ = ["STUDY_FILE", "SCHEMA", "ModelChoice", "load_study", "pareto_front", "scene_floor", "expected_error",
            "choose_model", "reference_model", "scenes"]
 
 STUDY_FILE = Path(__file__).resolve().parents[1] / "data" / "speed_accuracy.json"
-SCHEMA = 1
 
 
 @dataclasses.dataclass(frozen=True)
 class ModelChoice:
-    """One candidate of a scene: its options (the scene command's option names, e.g. ``frequency_cap``), its expected
-    error (relative), the error on the study's cases and on held-out cases (None: not run there), its cost, and the
-    scene's floor (0: the scene states none)."""
+    """One candidate of a scene: its options (the field names of the configuration the scene measured,
+    ``study_file.SCENE_CONFIG``: e.g. ``ContactMapConfig.frequency_cap``), its expected error (relative), the error on
+    the study's cases and on held-out cases (None: not run there), its cost, and the scene's floor (0: the scene
+    states none)."""
 
     scene: str
     name: str
@@ -42,6 +44,11 @@ class ModelChoice:
     cost: float
     cost_unit: str
     floor: float = 0.0
+
+    def config_options(self, config_type: type) -> dict:
+        """The options as keyword arguments of the dataclass ``config_type`` (``study_file.config_options``: e.g.
+        ``global_md`` is ``ReductionConfig.global_md_modes``); ValueError naming an option it has no field for."""
+        return config_options(self.options, config_type)
 
     def describe(self) -> str:
         if self.name == "reference":
@@ -55,13 +62,7 @@ class ModelChoice:
 
 def load_study(path: str | Path | None = None) -> dict:
     """The study file (default: the one shipped with the package); ValueError if absent or of another schema."""
-    path = Path(path) if path is not None else STUDY_FILE
-    if not path.is_file():
-        raise ValueError(f"speed-accuracy study file {path} not found: run python benchmarks/speed_accuracy.py")
-    study = json.loads(path.read_text())
-    if study.get("schema") != SCHEMA:
-        raise ValueError(f"speed-accuracy study file {path}: schema {study.get('schema')!r}, expected {SCHEMA}")
-    return study
+    return read_study(path if path is not None else STUDY_FILE)
 
 
 def scenes(study: dict | None = None) -> list[str]:

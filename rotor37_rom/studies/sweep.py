@@ -593,23 +593,14 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
         save(False)
     while sign * (stop - omega) > 1e-9:
         targets = [omega + sign * min(step / 2 ** k, abs(stop - omega)) for k in range(max_halvings + 1)]
-        runs: dict[float, tuple] = {}             # target -> (result, index in its batch, steady)
         if not batch_halvings:                    # the paper's order: one candidate at a time
             rounds = [[k] for k in range(max_halvings + 1)]
         elif points[-1].halvings > 0 or not points[-1].steady:
             rounds = [list(range(max_halvings + 1))]
         else:
             rounds = [[0], list(range(1, max_halvings + 1))]
-        for ks in rounds:
-            todo = sorted({targets[k] for k in ks} - runs.keys())
-            if todo:
-                r = simulate(scheme, todo, casing, revolutions=revolutions, record_every=record_every,
-                             initial=state, on_blowup="flag", duration=1e-12, phase=phase)
-                runs.update({tg: (r, p, bool(r.diverged_step[p] < 0)
-                                  and is_steady(r.t[p], r.u_r[p][r.row(node)], tg, tol, window))
-                             for p, tg in enumerate(todo)})
-            if any(runs[targets[k]][2] for k in ks):
-                break
+        runs = _candidate_runs(scheme, targets, rounds, casing, revolutions, record_every, state, phase, node, tol,
+                               window)
         k = next((k for k in range(max_halvings + 1) if targets[k] in runs and runs[targets[k]][2]), None)
         if k is None and unsteady == "full":       # the largest step whose run did not blow up
             k = next((k for k in range(max_halvings + 1) if targets[k] in runs
@@ -637,3 +628,23 @@ def continuation(scheme: CentralDifference, start: float, stop: float, step: flo
         omega = target
         save(sign * (stop - omega) <= 1e-9)
     return points
+
+
+def _candidate_runs(scheme: CentralDifference, targets: list[float], rounds: list[list[int]], casing: Casing,
+                    revolutions: float, record_every: int, state: tuple, phase: float, node: str, tol: float,
+                    window: int) -> dict[float, tuple]:
+    """The continuation's candidate runs from ``state``: the speeds ``targets`` (the full step and its halvings), run
+    in ``rounds`` (lists of indices of ``targets``, each round one batch) until a round has a steady run. Returns
+    {target: (result, index in its batch, steady)}."""
+    runs: dict[float, tuple] = {}
+    for ks in rounds:
+        todo = sorted({targets[k] for k in ks} - runs.keys())
+        if todo:
+            r = simulate(scheme, todo, casing, revolutions=revolutions, record_every=record_every,
+                         initial=state, on_blowup="flag", duration=1e-12, phase=phase)
+            runs.update({tg: (r, p, bool(r.diverged_step[p] < 0)
+                              and is_steady(r.t[p], r.u_r[p][r.row(node)], tg, tol, window))
+                         for p, tg in enumerate(todo)})
+        if any(runs[targets[k]][2] for k in ks):
+            break
+    return runs
