@@ -1,15 +1,15 @@
 """The reduced blade against a full-order reference in casing contact (issue #23, items 3 and 4).
 
-The full-order reference is the ci blade's finite-element model (13,836 DOFs) integrated with implicit Newmark
-(average acceleration, ``fem.solve_repeating_newmark`` with a casing): the same eight tip nodes, casing (eqs.
-37-38), normal and Coulomb law as the reduced models, each Newton iterate corrected by the multipliers that close
-every penetration at t_n+1 (``casing.ContactSolver`` on the iteration matrix's compliance). Both sides run undamped
-from rest over the same ovalization ramp, so what differs is the reduction (and each side's time integration: the
-reference is run at several steps, the finest being the reference). Reduced models: Craig-Bampton with r_b = 24 tip
-DOFs, r_c fixed-interface modes, the global modal derivatives (of the first --global-md clamped modes: 6 for the
-default 3) and r_MD MI 2b modal derivatives of the constraint modes, explicit central differences
-(``integrator.simulate``) at half the stability limit, unscaled. Among reduced models alone (--no-full-order:
-convergence in r, the largest the reference) they keep their modal damping.
+The full-order reference is the ci blade's finite-element model (13,836 DOFs) integrated with implicit Newmark (average
+acceleration, ``fem.solve_repeating_newmark`` with a casing): the same eight tip nodes, casing (eqs. 37-38), normal and
+Coulomb law as the reduced models, each Newton iterate corrected by the multipliers that close every penetration at
+t_n+1 (``dynamics.casing.ContactSolver`` on the iteration matrix's compliance). Both sides run undamped from rest over
+the same ovalization ramp, so what differs is the reduction (and each side's time integration: the reference is run at
+several steps, the finest being the reference). Reduced models: Craig-Bampton with r_b = 24 tip DOFs, r_c
+fixed-interface modes, the global modal derivatives (of the first --global-md clamped modes: 6 for the default 3) and
+r_MD MI 2b modal derivatives of the constraint modes, explicit central differences (``dynamics.explicit.simulate``) at
+half the stability limit, unscaled. Among reduced models alone (--no-full-order: convergence in r, the largest the
+reference) they keep their modal damping.
 
 Error measures on the LE normal displacement u(t) (m), recorded every --record seconds: the relative RMS error
 |u_rom - u_ref|_2 / |u_ref|_2 over the run, and the error of max |u| over the last revolution (the quantity a map is
@@ -93,7 +93,7 @@ def rom_runs(model, casing, speeds, duration, gnl, record, cap=None, h=None, dam
             if (str(data["model"]) == model.key and np.array_equal(data["speeds"], speeds)
                     and all(float(data[k]) == v for k, v in ident.items())):
                 state, before = loop_state(data, speeds.size), float(data["elapsed"])
-                print(f"  resuming at step {state['n']} of {n_steps} ({before:.0f} s run before)", flush=True)
+                print(f"  resuming at step {state.n} of {n_steps} ({before:.0f} s run before)", flush=True)
     t0 = time.perf_counter()
     save = None if checkpoint is None else (
         lambda st: save_loop_state(checkpoint, st, speeds, elapsed=before + time.perf_counter() - t0,
@@ -101,7 +101,7 @@ def rom_runs(model, casing, speeds, duration, gnl, record, cap=None, h=None, dam
     bar = None
     try:
         from tqdm import tqdm
-        bar = tqdm(total=n_steps * speeds.size, initial=0 if state is None else state["n"] * speeds.size,
+        bar = tqdm(total=n_steps * speeds.size, initial=0 if state is None else state.n * speeds.size,
                    unit="sim-step", unit_scale=True, mininterval=30, desc=f"r = {model.r}, h = {scheme.h:.3g} s")
     except ImportError:
         pass
@@ -154,7 +154,7 @@ def completed_revolutions(run, omega):
 
 
 def last_peak(run, omega):
-    """The last revolution's max |u| of a run (m): the NFRC's quantity (``sweep.last_revolution_max``)."""
+    """The last revolution's max |u| of a run (m): the NFRC's quantity (``studies.sweep.last_revolution_max``)."""
     from rotor37_rom.studies.sweep import last_revolution_max
 
     return last_revolution_max(np.asarray(run["t"]), np.asarray(run["u_le"]), omega)

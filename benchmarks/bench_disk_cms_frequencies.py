@@ -3,8 +3,8 @@ acceptance: the 1B, 1T and 2B families within 1 % at every k, Rayleigh-Ritz uppe
 
 The paper's r = 972 model (r_b = 3, node LE; r_c = 10; r_MD = 10 by MI 2b; r_cyclic = 144) and, with --tip-nodes all,
 the contact maps' model (r_b = 24): the disk model's eigenfrequencies sorted by harmonic index
-(``disk.harmonic_frequencies``) against the sector's full-order cyclic modes at k = 0 ... 18
-(``analysis.cyclic_harmonic_frequencies``).
+(``disk.harmonics.harmonic_frequencies``) against the sector's full-order cyclic modes at k = 0 ... 18
+(``post.stress.cyclic_harmonic_frequencies``).
 
     python benchmarks/bench_disk_cms_frequencies.py [--preset ci] [--tip-nodes LE|all]
 

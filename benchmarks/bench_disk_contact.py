@@ -5,10 +5,11 @@ r_MD = 10 modal derivatives by MI 2b, r_cyclic = 144 interface modes; exact sect
 in contact with the two-lobe casing (each blade at its own angle), through the blade's integrator and sweep.
 
 1. Cost per simulation-step (a batch of 8 speeds in 1,200-1,650 rad/s, 2,000 steps with contact): the step
-   operators dense against per harmonic index (``disk.HarmonicBlocks``, automatic for a tuned disk), GNL off and on;
-   the GNL step from the tangent limit on states of a capped GNL run; the wall time of the issue's full-disk map
+   operators dense against per harmonic index (``disk.harmonics.HarmonicBlocks``, automatic for a tuned disk), GNL off
+   and on; the GNL step from the tangent limit on states of a capped GNL run; the wall time of the issue's full-disk map
    (90 speeds x 200 revolutions in 1,200-1,650 rad/s, GNL) extrapolated from them, on one process.
-2. A short map through ``sweep.run_sweep`` (GNL off, --speeds x --revolutions): node LE of sector 0 and the largest
+2. A short map through ``studies.sweep.run_sweep`` (GNL off, --speeds x --revolutions): node LE of sector 0 and the
+largest
    over the sectors, the contact checks (penetration, lambda >= 0, friction power <= 0).
 
     python benchmarks/bench_disk_contact.py [--speeds 1200 1650 10] [--revolutions 20] [--cap 60]

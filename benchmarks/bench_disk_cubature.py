@@ -3,9 +3,9 @@ tensors and the error on the response at a few speeds, next to the problem's own
 
 The disk model of the contact maps (ci preset, every sector's 8 tip nodes, r_c = 10, r_MD = 10 by MI 2b, r_cyclic = 144:
 r = 1,728), casing cone normal, 60 kHz cap, GNL at a fixed step (default the short GNL map's 1.15e-6 s). The sector's
-force is hyper-reduced by ``builder.hyper_reduce`` (the blade's point cubature with the sectors as columns) trained on
-exact GNL contact runs from rest at --train speeds (``integrator.contact_training_states``), at each --tol, in float64
-and float32. Then, in the same run:
+force is hyper-reduced by ``reduction.builder.hyper_reduce`` (the blade's point cubature with the sectors as columns)
+trained on exact GNL contact runs from rest at --train speeds (``dynamics.explicit.contact_training_states``), at each
+--tol, in float64 and float32. Then, in the same run:
 
 1. cost per simulation-step of a batch of 8 speeds (1,000 steps), exact tensors against each cubature, and the issue's
    full-disk map (90 speeds x 200 revolutions, GNL) extrapolated at that step on one process;

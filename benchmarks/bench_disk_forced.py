@@ -1,17 +1,17 @@
 """Bladed disk without contact (paper §3.3, Figs. 16-22): the reduced models' forced response against the full-order
 reference, cost and error side by side.
 
-Load: 400 N along e_z at node LE of every sector, travelling with N_d nodal diameters, from rest, ``--periods``
-periods. Reference: the full-order model of N / gcd(N, N_d) sectors closed on themselves (``fem.periodic``; implicit
-Newmark, exact SVK tangent), linear for every case and GNL for the cases of ``--gnl-reference`` (the expensive part:
-checkpointed under the output directory, resumed when run again). Reduced models: ``disk_builder.build_disk_model``
-(r_b = 3, LE only, as the paper's §3.3 models) for each criterion and r_MD, integrated by the same Newmark at the
-same step, so the error is the reduction's. Each pair is scored by the performance indicator I
-(``disk.performance_indicator``: loaded node, tip nodes, field and strain-energy criteria), next to the smallest
-field and strain-energy errors any state of the model could have (``disk.best_approximation``: the reference's
-snapshots projected on the model's sector fields), which separates the basis's share of the error from that of the
-reduced dynamics. Each row keeps the error histories behind its I (``disk.indicator_histories``), which
-``benchmarks/plot_disk_indicator.py`` charts with I against r_MD.
+Load: 400 N along e_z at node LE of every sector, travelling with N_d nodal diameters, from rest, ``--periods`` periods.
+Reference: the full-order model of N / gcd(N, N_d) sectors closed on themselves (``fem.periodic``; implicit Newmark,
+exact SVK tangent), linear for every case and GNL for the cases of ``--gnl-reference`` (the expensive part: checkpointed
+under the output directory, resumed when run again). Reduced models: ``disk.builder.build_disk_model`` (r_b = 3, LE
+only, as the paper's §3.3 models) for each criterion and r_MD, integrated by the same Newmark at the same step, so the
+error is the reduction's. Each pair is scored by the performance indicator I (``disk.indicators.performance_indicator``:
+loaded node, tip nodes, field and strain-energy criteria), next to the smallest field and strain-energy errors any state
+of the model could have (``disk.indicators.best_approximation``: the reference's snapshots projected on the model's
+sector fields), which separates the basis's share of the error from that of the reduced dynamics. Each row keeps the
+error histories behind its I (``disk.indicators.indicator_histories``), which ``benchmarks/plot_disk_indicator.py``
+charts with I against r_MD.
 
 A 400 N point force on the ci mesh's thin leading edge makes the GNL reference collapse locally (St. Venant-Kirchhoff
 softens in compression; a point force on a continuum has no finite limit): ``--patch MM`` spreads the same 400 N as

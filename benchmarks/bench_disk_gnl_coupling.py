@@ -13,12 +13,12 @@ the same Newmark at the same step as the full-order reference:
   (Psi_L + Psi_R') Pi_0]);
 - "linear": no nonlinear force;
 - "faces on n_f shapes" (``--face-shapes``): the force of the disk model built with ``face_shapes = n_f``
-  (``DiskReductionConfig``: each face on n_f shapes, ``disk.face_shapes``), restricted to the tied sector;
+  (``DiskReductionConfig``: each face on n_f shapes, ``disk.assembly.face_shapes``), restricted to the tied sector;
 
-and reports each one's performance indicator (``disk.performance_indicator``) next to the smallest errors any state
-of the basis can have (``disk.best_approximation``). The full-order GNL reference is ``bench_disk_forced.py``'s
-(cached under results/disk_forced/<preset>/; computed, about 20 min on the ci preset, when missing) and the disk
-models are its cached ones (built when missing):
+and reports each one's performance indicator (``disk.indicators.performance_indicator``) next to the smallest errors any
+state of the basis can have (``disk.indicators.best_approximation``). The full-order GNL reference is
+``bench_disk_forced.py``'s (cached under results/disk_forced/<preset>/; computed, about 20 min on the ci preset, when
+missing) and the disk models are its cached ones (built when missing):
 
     python benchmarks/bench_disk_gnl_coupling.py [--preset ci] [--r-md 10 20 40] [--patch 3] [--face-shapes 6 12]
         [--faces-only] [--name SUFFIX]
@@ -73,7 +73,7 @@ def tied_basis(model) -> tuple[np.ndarray, int, np.ndarray]:
 
 
 def face_shape_force(sector, model, r_s: int, Pi0: np.ndarray, n_f: int):
-    """The force of the disk model with ``face_shapes = n_f`` (``disk.face_shapes``: the faces on n_f shapes L)
+    """The force of the disk model with ``face_shapes = n_f`` (``disk.assembly.face_shapes``: the faces on n_f shapes L)
     restricted to the tied sector: x = [q; L^T Pi_0 eta; L^T Pi_0 eta] (both faces alike under k = 0)."""
     b = model.sectors
     eta = slice(b.blocks.size, model.r)

@@ -1,11 +1,11 @@
 """Mistuning of the bladed disk in contact (issue #21, item 5; the paper's disk is tuned): how the largest response over
 the blades and its localisation on one blade change with the blade-to-blade stiffness scatter.
 
-The contact maps' disk model (ci preset, every sector's 8 tip nodes, r_c = 10, r_MD = 10 by MI 2b, r_cyclic = 144:
-r = 1,728) with each sector's stiffness and SVK force scaled by its own factor (``disk.mistuning_factors``: log-normal,
-mean 1, standard deviation sigma, seeded), all 36 x 8 tip nodes against the casing (cone normal, mu = 0.15), 60 kHz
-cap, GNL off (a mistuned disk's operators are not block-circulant: the dense step) or on (--gnl: exact sector
-tensors at --h). Each speed runs from rest for --revolutions through ``sweep.run_sweep`` (resumable).
+The contact maps' disk model (ci preset, every sector's 8 tip nodes, r_c = 10, r_MD = 10 by MI 2b, r_cyclic = 144: r =
+1,728) with each sector's stiffness and SVK force scaled by its own factor (``disk.assembly.mistuning_factors``:
+log-normal, mean 1, standard deviation sigma, seeded), all 36 x 8 tip nodes against the casing (cone normal, mu = 0.15),
+60 kHz cap, GNL off (a mistuned disk's operators are not block-circulant: the dense step) or on (--gnl: exact sector
+tensors at --h). Each speed runs from rest for --revolutions through ``studies.sweep.run_sweep`` (resumable).
 
 Per sigma, seed and speed: node LE's max over the last revolution on every blade; the largest over the blades and
 which blade; its ratio to the tuned disk's largest at the same speed (the amplification); and the localisation, the

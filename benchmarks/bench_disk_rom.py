@@ -11,7 +11,8 @@ brings them down to it; those below keep their frequency and shape). The paper's
     python benchmarks/bench_disk_rom.py [--preset ci] [--cap 1.5e5]
 
 Results: results/bench_disk_rom.json and the von Mises stress of the whole bladed disk at sector 0's t_max
-(each sector's field rebuilt from q, no reassembly; results/bench_disk_rom/stress_{linear,gnl}.png). Each part runs in this process, one after the other (2-core machine).
+(each sector's field rebuilt from q, no reassembly; results/bench_disk_rom/stress_{linear,gnl}.png). Each part runs in
+this process, one after the other (2-core machine).
 """
 from __future__ import annotations
 

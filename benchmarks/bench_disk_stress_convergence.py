@@ -9,7 +9,7 @@ value does not converge under refinement. This script meshes the ci sector at el
 displacement component at node LE, and reports its linear von Mises stress outside the tip band:
 - at the corner: the largest at the cells' vertices anywhere (``fem.von_mises_at_vertices``);
 - off the corner: the largest at the vertices of the cells farther than d from the blade-rim junction (every cell
-  with a vertex within d left out; ``fem.root_junction``), d = 2, 4 (``analysis.ROOT_BAND``, what the disk maps
+  with a vertex within d left out; ``fem.root_junction``), d = 2, 4 (``post.stress.ROOT_BAND``, what the disk maps
   report) and 8 mm, and where it sits;
 - the largest at the cells' midpoints (DG0, what the disk maps reported before: a midpoint misses the surface's
   bending stress on a coarse mesh).
@@ -20,7 +20,7 @@ against the sliding (mu = 0.15, the maps' casing), linear stress per kN. A reduc
 through its constraint modes, which are static responses to the tip nodes' displacements, so this is the field the
 maps' stress next to the contact loads is made of. The point load's own stress is singular at the node (~ 1/rho^2);
 reported are the disk summaries' largest off the corner (outside the tip band: the cells whose midpoint lies within
-``analysis.TIP_BAND`` = 10 % of the sector's radial extent, bore to tip, of a contact node - 10.6 mm on the ci
+``post.stress.TIP_BAND`` = 10 % of the sector's radial extent, bore to tip, of a contact node - 10.6 mm on the ci
 sector), the largest in the cells whose every vertex lies more than d = 8, 16, 24 mm from node LE (and off the
 corner), and node LE's displacement. Both cases are also read at one point: the largest vertex value within 3 mm of
 where the linear disk map's largest stress off the corner sits (MAP_POINT, at the LE 16 mm under the tip).

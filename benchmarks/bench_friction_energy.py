@@ -9,8 +9,8 @@ the last revolution (or the time it was stopped), the three works, and the frict
 damping's over the last third of the run: the balance that decides whether a response grows. After each batch, the
 number of speeds stopped per friction coefficient.
 
-First, the stability of persistent sliding (``rotor37_rom.dynamics.friction``) at each tip node, the LE and TE halves and all
-8 nodes, both rotation senses: the divergence (sprag-slip) coefficient from the static compliance, and the first
+First, the stability of persistent sliding (``rotor37_rom.dynamics.friction``) at each tip node, the LE and TE halves
+and all 8 nodes, both rotation senses: the divergence (sprag-slip) coefficient from the static compliance, and the first
 instability of the constrained dynamics growing faster than --min-rate (1/s), divergence or flutter.
 
     python benchmarks/bench_friction_energy.py                  # linear, r = 55, 60 kHz cap: ~2 min

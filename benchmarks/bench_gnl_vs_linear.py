@@ -14,7 +14,7 @@ as the GNL one):
 (the GNL forces are the point cubature trained on exact GNL contact runs of that friction value, float32, as in
 the GNL headline map). A killed run started again resumes. From each map's per-speed records this script takes,
 GNL off and on: the speeds that grew past the limit after the retries, the largest response and its speed, the
-1B/EO4 resonance (``sweep.engine_order_resonance``) and its stiffening over omega_1/4 of the model, and at that
+1B/EO4 resonance (``studies.sweep.engine_order_resonance``) and its stiffening over omega_1/4 of the model, and at that
 resonance the mechanism: the share of the last half of the run during which some tip node touches the casing, and
 the work the normal and the friction forces did on the blade. Results to results/bench_gnl_vs_linear.json (rows of
 earlier runs with other settings are kept), printed as Markdown (docs/results.md). Wall times are the maps' own
@@ -29,8 +29,8 @@ output (a rerun that finds every speed done takes seconds).
         --step-check 1820 1860 2          # the GNL step without a collapse state, two speeds checked at the full one
 
 With ``--step-outliers drop`` the GNL step leaves out the few step states whose tangent frequency is far above the
-others' (``integrator.step_outliers``; St. Venant-Kirchhoff collapse states), and ``--step-check START STOP N`` runs
-those speeds of the map again at the step from every state, on the same cubature (OUT/step_check), and reports the
+others' (``dynamics.explicit.step_outliers``; St. Venant-Kirchhoff collapse states), and ``--step-check START STOP N``
+runs those speeds of the map again at the step from every state, on the same cubature (OUT/step_check), and reports the
 difference of the largest LE response. A speed of a drop map that still blows up after its retries (h/2, h/4: still
 above the step from every state) is reported grown; run it with the step check before reading it so.
 

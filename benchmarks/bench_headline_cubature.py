@@ -46,7 +46,7 @@ def _finals(patterns) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _largest(Q: np.ndarray, boundary_rows: np.ndarray, n: int) -> np.ndarray:
-    """The n states (columns) of largest boundary-DOF motion (as ``integrator.largest_states``)."""
+    """The n states (columns) of largest boundary-DOF motion (as ``dynamics.explicit.largest_states``)."""
     return Q[:, np.argsort(-np.abs(Q[boundary_rows]).max(axis=0))[:n]]
 
 

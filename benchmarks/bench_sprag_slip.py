@@ -4,7 +4,7 @@ sliding of the tip on the casing diverges, against the modelling choices the pap
 mu* needs only the static compliance G = E^T K^-1 E at the contact nodes (``fem.static_compliance``: Craig-Bampton
 keeps those DOFs with exact constraint modes, so every reduced model of the project has this G) and each node's
 contact normal n and sliding direction s: one node diverges where G_nn + mu G_ns = 0, a set of nodes where
-det(N G (N + mu S)^T) = 0 (``friction.sprag_slip_friction``). Choices measured, at the ci and coarse presets:
+det(N G (N + mu S)^T) = 0 (``dynamics.friction.sprag_slip_friction``). Choices measured, at the ci and coarse presets:
 
 - contact normal: the blade frame's e_x (the paper: "the radial direction is defined as axis e_x for each boundary
   node"; this geometry's stacking line lies along it), e_x turned about e_z through the root face's centroid or
@@ -42,7 +42,7 @@ SPINS = (1400.0, 1800.0)     # rad/s: the 1B/EO4 region and the design speed
 
 
 def frames(nodes: np.ndarray, normal: str, sense: int, root: np.ndarray, tip: np.ndarray):
-    """(normals, slides) (n, 3) of the contact nodes for one choice of normal (``casing.contact_frames``; e_x turned
+    """(normals, slides) (n, 3) of the contact nodes for one choice of normal (``dynamics.casing.contact_frames``; e_x turned
     about e_z through a centroid for 'root centroid' and 'tip centroid')."""
     if normal in ("root centroid", "tip centroid"):
         c = root if normal == "root centroid" else tip

@@ -1,6 +1,6 @@
 """How often a map's responses pass the continuation's steady-state test, by window length.
 
-The sequential continuation (§2.3.3, ``sweep.continuation``) halves its speed step when a run is not steady. The
+The sequential continuation (§2.3.3, ``studies.sweep.continuation``) halves its speed step when a run is not steady. The
 paper's test compares the largest response of the last two revolutions; contact responses that repeat over several
 revolutions (the paper's 11T/2 branch) or never exactly (quasi-periodic) fail it at every step. This reads the
 LE records of a finished map (each speed from rest, the map's full length) and counts, for each window of N

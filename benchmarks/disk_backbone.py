@@ -2,11 +2,11 @@
 diameters rises with its amplitude, and at which speed each engine-order line k Omega meets it (docs/results.md, the
 full map with GNL: why its response rides EO6 from 1,200 to 1,520 rad/s).
 
-For each k (``--diameters``), ``disk.travelling_wave_backbone`` on the map's disk model (its exact sector tensors,
-no casing, no damping) from the linear wave up to node LE of sector 0 at ``--le-max`` mm: per point the modal
+For each k (``--diameters``), ``disk.harmonics.travelling_wave_backbone`` on the map's disk model (its exact sector
+tensors, no casing, no damping) from the linear wave up to node LE of sector 0 at ``--le-max`` mm: per point the modal
 amplitude, the frequency and its rise over the linear one, node LE's amplitude (max over a period of its normal
-displacement along the casing's normal, ``--direction``), the speed Omega = omega / k where EO k meets the wave, and
-the ansatz's defect (``travelling_wave_backbone``).
+displacement along the casing's normal, ``--direction``), the speed Omega = omega / k where EO k meets the wave, and the
+ansatz's defect (``travelling_wave_backbone``).
 
     python benchmarks/disk_backbone.py --model results/disk_map200/rom.npz [--diameters 4 6] [--le-max 0.8]
     python benchmarks/disk_backbone.py --replot --overlay results/bench_disk_map_reference.json

@@ -1,8 +1,10 @@
-# # Blade-tip/casing contact: interaction maps, NFRC and continuation (paper §2.3.1, §2.3.3, §3.4; Figs. 6, 7, 11, 12, 23, 24)
+# # Blade-tip/casing contact: interaction maps, NFRC and continuation (paper §2.3.1, §2.3.3, §3.4; Figs. 6, 7, 11, 12,
+# 23, 24)
 #
 # Builds (or loads) a reduced model of the clamped blade, or with `--disk` of the whole 36-sector bladed disk (every
 # blade's 8 tip nodes in contact, each blade at its own angle), then sweeps the angular speed with the casing ovalized
-# into two lobes (eqs. 37-38; c0 = 0.5 mm, h_b = 0.625 mm, mu = 0.15), GNL off and on. Every speed's result is written as
+# into two lobes (eqs. 37-38; c0 = 0.5 mm, h_b = 0.625 mm, mu = 0.15), GNL off and on. Every speed's result is written
+# as
 # it finishes; a killed run started again resumes. The same command under `mpirun -n N` splits the speeds over the
 # ranks (rank 0 builds the model, or give --model; with --cubature rank 0 trains; the others wait).
 #

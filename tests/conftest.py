@@ -120,7 +120,7 @@ def ci_rom(ci_blade, ci_ops, tmp_path_factory):
 
 
 def random_sector(rng, r_s: int, n_l: int):
-    """A random sector's reduced matrices (``disk.SectorMatrices``: r_s interior coordinates, n_l DOFs per cyclic
+    """A random sector's reduced matrices (``disk.assembly.SectorMatrices``: r_s interior coordinates, n_l DOFs per cyclic
     face, symmetric positive definite K and M) for the disk's algebra tests; tests import it with
     ``from conftest import random_sector``."""
     import numpy as np

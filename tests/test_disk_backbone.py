@@ -22,7 +22,8 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from rotor37_rom.disk.assembly import DiskBasis, assemble_disk_matrices, interface_modes
+from rotor37_rom.disk.assembly import assemble_disk_matrices, interface_modes
+from rotor37_rom.model.disk_basis import DiskBasis
 from rotor37_rom.disk.harmonics import (harmonic_coordinates, harmonic_frequencies, travelling_wave_backbone,
     wave_harmonic_order, wave_history)
 from conftest import random_sector  # noqa: E402

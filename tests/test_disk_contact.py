@@ -182,12 +182,12 @@ def test_disk_gnl_map_probes_once(disk_model, tmp_path, monkeypatch):
 
 
 def test_disk_point_cubature(ci_disk, disk_model, tmp_path):
-    """The sector's force hyper-reduced by point cubature (``builder.hyper_reduce`` on a disk model), trained on the
-    sector columns of a GNL contact run at 1,400 rad/s (light contact as above, 0.06 s: the casing's ramp and the
-    first contacts). The exact quadrature on ``disk.sector_force_basis`` equals the model's exact tensors to round-off
-    (1e-10: the same polynomial, summed in another order); the training error is within its tolerance, 1e-3, on few
-    of the sector's points with positive weights (the force stays the gradient of a sum of SVK point energies); on
-    the states of a run at 1,500 rad/s (held out) the disk force's error has a median within 5 times the training
+    """The sector's force hyper-reduced by point cubature (``reduction.builder.hyper_reduce`` on a disk model), trained on the
+    sector columns of a GNL contact run at 1,400 rad/s (light contact as above, 0.06 s: the casing's ramp and the first
+    contacts). The exact quadrature on ``model.disk_basis.sector_force_basis`` equals the model's exact tensors to
+    round-off (1e-10: the same polynomial, summed in another order); the training error is within its tolerance, 1e-3,
+    on few of the sector's points with positive weights (the force stays the gradient of a sum of SVK point energies);
+    on the states of a run at 1,500 rad/s (held out) the disk force's error has a median within 5 times the training
     tolerance (the blade's bound); K~ is the exact one and the key changes; float32 evaluation moves the force by far
     less than the cubature's own error; save/load keeps it. (Unlike the blade's test, no comparison of runs: this
     light-contact disk run amplifies any perturbation ~1e6-fold in 0.06 s - the batched and the single run at 1,500

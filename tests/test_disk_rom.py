@@ -20,8 +20,8 @@ import scipy.sparse.linalg as spla
 from rotor37_rom import fem
 from rotor37_rom.post.stress import cyclic_harmonic_frequencies
 from rotor37_rom.disk.symmetry import assemble_full_structure, to_global_frame
-from rotor37_rom.disk.assembly import (DiskBasis, assemble_disk_matrices, face_shapes, interface_modes,
-    sector_force_basis)
+from rotor37_rom.disk.assembly import assemble_disk_matrices, face_shapes, interface_modes
+from rotor37_rom.model.disk_basis import DiskBasis, sector_force_basis
 from rotor37_rom.disk.indicators import best_approximation, indicator_histories, performance_indicator
 from rotor37_rom.disk.loads import harmonic_field_load, harmonic_node_load, repeat_count
 from rotor37_rom.disk.harmonics import harmonic_frequencies, sector_harmonics
@@ -93,8 +93,8 @@ def test_generalised_alpha_is_second_order_and_newmark_at_rho_1():
     """The full-order reference's generalised-alpha option (rho_inf, for contact runs whose tip nodes ring at
     unresolved frequencies): at rho_inf = 1 it is average-acceleration Newmark (alpha_m = alpha_f = 1/2: the mean of
     equilibria at t_n and t_n+1, which holds at t_n), equal to round-off; at rho_inf = 0.8 and 0.5 it is second order
-    (Chung & Hulbert): halving the step divides the change between successive halvings by 4 (3.5-4.5 asserted), on a load
-    started smoothly (sin^2 over one period: an abrupt start excites the plate's mesh-scale modes, which no step of
+    (Chung & Hulbert): halving the step divides the change between successive halvings by 4 (3.5-4.5 asserted), on a
+    load started smoothly (sin^2 over one period: an abrupt start excites the plate's mesh-scale modes, which no step of
     this size resolves, and the rate measured is then 1.5-2.6 for every scheme, Newmark included)."""
     plate, load_dof = _plate()
     N, nd, n_rep, omega = 8, 2, repeat_count(8, 2), 3000.0

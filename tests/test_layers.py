@@ -159,3 +159,13 @@ def test_scripts_are_not_imported_and_do_not_touch_sys_path():
             if bad:
                 offenders.append(f"{path.relative_to(ROOT)}: imports {bad}")
     assert not offenders, offenders
+
+
+def test_every_subpackage_is_installed():
+    """pyproject.toml lists the packages setuptools installs (no discovery: forms/ and geometry/ are mapped): every
+    folder of rotor37_rom with an __init__.py must be among them, or a non-editable install would lack it."""
+    import tomllib
+
+    listed = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
+    found = {".".join(p.parent.relative_to(ROOT).parts) for p in (ROOT / "rotor37_rom").rglob("__init__.py")}
+    assert found <= listed, sorted(found - listed)

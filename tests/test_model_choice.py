@@ -285,7 +285,8 @@ def test_reduced_blade_builds_the_chosen_model():
 def test_disk_forced_scenes_score_the_indicator():
     """The disk's forced-response scenes (§3.3) judge a model by the largest of the four relative errors behind the
     performance indicator I, over the cases: the recorded error of every candidate is that maximum, and each case's I
-    is the mean of max(0, 1 - e) over the same four errors (the indicator's definition, ``disk.performance_indicator``).
+    is the mean of max(0, 1 - e) over the same four errors (the indicator's definition,
+    ``disk.indicators.performance_indicator``).
     The costs are the reduced runs' wall times summed over the cases, below the full order's."""
     study = load_study()
     for name in ("disk-forced-linear", "disk-forced-gnl"):

@@ -458,12 +458,12 @@ def test_sector_rows_and_maxima_follow_the_sector_index():
 
 
 class _Calls(list):
-    """The first speed of each ``sweep.simulate`` call; the call numbered ``kill_at`` (from 1) raises _Killed."""
+    """The first speed of each ``studies.sweep.simulate`` call; the call numbered ``kill_at`` (from 1) raises _Killed."""
     kill_at = 0
 
 
 def _counted_simulate(monkeypatch) -> _Calls:
-    """Wrap ``sweep.simulate`` (the continuation's runs) to count its calls; returns the list they go to."""
+    """Wrap ``studies.sweep.simulate`` (the continuation's runs) to count its calls; returns the list they go to."""
     real, calls = sweep_mod.simulate, _Calls()
 
     def counted(*a, **k):

@@ -19,8 +19,9 @@ from rotor37_rom import __version__, fem
 from rotor37_rom.reduction.builder import (Laps, _m_normalise, boundary_node_map, cached_model,
     compute_modal_derivatives, mesh_signature)
 from rotor37_rom.disk.symmetry import rotation_z
-from rotor37_rom.disk.assembly import (DiskBasis, SectorMatrices, assemble_disk_matrices, disk_node_map, face_shapes,
+from rotor37_rom.disk.assembly import (SectorMatrices, assemble_disk_matrices, disk_node_map, face_shapes,
     interface_modes)
+from rotor37_rom.model.disk_basis import DiskBasis
 from rotor37_rom.forces.sector import SectorForces
 from rotor37_rom.forces.tensors import QuadratureForces, compute_polynomial_forces
 from rotor37_rom.npz import load_npz, save_npz
@@ -58,9 +59,9 @@ class DiskReductionConfig:
             correction of component mode synthesis: a load off the boundary set has a local field that neither the
             constraint modes nor the lowest fixed-interface modes carry), its modal derivatives among the candidates.
         face_shapes: 0 (eq. 61: each sector's nonlinear force acts on its q^n only, the paper's linear coupling), or
-            n_f >= 1: the force acts on the sector's whole field with each face on n_f shapes (``disk.face_shapes``),
-            r_s + 2 n_f force coordinates per sector. The faces' constraint modes carry part of the blade's motion:
-            eq. 61 caps the GNL forced response's accuracy (docs/results.md).
+            n_f >= 1: the force acts on the sector's whole field with each face on n_f shapes
+            (``disk.assembly.face_shapes``), r_s + 2 n_f force coordinates per sector. The faces' constraint modes carry
+            part of the blade's motion: eq. 61 caps the GNL forced response's accuracy (docs/results.md).
     """
 
     tip_nodes: str = "all"
@@ -188,7 +189,8 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     """The disk's reduced model (r = N (r_b + r_c + r_load + r_MD) + r_cyclic, eq. 53) from a cyclic sector (serial).
 
     Returns (model, report): the model is a ReducedModel like a blade's (its ``nodes`` cover all sectors' tip
-    nodes, its forces are ``disk.SectorForces``, ``model.sectors`` the DiskBasis); the report has the timings, the
+    nodes, its forces are ``forces.sector.SectorForces``, ``model.sectors`` the DiskBasis); the report has the timings,
+    the
     selection weights and pairs, the interface modes' frequencies and nodal diameters, the sector frequencies."""
     if sector.cyclic is None:
         raise ValueError(f"{sector.source} is not a cyclic sector: build a disk model from fem.create_disk_sector")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rotor37_rom.disk.assembly import DiskBasis
+from rotor37_rom.model.disk_basis import DiskBasis
 
 INDICATOR_CRITERIA = ("loaded node", "tip nodes", "field", "strain energy")
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rotor37_rom.disk.assembly import DiskBasis
+from rotor37_rom.model.disk_basis import DiskBasis
 
 
 def repeat_count(n_sectors: int, n_diameters: int) -> int:

@@ -81,9 +81,8 @@ def contact_matrices(nodes, r: int, casing: "Casing | None", rows=None):
     """Normal and sliding directions of contact nodes as rows over the reduced coordinates: u_n = N q, u_s = S q.
 
     Args:
-        nodes: the model's ``reduction.NodeMap`` (which entries of q are which node, in which sector frame).
-        r: size of q.
-        casing: sets the normal direction and the rotation sense; None: e_x normals, S = 0 (what a run without
+        nodes: the model's ``model.nodes.NodeMap`` (which entries of q are which node, in which sector frame). r: size
+        of q. casing: sets the normal direction and the rotation sense; None: e_x normals, S = 0 (what a run without
             contact records).
         rows: node-map rows to build (default: the casing's contact nodes, all nodes without a casing).
     Returns (N (n_c, r), S (n_c, r), theta0 (n_c,), rows (n_c,)): theta0 is each node's angle about e_z at rest,

@@ -13,17 +13,17 @@ Step n -> n+1 (t_n = n h):
     correction  Q_{n+1} = Q* + W f_c, f_c = sum_k lambda_k (-n_k - mu s_k) at node k's DOFs          (eq. 27)
 
 n_k is the contact normal (e_x, radial or the casing cone's), s_k the direction in which node k slides on the casing
-(the rotation direction); sliding friction mu lambda_k acts along -s_k. Contact forces, penetrations and the power of friction
-are outputs, and so is the work each force does on the blade in the scheme's own energy balance: with the discrete
-energy E_{n+1/2} = 1/2 v M v + 1/2 q_{n+1} K q_n (v = (q_{n+1} - q_n)/h, ``discrete_energy``) a force f_n of step n
-does the work f_n . (q_{n+1} - q_{n-1})/2 and the damping takes (q_{n+1} - q_{n-1}) C (q_{n+1} - q_{n-1})/4h, so for
-the linear scheme E_{n+1/2} - E_{-1/2} = W_normal + W_friction + W_forcing - D_damping to round-off (eq. 27's
-correction is a force of step n). This tells which contact force feeds a growing response.
-The massless-boundary variant (Monjaraz Tec, Gross & Krack 2022) drops the inertia of the boundary DOFs: they
-follow the interior quasi-statically, which removes the stiff single-node constraint modes from the stability limit
-(linear models only). The frequency cap (spectral mass scaling, ``capped_mass``) keeps all inertia and every mode
-below the cap exact and slows the stiff modes above it, for linear and GNL models; with GNL the step then comes
-from the tangent limit on representative states (``gnl_time_step``, ``probe_states``).
+(the rotation direction); sliding friction mu lambda_k acts along -s_k. Contact forces, penetrations and the power of
+friction are outputs, and so is the work each force does on the blade in the scheme's own energy balance: with the
+discrete energy E_{n+1/2} = 1/2 v M v + 1/2 q_{n+1} K q_n (v = (q_{n+1} - q_n)/h, ``discrete_energy``) a force f_n of
+step n does the work f_n . (q_{n+1} - q_{n-1})/2 and the damping takes (q_{n+1} - q_{n-1}) C (q_{n+1} - q_{n-1})/4h, so
+for the linear scheme E_{n+1/2} - E_{-1/2} = W_normal + W_friction + W_forcing - D_damping to round-off (eq. 27's
+correction is a force of step n). This tells which contact force feeds a growing response. The massless-boundary variant
+(Monjaraz Tec, Gross & Krack 2022) drops the inertia of the boundary DOFs: they follow the interior quasi-statically,
+which removes the stiff single-node constraint modes from the stability limit (linear models only). The frequency cap
+(spectral mass scaling, ``capped_mass``) keeps all inertia and every mode below the cap exact and slows the stiff modes
+above it, for linear and GNL models; with GNL the step then comes from the tangent limit on representative states
+(``gnl_time_step``, ``probe_states``).
 """
 from __future__ import annotations
 
@@ -36,7 +36,6 @@ from typing import Callable, Sequence
 
 import numpy as np
 import scipy.linalg
-import scipy.sparse
 
 from rotor37_rom.dynamics.casing import Casing, contact_matrices
 from rotor37_rom.dynamics.contact_step import ContactStep, per_simulation_casings, row_operator
@@ -164,11 +163,11 @@ def contact_training_states(scheme: "CentralDifference", speeds, casing, revolut
                             n_largest: int = 24, checkpoint: "str | Path | None" = None,
                             checkpoint_seconds: float = 60.0) -> tuple[np.ndarray, np.ndarray]:
     """States of exact GNL contact runs at ``speeds`` (records every 1e-5 s) for training a hyper-reduction
-    (``ecsw.trajectory_states``), and the states a GNL step is taken over: the n_largest of largest tip motion and
-    the training states (the stiffest tangent belongs to a deformation shape, not to the largest tip amplitude: on
-    the r = 55 headline the 24 largest gave 7.62e-7 s, the 179 training states 6.21e-7 s). Returns (train, step).
-    ``checkpoint``: a file the runs' loop state is saved to every ``checkpoint_seconds`` (``save_loop_state``) and
-    resumed from when it holds the same runs (speeds, model, step, frequency cap, casing, length; exact runs of a
+    (``forces.cubature.trajectory_states``), and the states a GNL step is taken over: the n_largest of largest tip
+    motion and the training states (the stiffest tangent belongs to a deformation shape, not to the largest tip
+    amplitude: on the r = 55 headline the 24 largest gave 7.62e-7 s, the 179 training states 6.21e-7 s). Returns (train,
+    step). ``checkpoint``: a file the runs' loop state is saved to every ``checkpoint_seconds`` (``save_loop_state``)
+    and resumed from when it holds the same runs (speeds, model, step, frequency cap, casing, length; exact runs of a
     large basis take an hour). It is left in place: the caller removes it once it has kept the result (a finished
     checkpoint resumed gives the result at once)."""
     from rotor37_rom.forces.cubature import trajectory_states
@@ -417,7 +416,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
              record_every: int = 1, record_q: bool = False, energy: bool = False, on_blowup: str = "raise",
              blowup_limit: float = 0.02, check_every: int = 200, duration: float | Sequence[float] | None = None,
              progress: Callable[[int], None] | None = None, on_finish: Callable[[int, dict], None] | None = None,
-             state: dict | None = None, checkpoint: Callable[[dict], None] | None = None,
+             state: LoopState | None = None, checkpoint: Callable[[LoopState], None] | None = None,
              checkpoint_seconds: float = 60.0, phase: float | Sequence[float] = 0.0,
              monitor: Sequence[int] | None = None) -> SimulationResult:
     """Run P simulations of the reduced model together with central differences and casing contact.

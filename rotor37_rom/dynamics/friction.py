@@ -17,7 +17,7 @@ analysis of brake squeal) say whether sliding is stable:
 - flutter: two eigenvalues merge and leave the imaginary axis (mode coupling), found by ``critical_friction``.
 
 Contact in a rub is intermittent, so these onsets are those of sustained sliding; the energy balance of a run
-(``integrator.simulate``: ``work``) shows how much energy friction gives the blade between them.
+(``dynamics.explicit.simulate``: ``work``) shows how much energy friction gives the blade between them.
 """
 from __future__ import annotations
 
@@ -36,7 +36,8 @@ def _rows(N, S, nodes):
 
 def sliding_contact_eigenvalues(M, C, K, N, S, mu: float, nodes=None) -> np.ndarray:
     """Eigenvalues (1/s) of the reduced model in persistent sliding contact at the rows ``nodes`` of N, S (all by
-    default; N, S from ``casing.contact_matrices``) with friction coefficient mu: 2 (r - n_A) of them, sorted by
+    default; N, S from ``dynamics.casing.contact_matrices``) with friction coefficient mu: 2 (r - n_A) of them, sorted
+    by
     decreasing real part. Re > 0: the sliding state is unstable (rate Re, frequency |Im|)."""
     if not mu >= 0.0:
         raise ValueError(f"friction coefficient mu must be >= 0, got {mu}")

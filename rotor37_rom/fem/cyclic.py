@@ -3,11 +3,11 @@
 operators per harmonic index k (nodal diameter) and their modes through the SLEPc shift-invert path, and the
 expansion of a sector mode to the whole structure.
 
-Part of the dolfinx adapter (``rotor37_rom.fem``); the algebra of the projection is ``rotor37_rom.disk.symmetry``. Runs under
-MPI: the pairing is computed on every rank from gathered face nodes (a few thousand), the projection T_k is a
-distributed PETSc matrix in the layout of [a; b] (each rank owns the a and b copies of its own DOFs), and
-K_k = T_k^T diag(K, K) T_k is PETSc's PtAP. Eliminated slots (the right face, constrained axis directions) get 1 on
-K_k's diagonal and MASS_DIAGONAL on M_k's, like the clamped DOFs: their eigenvalues sit at 1e14 (rad/s)^2.
+Part of the dolfinx adapter (``rotor37_rom.fem``); the algebra of the projection is ``rotor37_rom.disk.symmetry``. Runs
+under MPI: the pairing is computed on every rank from gathered face nodes (a few thousand), the projection T_k is a
+distributed PETSc matrix in the layout of [a; b] (each rank owns the a and b copies of its own DOFs), and K_k = T_k^T
+diag(K, K) T_k is PETSc's PtAP. Eliminated slots (the right face, constrained axis directions) get 1 on K_k's diagonal
+and MASS_DIAGONAL on M_k's, like the clamped DOFs: their eigenvalues sit at 1e14 (rad/s)^2.
 """
 from __future__ import annotations
 
@@ -170,7 +170,8 @@ class CyclicOperators:
     def _harmonic_parts(self) -> list:
         """For 0 < k < N/2 without axis nodes: [(K_0, K_c, K_s), (M_0, M_c, M_s), (T_0, T_c, T_s)], each three
         matrices of one nonzero pattern with A_k = A_0 + cos(k alpha) A_c + sin(k alpha) A_s
-        (``cyclic.cyclic_projection_parts``): three PtAP per operator once, then every k is two AXPY of values."""
+        (``disk.symmetry.cyclic_projection_parts``): three PtAP per operator once, then every k is two AXPY of
+        values."""
         if self._parts is None:
             sector, pairs = self.sector, self.sector.cyclic
             K2, M2, perm, first, local_rows = self._copies(2)

@@ -42,16 +42,13 @@ class Sector:
     """A meshed structure with named groups and DOF sets: a blade, or a disk sector with cyclic faces.
 
     Attributes:
-        mesh: dolfinx mesh (distributed over ``mesh.comm``).
-        cell_tags, facet_tags: gmsh physical groups as dolfinx MeshTags.
-        groups: group name -> tag (BladeGroup names, lower case).
-        V: vector P``degree`` function space.
-        material: the material.
-        clamp_bc: homogeneous Dirichlet condition on the clamp facets.
-        tip_nodes: (n_tip, 3) coordinates of the contact nodes, LE first (m), identical on all ranks.
-        tip_dofs: (n_tip, 3) local (unblocked) DOF indices of the tip nodes on this rank, -1 where not owned here.
-        tip_names: the contact nodes' names, 'LE', 'tip1', ..., 'TE' in the order of tip_nodes.
-        cyclic: the cyclic faces as global DOF indices paired node for node (``cyclic.CyclicPairs``: right[i] is
+        mesh: dolfinx mesh (distributed over ``mesh.comm``). cell_tags, facet_tags: gmsh physical groups as dolfinx
+        MeshTags. groups: group name -> tag (BladeGroup names, lower case). V: vector P``degree`` function space.
+        material: the material. clamp_bc: homogeneous Dirichlet condition on the clamp facets. tip_nodes: (n_tip, 3)
+        coordinates of the contact nodes, LE first (m), identical on all ranks. tip_dofs: (n_tip, 3) local (unblocked)
+        DOF indices of the tip nodes on this rank, -1 where not owned here. tip_names: the contact nodes' names, 'LE',
+        'tip1', ..., 'TE' in the order of tip_nodes. cyclic: the cyclic faces as global DOF indices paired node for node
+        (``disk.symmetry.CyclicPairs``: right[i] is
             left[i] turned by 2 pi / N), None for a single blade.
         volume: CAD volume (m^3); for a mesh file, the mesh's own (assembled).
         source: where the geometry came from; preset: mesh preset name.

@@ -55,7 +55,7 @@ class SectorForces:
 
     def arrays(self) -> dict[str, np.ndarray]:
         """Its entries in a model's file: the sectors' blocks, scales and faces, then the sector's force's entries
-        with its kind prefixed 'sector_' (``protocol.load_force``)."""
+        with its kind prefixed 'sector_' (``model.reduced``)."""
         out = {"sector_blocks": self.blocks, "sector_scales": self.scales}
         if self.faces is not None:
             out["sector_faces"] = self.faces

@@ -135,7 +135,7 @@ class QuadratureForces:
         raise NotImplementedError("the potential of quadrature forces is not formed (has_potential is False)")
 
     def arrays(self) -> dict[str, np.ndarray]:
-        """Its entries in a model's file (``protocol.load_force``)."""
+        """Its entries in a model's file (``model.reduced``)."""
         return {"forces": "quadrature", "H": self.H, "w": self.w, "lame": np.array([self.lmbda, self.mu]),
                 "precision": self.precision}
 
@@ -345,7 +345,7 @@ class PolynomialForces:
                 + np.sum(Q * (self.B @ (Q[ca] * Q[cb] * Q[cc])), axis=0) / 4.0)
 
     def arrays(self) -> dict[str, np.ndarray]:
-        """Its entries in a model's file (``protocol.load_force``)."""
+        """Its entries in a model's file (``model.reduced``)."""
         return {"forces": "polynomial", "A": self.A, "B": self.B}
 
     @classmethod

@@ -11,7 +11,7 @@ from typing import Sequence
 
 import numpy as np
 
-from rotor37_rom.disk.assembly import DiskBasis
+from rotor37_rom.model.disk_basis import DiskBasis
 from rotor37_rom.forces.protocol import NonlinearForce
 from rotor37_rom.forces.sector import SectorForces
 from rotor37_rom.forces.tensors import PolynomialForces, QuadratureForces
@@ -37,7 +37,8 @@ class ReducedModel:
             (r_md, 2).
         Phi: (n, r) basis to rebuild fields (optional).
         metadata: parameters, mesh signature, version; ``key`` hashes them.
-        sectors: for a disk model, the per-sector basis that rebuilds each sector's field (``disk.assembly.DiskBasis``);
+        sectors: for a disk model, the per-sector basis that rebuilds each sector's field
+        (``model.disk_basis.DiskBasis``);
             None for a blade.
     """
 

@@ -1,6 +1,6 @@
 """Analyses that combine the FE adapter with the pure modules: stress at the worst instant of a simulation, and the
 stress of every sector of a bladed disk from a disk model's state, and the full-order cyclic frequencies per nodal
-diameter (a disk model's: ``disk.harmonic_frequencies``)."""
+diameter (a disk model's: ``disk.harmonics.harmonic_frequencies``)."""
 from __future__ import annotations
 
 import numpy as np
@@ -82,7 +82,8 @@ def disk_stress_summary(sector, model, values: np.ndarray, monitored: int = 0, r
     The blade meets the rim at a sharp re-entrant corner (no fillet), where the FE stress is singular: its largest
     there does not converge under mesh refinement. The same numbers off the root corner (``*_off_root``: every cell
     with a vertex within ``root_band`` (m, default ``ROOT_BAND``) of the junction left out as well;
-    ``location_off_root`` is the vertex's) converge with the mesh (benchmarks/bench_disk_stress_convergence.py: the disk's 1B mode on meshes of 12 to 1.5
+    ``location_off_root`` is the vertex's) converge with the mesh (benchmarks/bench_disk_stress_convergence.py: the
+    disk's 1B mode on meshes of 12 to 1.5
     mm); they are the stress to compare with sigma_Y."""
     values = np.asarray(values, float)
     if values.ndim != 3 or values.shape[2] != 4:

@@ -346,13 +346,14 @@ def release_freed_memory() -> None:
 def hyper_reduce(sector, model: ReducedModel, Q_train: np.ndarray, tol: float = 1e-3, level: str = "point",
                  label: str = "", max_columns: int = 256) -> tuple[ReducedModel, dict]:
     """The model with its nonlinear forces replaced by a hyper-reduced quadrature trained on the states Q_train
-    (r, n): cells (ECSW) or single points (empirical cubature), see ``ecsw.train_ecsw``. Train on the states the
-    model will visit (e.g. those of contact runs): smooth lifted modes miss the local tip deformations of contact.
+    (r, n): cells (ECSW) or single points (empirical cubature), see ``forces.cubature.train_ecsw``. Train on the states
+    the model will visit (e.g. those of contact runs): smooth lifted modes miss the local tip deformations of contact.
 
-    A disk model (``model.sectors``, forces ``disk.SectorForces``): the sector's force is hyper-reduced, trained on
-    the sectors' coordinates of the states as columns (``SectorForces.sector_states``; at most ``max_columns`` of
-    them, ``ecsw.spread_columns``), on the sector's fields (``disk.sector_force_basis``, the faces included when the
-    model's force has them); every sector then evaluates the same points. ``sector`` is the disk sector.
+    A disk model (``model.sectors``, forces ``forces.sector.SectorForces``): the sector's force is hyper-reduced,
+    trained on the sectors' coordinates of the states as columns (``SectorForces.sector_states``; at most
+    ``max_columns`` of them, ``forces.cubature.spread_columns``), on the sector's fields
+    (``model.disk_basis.sector_force_basis``, the faces included when the model's force has them); every sector then
+    evaluates the same points. ``sector`` is the disk sector.
 
     Returns (model, report): report has the exact quadrature forces ('exact'), the EcswResult ('result'), the
     training columns ('columns_trained') and the training time (s). The model's metadata records the
@@ -374,7 +375,7 @@ def hyper_reduce(sector, model: ReducedModel, Q_train: np.ndarray, tol: float = 
                          "reach the casing); the cubature would have no points")
     t0 = time.perf_counter()
     if disk:
-        from rotor37_rom.disk.assembly import sector_force_basis
+        from rotor37_rom.model.disk_basis import sector_force_basis
         from rotor37_rom.forces.cubature import spread_columns
 
         fields = sector_force_basis(model.sectors, model.forces.faces)

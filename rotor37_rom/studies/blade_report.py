@@ -7,15 +7,15 @@ on the same mesh; ``<out>/report.html`` opens with the summary table and the lis
 and every section below gives the numbers behind a row and the pictures.
 
 The resonance of a map is its 1B/EO4 resonance, as in the paper: the largest bounded response among the speeds whose
-response is dominated by the fourth engine order (``sweep.engine_order_resonance``); a short map's largest response
-can be a higher mode's crossing instead. The stress of one map is a ``PeakStress``: at that resonance the run is
-carried on for one revolution from its final state (casing fully ovalized, the rotor angle carried over, as a
-continuation does), recording every state; t_max is where node LE's radial displacement is largest in magnitude in
-that revolution (the NFRC's max |u_LE|: as in the paper's Fig. 25 the blade swings away from the casing there, free of
+response is dominated by the fourth engine order (``studies.sweep.engine_order_resonance``); a short map's largest
+response can be a higher mode's crossing instead. The stress of one map is a ``PeakStress``: at that resonance the run
+is carried on for one revolution from its final state (casing fully ovalized, the rotor angle carried over, as a
+continuation does), recording every state; t_max is where node LE's radial displacement is largest in magnitude in that
+revolution (the NFRC's max |u_LE|: as in the paper's Fig. 25 the blade swings away from the casing there, free of
 contact forces). The map's scheme is rebuilt from its model, step and cap (the sweep folder it gives is checked to be
 the map's); the stress recovery evaluates the von Mises field at every quadrature point from q(t_max) without
-reassembly. A run that grows past the limit there, or a map without a 1B/EO4 resonance, gives no stress: the report
-says so.
+reassembly. A run that grows past the limit there, or a map without a 1B/EO4 resonance, gives no stress: the report says
+so.
 """
 from __future__ import annotations
 
@@ -61,7 +61,7 @@ class ReportConfig:
         direction: contact normal: 'x' (the paper's e_x), 'radial' or 'cone' (the conical casing's own normal,
             with which friction cannot wedge this tip: docs/results.md).
         tolerance: the maps' frequency cap, step and force evaluation are the cheapest within this relative error
-            in the speed-accuracy study (``model_choice.choose_model``, scenes 'map-linear' and 'map-gnl'), in
+            in the speed-accuracy study (``studies.model_choice.choose_model``, scenes 'map-linear' and 'map-gnl'), in
             (0, 1); None: set by hand (``linear_cap``; the GNL map with exact tensors at half the stability limit).
         linear_cap: with ``tolerance`` None, the frequency cap of the linear map (kHz; None: none).
         levels: load levels on each side of delta = 0 in the clearance study (1..50).
@@ -143,7 +143,7 @@ class PeakStress:
         speed: the map's 1B/EO4 resonance (rad/s; ``resonance``); NaN if no bounded speed is dominated by it.
         bounded: the revolution carried on stayed below the limit (and the map had a 1B/EO4 resonance).
         t_diverged: when an unbounded run passed the limit (s from rest); None otherwise.
-        peak: ``analysis.stress_at_peak``'s numbers (SI units, t_max from rest) when bounded, else None.
+        peak: ``post.stress.stress_at_peak``'s numbers (SI units, t_max from rest) when bounded, else None.
         files: pictures and XDMF files written.
     """
 

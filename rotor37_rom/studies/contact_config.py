@@ -92,14 +92,14 @@ class ContactMapConfig:
             the tangent limit on a short unscaled probe run. None: no scaling.
         tangent_safety: with a cap, the GNL step is this x 2 / the largest tangent frequency, in (0, 1].
         step_outliers: with a cap, 'keep' (the GNL step from every step state) or 'drop' (from the states other than
-            ``integrator.step_outliers``, those above 10 times the median tangent frequency: on the ci blade at
+            ``dynamics.explicit.step_outliers``, those above 10 times the median tangent frequency: on the ci blade at
             mu = 0.1 over 1,620-2,000 rad/s one of 204, a St. Venant-Kirchhoff collapse that alone sets a step 19
             times smaller). With 'drop' a run that stays near such a state at the larger step blows up and is
             flagged; its retries (``retry_diverged``) halve that step, which may still be above the one from every
             state, and the demo then says so. A brief pass may not blow up, so benchmarks/bench_gnl_vs_linear.py
             --step-check measures the dropped step's error against runs at the kept one.
         perturbation: the internal force K q + g(q) of the runs scaled by 1 + this, |.| < 0.01 (0: none), after
-            the cubature is trained and the step set (``reduction.perturbed_model``; the same cubature and step,
+            the cubature is trained and the step set (``model.reduced.perturbed_model``; the same cubature and step,
             the cap applied to the perturbed model): a map again with 1e-4 shows the speeds whose response any
             force approximation's error moves (the floor; docs/results.md). A step at the unperturbed limit is
             refused, the perturbed model's being eps / 2 lower.
@@ -114,11 +114,11 @@ class ContactMapConfig:
             (the modal derivatives of 10 clamped modes, r = 104); the cubature is then trained on the capped
             dynamics the map runs. False: unscaled training runs (the headline maps').
         tolerance: choose r_c, the frequency cap, the step and the force evaluation of each setting (GNL off, on) as
-            the cheapest model of the speed-accuracy study within this relative error (``model_choice.choose_model``
-            on the scenes 'map-linear' and 'map-gnl', read from rotor37_rom/data/speed_accuracy.json), in (0, 1);
-            with ``disk`` (tuned) r_c, r_md, r_cyclic, the cap and the force evaluation from the scenes
-            'disk-map-linear' and 'disk-map-gnl' (measured with the cone normal and mu = 0.15). The options it sets
-            must not be given with it. None: the options as given.
+            the cheapest model of the speed-accuracy study within this relative error
+            (``studies.model_choice.choose_model`` on the scenes 'map-linear' and 'map-gnl', read from
+            rotor37_rom/data/speed_accuracy.json), in (0, 1); with ``disk`` (tuned) r_c, r_md, r_cyclic, the cap and the
+            force evaluation from the scenes 'disk-map-linear' and 'disk-map-gnl' (measured with the cone normal and mu
+            = 0.15). The options it sets must not be given with it. None: the options as given.
         retry_diverged: runs that blew up run again with the step halved, up to this many times (0..4).
         mu: Coulomb friction coefficient of the casing contact (paper 0.15).
         c0: clearance at rest (m).
@@ -130,7 +130,7 @@ class ContactMapConfig:
         continuation_range: (LOW, HIGH) speeds (rad/s) of the continuation; None: the map's range.
         steady_window: a continued run is steady when its max over the last N revolutions and the N before agree.
         unsteady_step: the continuation's point when no halving is steady: 'smallest' (the paper read literally:
-            the step stays divided) or 'full' (the full step, marked not steady; ``sweep.continuation``).
+            the step stays divided) or 'full' (the full step, marked not steady; ``studies.sweep.continuation``).
         out: folder of the charts, summary.json, the sweeps' records and the caches.
         cache: folder of the model, cubature, training-run and probe caches; None: OUT/cache. Maps in other folders
             given the same cache share its cubature (e.g. a few speeds run again at another step).

@@ -378,7 +378,7 @@ def disk_stress_of(sector, model: ReducedModel, res, nonlinear: bool, monitor: i
     """The disk's von Mises stress at t_max of a carried-on run ``res`` (one speed; its first recorded row is the
     monitored node): every sector's field rebuilt from q at the record of largest |u| (no reassembly) on the disk
     ``sector`` (``stress_mesh``), summarised for sector ``monitor`` and over the sectors
-    (``analysis.disk_stress_summary``). Returns (the sectors' displacement fields, each sector's largest von Mises
+    (``post.stress.disk_stress_summary``). Returns (the sectors' displacement fields, each sector's largest von Mises
     per cell, the numbers with ``u_le``, the record's index)."""
     from rotor37_rom.post.stress import disk_stress, disk_stress_summary
 

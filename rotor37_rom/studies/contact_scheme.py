@@ -149,7 +149,7 @@ def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: Re
 
 
 def print_step_outliers(step: dict, dropped: bool = False) -> None:
-    """A line when a few states set the GNL step far below the others' (``integrator.step_outliers``), and whether
+    """A line when a few states set the GNL step far below the others' (``dynamics.explicit.step_outliers``), and whether
     the step was taken without them (--step-outliers drop)."""
     out = step["outliers"]
     if out.size and step["h_without_outliers"] > step["h"]:

@@ -20,6 +20,7 @@ import numpy as np
 
 from rotor37_rom.dynamics.casing import Casing
 from rotor37_rom.dynamics.explicit import CentralDifference, loop_state, save_loop_state, simulate
+from rotor37_rom.dynamics.recorder import LoopState
 from rotor37_rom.npz import save_json, save_npz
 
 __all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "load_speed", "sweep_folder", "interaction_map",
@@ -251,7 +252,7 @@ def rerun_diverged(scheme: CentralDifference, results: Sequence[dict], spec: Swe
     return results, retried
 
 
-def _load_state(path: Path, P: int) -> dict | None:
+def _load_state(path: Path, P: int) -> LoopState | None:
     data = _load_result(path) if path.exists() else None
     if data is None:
         return None

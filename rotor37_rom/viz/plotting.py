@@ -147,7 +147,7 @@ def _check_serial(sector) -> None:
 
 def _sector_fields(sector, a, b, k: int) -> np.ndarray:
     """(N, n_nodes, 3) displacement of every sector, each turned to the common frame, of the mode (a, b) of index k
-    (``cyclic.expand_sector_mode``)."""
+    (``disk.symmetry.expand_sector_mode``)."""
     from rotor37_rom.disk.symmetry import expand_sector_mode
 
     n = sector.cyclic.n_sectors

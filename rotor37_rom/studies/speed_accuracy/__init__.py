@@ -1,5 +1,5 @@
 """The speed-accuracy study (issue #22): per scene, the cost and the error of every candidate model against a
-reference, written to the study file ``rotor37_rom/data/speed_accuracy.json`` that ``model_choice.choose_model``
+reference, written to the study file ``rotor37_rom/data/speed_accuracy.json`` that ``studies.model_choice.choose_model``
 reads. ``benchmarks/speed_accuracy.py`` is its command line (the scenes' settings are in its docstring).
 
 Modules, one per scene family:

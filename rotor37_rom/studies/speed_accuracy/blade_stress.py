@@ -33,7 +33,7 @@ def _recovery(ctx: StudyContext, r_c: int):
 
 def stress_at_tmax(ctx: StudyContext, run: MapRun, options: dict, gnl: bool, speed: float) -> dict:
     """von Mises at t_max of one revolution carried on from ``run``'s final state at ``speed`` (the report's
-    procedure: ``analysis.stress_at_peak``, the largest outside the contact nodes' tip band), with the wall time."""
+    procedure: ``post.stress.stress_at_peak``, the largest outside the contact nodes' tip band), with the wall time."""
     from rotor37_rom.post.stress import stress_at_peak
     from rotor37_rom.studies import contact_map as cm
 

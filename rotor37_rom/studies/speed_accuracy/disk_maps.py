@@ -139,7 +139,7 @@ def disk_map_errors(run: MapRun, ref: MapRun, robust: np.ndarray) -> dict:
 def cap_floor(ref_opts: dict, cands: list[dict]) -> dict | None:
     """What the reference's own frequency cap is worth: the error of the candidate that is the reference's model at
     the nearest lower cap (None if no such candidate, or if it lost a speed). Models that differ from the reference
-    by less cannot be told apart by the scene: its floor (``model_choice.scene_floor``)."""
+    by less cannot be told apart by the scene: its floor (``studies.model_choice.scene_floor``)."""
     def model(options: dict) -> dict:
         return {k: v for k, v in options.items() if k != "frequency_cap"}
 

@@ -21,7 +21,7 @@ def disk_stress_at_tmax(run: MapRun, model_path: Path, speed: float, gnl: bool =
     """The disk's von Mises stress at t_max (largest |u| of node LE of sector 0) of one revolution carried on from
     ``run``'s final state at ``speed`` (what ``contact_map.py --stress`` does at the map's largest response), every
     sector rebuilt from q: the largest off the root corner and outside the tip band in sector 0 and over the sectors
-    (``analysis.disk_stress_summary``: the numbers that converge with the mesh), with the wall time."""
+    (``post.stress.disk_stress_summary``: the numbers that converge with the mesh), with the wall time."""
     from rotor37_rom.model.reduced import load_reduced_model
     from rotor37_rom.studies import contact_map as cm
 

@@ -119,7 +119,7 @@ def expand_scenes(names: Iterable[str]) -> tuple[str, ...]:
 
 
 def record_choices(study: StudyRecord) -> None:
-    """Every scene's choices at the study's tolerances (``model_choice.choose_model``), or why there is none."""
+    """Every scene's choices at the study's tolerances (``studies.model_choice.choose_model``), or why there is none."""
     from rotor37_rom.studies.model_choice import choose_model
 
     for name, scene in study["scenes"].items():
