@@ -1,13 +1,13 @@
 """Full-order implicit transients: a bladed disk under a load of N_d nodal diameters, whose response repeats every
 N / gcd(N, N_d) sectors, so that many sectors closed on themselves (``cyclic.repeating_sector_maps``) carry the whole
 disk's nonlinear response; a single blade is the case of one sector without cyclic faces. Implicit Newmark (average
-acceleration; or generalised alpha, whose numerical dissipation a contact run needs) with Newton on the exact SVK
-tangent, every sector's forces and tangents from the one sector's compiled
-forms; the factorisation of the iteration matrix is kept across iterations and steps while Newton converges fast
-(modified Newton), refreshed when it does not. Optionally the tip nodes touch the casing of eqs. 37-38 (Lagrange
-multipliers, Coulomb sliding friction, ``casing.ContactSolver``): each Newton iterate is corrected by the multipliers
-that close every penetration at t_n+1 through the compliance of the iteration matrix, the implicit counterpart of
-the reduced scheme's forward-increment correction (eq. 27).
+acceleration; or generalised alpha, whose numerical dissipation a contact run needs): the steps are
+``dynamics.newmark.Newmark``'s, given the sectors' SVK forces and exact tangents (every sector's from the one
+sector's compiled forms) and MUMPS; the factorisation of the iteration matrix is kept across iterations and steps
+while Newton converges fast (modified Newton), refreshed when it does not. Optionally the tip nodes touch the casing
+of eqs. 37-38 (Lagrange multipliers, Coulomb sliding friction, ``casing.ContactSolver``): each Newton iterate is
+corrected by the multipliers that close every penetration at t_n+1 through the compliance of the iteration matrix,
+the implicit counterpart of the reduced scheme's forward-increment correction (eq. 27).
 
 Part of the dolfinx adapter (``rotor37_rom.fem``); serial. The references the reduced models are checked against
 (paper §3.3: full-order GNL responses, Fig. 16; and, beyond the paper, the blade in contact with GNL).
@@ -23,9 +23,10 @@ from typing import Callable
 import numpy as np
 import scipy.sparse as sp
 
-from rotor37_rom.dynamics.casing import (Casing, ContactSetError, ContactSolver, casing_clearance, contact_frames,
-    friction_power, node_angles, ramp_rate)
+from rotor37_rom.dynamics.casing import (Casing, casing_clearance, contact_frames, friction_power, node_angles,
+                                         ramp_rate)
 from rotor37_rom.disk.symmetry import repeating_sector_maps
+from rotor37_rom.dynamics.newmark import Newmark, StepContact
 from rotor37_rom.npz import save_npz
 
 from .operators import (SvkOperators, _require_serial, assemble_mass, assemble_stiffness, assemble_tangent_scipy,
@@ -229,11 +230,6 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
     t_wall = time.perf_counter()
     system = RepeatingSectors(sector, n_repeat, ops)
     M, maps, keep = system.M, system.maps, system.keep
-    if rho_inf is None:
-        alpha_m = alpha_f = 0.0
-    else:
-        alpha_m, alpha_f = (2 * rho_inf - 1) / (rho_inf + 1), rho_inf / (rho_inf + 1)
-    gamma, beta = 0.5 - alpha_m + alpha_f, 0.25 * (1 - alpha_m + alpha_f) ** 2
     if load is None:
         def force(t):
             return np.zeros(keep.size)
@@ -250,17 +246,18 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
         if not duration > 0:
             raise ValueError(f"duration must be > 0 s, got {duration}")
         alpha = float(ramp_rate(duration, casing.ramp_fraction, casing.ramp_level))
-        B = (contact.N + casing.mu * contact.S).T.tocsr()               # contact force on the sectors: -B lambda
         n_c = contact.N.shape[0]
 
         def clearance(t):
             theta = node_angles(contact.theta0, omega, t, casing.rotation_sense)
             return casing_clearance(theta, t, casing.c0, casing.p0, alpha, casing.width)
 
-    internal = system.internal if nonlinear else (lambda x: system.K @ x)
-    tangent = system.tangent if nonlinear else (lambda x: system.K)
+    stepper = Newmark(M, system.internal if nonlinear else (lambda x: system.K @ x),
+                      system.tangent if nonlinear else (lambda x: system.K), lambda A: mumps_solver(A.tocsr()), force,
+                      rho_inf=rho_inf, rtol=rtol, atol=atol, max_iterations=max_iterations, linear=not nonlinear,
+                      contact=None if contact is None else StepContact(contact.N, contact.S, casing.mu, clearance))
     x, v = np.zeros(keep.size), np.zeros(keep.size)
-    a = mumps_solver(M)(force(0.0))
+    a = stepper.acceleration_at_rest()
     refreshes = 0
     tip = np.asarray(sector.tip_dofs)
 
@@ -294,122 +291,11 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
             start = int(data["step"]) + 1
             t_wall -= float(data["elapsed"]) if "elapsed" in data.files else 0.0   # wall of the earlier parts
         LOG.info("resuming from %s at step %d", checkpoint, start)
-    cache = {"h": None, "solve": None, "refreshes": refreshes}
-    carried = {"x": None, "f": None}         # the internal forces of the last converged state (generalised alpha)
-
-    def factorise(y, h):
-        """The iteration matrix at y, factorised; with a casing also its response to unit multipliers."""
-        cache["solve"] = mumps_solver(((1 - alpha_m) / (beta * h * h) * M + (1 - alpha_f) * tangent(y)).tocsr())
-        cache["h"] = h
-        cache["refreshes"] += 1
-        if contact is not None:
-            WN = -cache["solve"](contact.N.T.toarray())
-            WT = -cache["solve"](contact.S.T.toarray())
-            cache["WB"] = WN + casing.mu * WT                            # the iterate's change per multiplier
-            cache["contact"] = ContactSolver(np.asarray(contact.N @ WN), np.asarray(contact.N @ WT))
-
-    def advance(x, v, a, t_new, h, touching=False):
-        """One step of length h to t_new: (x, v, a, iterations, multipliers), or None where Newton fails. The
-        residual is equilibrium at the alpha point (at t_new for Newmark, alpha_m = alpha_f = 0). ``touching``:
-        the step starts in contact, and Newton starts from constant velocity instead of constant acceleration."""
-        c0 = 1.0 / (beta * h * h)
-        f_ext = (1 - alpha_f) * force(t_new) + (alpha_f * force(t_new - h) if alpha_f else 0.0)
-        # the inertia of a(y) = c0 (y - x) - v / (beta h) - (1 / (2 beta) - 1) a at the alpha point, without y
-        inertia = -M @ ((1 - alpha_m) * (c0 * x + v / (beta * h) + (0.5 / beta - 1.0) * a) - alpha_m * a) - f_ext
-        if alpha_f:             # f(x_n): carried over from the step that converged to x_n (the same assembly)
-            inertia = inertia + alpha_f * (carried["f"] if carried["x"] is x else internal(x))
-        gap_free = None if contact is None else clearance(t_new)
-        last = {"y": None, "f": None}
-
-        def residual(y):
-            f = internal(y)
-            last["y"], last["f"] = y, f
-            return (1 - alpha_m) * c0 * (M @ y) + (1 - alpha_f) * f + inertia
-
-        def correct(y):
-            """y with the multipliers that close its penetrations through the kept compliance, and them."""
-            if contact is None:
-                return y, None
-            g = gap_free - contact.N @ y
-            if g.min() >= 0.0:
-                return y, np.zeros(n_c)
-            lam, _ = cache["contact"].solve(casing.mu, g)      # ContactSetError: refreshed, then the step split
-            return y + cache["WB"] @ lam, lam
-
-        def total(r, lam):
-            return r if lam is None else r + B @ lam
-
-        def admissible(y):                                   # round-off of the correction: ~1e-20 m
-            return contact is None or (gap_free - contact.N @ y).min() >= -1e-15
-
-        # predictor: in contact a_n is mostly the tip nodes' ringing at frequencies the step does not resolve, and
-        # extrapolating it costs Newton 8-11 iterations per step instead of 3-4 (ci blade, GNL, generalised alpha,
-        # the second bump passage at 1,280 rad/s); out of contact it is the better guess
-        x_new = x + h * v + (0.0 if touching else 0.5 * h * h * a)
-        lam = None if contact is None else np.zeros(n_c)
-        r = residual(x_new)
-        norm = np.linalg.norm(r)
-        for it in range(max_iterations + 1):
-            acc = c0 * (x_new - x) - v / (beta * h) - (0.5 / beta - 1.0) * a
-            f_c = 0.0 if lam is None else np.linalg.norm(B @ lam)
-            scale = max(np.linalg.norm(M @ acc), np.linalg.norm(f_ext), np.linalg.norm(r + f_ext - M @ acc), f_c,
-                        1e-300)
-            LOG.debug("t %.6e it %d |r| = %.3e", t_new, it, norm)
-            if norm <= max(rtol * scale, atol) and admissible(x_new):
-                if last["y"] is x_new:
-                    carried["x"], carried["f"] = x_new, last["f"]
-                return x_new, v + h * ((1 - gamma) * a + gamma * acc), acc, it, lam
-            if it == max_iterations or not np.isfinite(norm):
-                return None
-            trial = None
-            # in contact, Newton on the exact tangent (a kept factorisation's stale compliance at the contact nodes
-            # makes the multipliers oscillate between iterates: measured on the ci blade); else modified Newton
-            in_contact = nonlinear and lam is not None and (lam.any() or not admissible(x_new))
-            if cache["solve"] is not None and cache["h"] == h and not in_contact:   # the kept factorisation
-                try:
-                    trial, lam_t = correct(x_new - cache["solve"](r))
-                    r_trial = residual(trial)
-                    norm_t = np.linalg.norm(total(r_trial, lam_t))
-                except ContactSetError:                          # the stale compliance: refresh below
-                    trial = None
-                # too slow: refresh below (from a penetrating iterate any admissible one is progress)
-                if trial is not None and norm_t > 0.25 * norm and admissible(x_new):
-                    trial = None
-            if trial is None:                                    # Newton with a backtracking line search
-                factorise(x_new, h)
-                step = cache["solve"](r)
-                for _ in range(6):
-                    trial, lam_t = correct(x_new - step)
-                    r_trial = residual(trial)
-                    norm_t = np.linalg.norm(total(r_trial, lam_t))
-                    # a change of the contact set is a finite step of the semi-smooth Newton (exact tangent)
-                    if norm_t < norm or not (admissible(x_new) and _same_set(lam, lam_t)):
-                        break
-                    step = 0.5 * step
-                else:
-                    return None                                  # no descent: the step is too long
-            x_new, lam, r, norm = trial, lam_t, r_trial, norm_t
-        return None
-
-    def advance_adaptive(x, v, a, t_new, h, touching, depth=0):
-        """The step, split in halves (recursively, 5 levels) where Newton fails: the point load's local
-        nonlinearity needs small load increments while the response does not."""
-        try:
-            out = advance(x, v, a, t_new, h, touching)
-        except ContactSetError:                                  # no admissible contact set from this iterate
-            out = None
-        if out is not None:
-            return out
-        if depth == 5:
-            raise RuntimeError(f"Newmark-Newton did not converge at t = {t_new:.6e} s even with dt / 32")
-        LOG.info("t = %.6e s: Newton failed, two half steps", t_new)
-        x, v, a, i1, lam = advance_adaptive(x, v, a, t_new - h / 2, h / 2, touching, depth + 1)
-        x, v, a, i2, lam = advance_adaptive(x, v, a, t_new, h / 2, lam is not None and lam.any(), depth + 1)
-        return x, v, a, i1 + i2, lam
+    stepper.refreshes = refreshes
 
     for k in range(start, n_steps + 1):
         x_old = x
-        x, v, a, it, lam = advance_adaptive(x, v, a, k * dt, dt, contact is not None and lams[-1].any())
+        x, v, a, it, lam = stepper.step(x, v, a, k * dt, dt, contact is not None and lams[-1].any())
         its.append(it)
         per_sector = system.fields(x)
         tips.append(tip_values(per_sector))
@@ -426,10 +312,10 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
         if checkpoint is not None and (time.perf_counter() - saved > checkpoint_seconds or k == n_steps):
             save_npz(checkpoint, signature=signature, x=x, v=v, a=a, tips=np.array(tips),
                      fields=np.array(fields).reshape((-1, n_repeat, sector.n_dofs)),
-                     snaps=np.array(snaps, np.int64), its=np.array(its, np.int64), refreshes=cache["refreshes"],
+                     snaps=np.array(snaps, np.int64), its=np.array(its, np.int64), refreshes=stepper.refreshes,
                      step=k, elapsed=time.perf_counter() - t_wall, lams=np.array(lams), checks=checks)
             saved = time.perf_counter()
-    refreshes = cache["refreshes"]
+    refreshes = stepper.refreshes
     LOG.info("repeating-sector Newmark: %d steps, %d factorisations, %.1f s", n_steps, refreshes,
              time.perf_counter() - t_wall)
     return RepeatingSectorResult(t=np.arange(n_steps + 1) * dt, tip=np.array(tips), fields=np.array(fields),
@@ -440,7 +326,3 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
                                  friction_power=float(checks[1]) if contact is not None and np.isfinite(checks[1])
                                  else float("nan"))
 
-
-def _same_set(lam, other) -> bool:
-    """Whether two multiplier vectors (None without contact) have the same nodes in contact."""
-    return lam is None or other is None or np.array_equal(lam > 0, other > 0)

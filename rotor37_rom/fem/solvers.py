@@ -1,6 +1,6 @@
 """Full-order solvers on a sector: SLEPc eigenproblems (shift-invert, MUMPS), Newton statics with the exact tangent,
-implicit Newmark transients, and the factorisation and eigen-solver that the pure Craig-Bampton function
-(``reduction.craig_bampton``) is given for SciPy matrices.
+and the factorisation and eigen-solver that the pure Craig-Bampton function (``reduction.craig_bampton``) and the
+implicit Newmark of ``fem.periodic`` are given for SciPy matrices.
 
 Part of the dolfinx adapter (``rotor37_rom.fem``). Everything but the SciPy-matrix helpers runs under MPI.
 """
@@ -23,8 +23,8 @@ from .operators import (JIT_PARAMS, SvkOperators, _require_serial, assemble_mass
                         assemble_stiffness, assemble_vector, create_svk_operators, gather_dof_values, scipy_to_petsc)
 from .sector import Sector
 
-__all__ = ["ModalResult", "StaticResult", "TransientResult", "solve_eigenproblem", "compute_clamped_modes",
-           "solve_static", "solve_newmark", "solve_clamped_static", "mumps_solver", "slepc_eigenpairs",
+__all__ = ["ModalResult", "StaticResult", "solve_eigenproblem", "compute_clamped_modes",
+           "solve_static", "solve_clamped_static", "mumps_solver", "slepc_eigenpairs",
            "shift_invert_solver", "static_compliance"]
 
 LOG = logging.getLogger(__name__)
@@ -295,134 +295,6 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
     out.x.array[:] = u.x.array
     return StaticResult(load_factors=lambdas, tip_displacements=np.array(tips), iterations=np.array(its), u=out,
                         residuals=history)
-
-
-@dataclasses.dataclass(frozen=True)
-class TransientResult:
-    """Times (n+1,), monitored DOF values (n+1, n_monitor) and final displacement/velocity Functions."""
-
-    t: np.ndarray
-    monitored: np.ndarray
-    u: object
-    v: object
-    energy: np.ndarray
-
-
-def solve_newmark(sector: Sector, force_shape: PETSc.Vec, load: Callable[[float], float], dt: float,
-                  n_steps: int, monitor_dofs: np.ndarray, nonlinear: bool = True, rayleigh=(0.0, 0.0),
-                  beta: float = 0.25, gamma: float = 0.5, rtol: float = 1e-9, max_iterations: int = 20,
-                  ops: SvkOperators | None = None) -> TransientResult:
-    """Implicit Newmark integration of M a + C v + f_int(u) = load(t) f from rest (full-order reference).
-
-    Args:
-        force_shape: spatial load vector f (N).
-        load: time law load(t) (dimensionless).
-        dt: time step (s), > 0; n_steps: number of steps.
-        monitor_dofs: per-rank local DOF indices (-1 = not here) recorded each step, e.g. ``sector.tip_dofs``.
-        nonlinear: SVK internal force with Newton on the exact tangent; False: linear K u (one factorisation).
-        rayleigh: (alpha, beta_K): C = alpha M + beta_K K.
-        beta, gamma: Newmark parameters (default: average acceleration, unconditionally stable, no dissipation).
-    Returns:
-        TransientResult with energy (n+1,): kinetic + strain energy (linear: u^T K u / 2), for checks.
-    """
-    if not dt > 0:
-        raise ValueError(f"dt must be > 0 s, got {dt}")
-    if not (1 <= n_steps <= 10_000_000):
-        raise ValueError(f"n_steps must be in [1, 1e7], got {n_steps}")
-    if not (0.0 < beta <= 0.5 and 0.5 <= gamma <= 1.0):
-        raise ValueError(f"Newmark needs 0 < beta <= 0.5 and 0.5 <= gamma <= 1, got beta={beta}, gamma={gamma}")
-    ops = ops or create_svk_operators(sector)
-    comm, bcs = sector.comm, [sector.clamp_bc]
-    K, M = assemble_stiffness(sector, ops), assemble_mass(sector, ops)
-    C = M.copy()
-    C.scale(rayleigh[0])
-    C.axpy(rayleigh[1], K)
-    c_mass, c_damp = 1.0 / (beta * dt**2), gamma / (beta * dt)
-    u = ops.u
-    u.x.array[:] = 0.0
-    un, vn, an = u.vector.copy(), u.vector.duplicate(), u.vector.duplicate()
-    for w in (vn, an):
-        w.set(0.0)
-    # initial acceleration from rest: M a0 = f(0)
-    rhs = force_shape.copy()
-    rhs.scale(load(0.0))
-    fem_petsc.set_bc(rhs, bcs, scale=0.0)
-    ksp_m = _lu_solver(comm, M, "newmark_mass_")
-    ksp_m.solve(rhs, an)
-    ksp_m.destroy()
-    if not nonlinear:
-        A_lin = K.copy()
-        A_lin.axpy(c_mass, M)
-        A_lin.axpy(c_damp, C)
-        ksp_lin = _lu_solver(comm, A_lin, "newmark_")
-    t = np.arange(n_steps + 1) * dt
-    monitored = [gather_dof_values(sector, u.x.array, monitor_dofs)]
-    energies = [0.0]
-    pred_a, pred_v, tmp, r, du = (u.vector.duplicate() for _ in range(5))
-    for n in range(1, n_steps + 1):
-        # predictors: a_{n+1} = c_mass (u - un) - pred_a, v_{n+1} = pred_v + gamma dt a_{n+1}
-        pred_a.set(0.0)
-        pred_a.axpy(c_mass * dt, vn)
-        pred_a.axpy(1.0 / (2.0 * beta) - 1.0, an)
-        pred_v.set(0.0)
-        pred_v.axpy(1.0, vn)
-        pred_v.axpy((1.0 - gamma) * dt, an)
-        f_n = force_shape.copy()
-        f_n.scale(load(t[n]))
-        for it in range(max_iterations + 1):
-            # a = c_mass (u - un) - pred_a ; v = pred_v + gamma dt a
-            a_vec = u.vector.copy()
-            a_vec.axpy(-1.0, un)
-            a_vec.scale(c_mass)
-            a_vec.axpy(-1.0, pred_a)
-            v_vec = pred_v.copy()
-            v_vec.axpy(gamma * dt, a_vec)
-            if nonlinear:
-                r = assemble_vector(ops.f_int)
-            else:
-                K.mult(u.vector, r)
-            M.mult(a_vec, tmp)
-            # residual scale: the largest of the force terms, so round-off in any of them cannot stall Newton
-            ref = max(f_n.norm(), r.norm(), tmp.norm(), 1e-30)
-            r.axpy(1.0, tmp)
-            C.multAdd(v_vec, r, r)
-            r.axpy(-1.0, f_n)
-            fem_petsc.set_bc(r, bcs, scale=0.0)
-            res = r.norm()
-            if not nonlinear and it == 1:
-                break
-            if nonlinear and (res <= rtol * ref or (it > 0 and res < 1e-14)):
-                break
-            if it == max_iterations:
-                raise RuntimeError(f"Newmark-Newton did not converge at step {n} (|r|/|f| = {res / ref:.2e})")
-            if nonlinear:
-                A = fem_petsc.assemble_matrix(ops.tangent, bcs=bcs, diagonal=1.0)
-                A.assemble()
-                A.axpy(c_mass, M)
-                A.axpy(c_damp, C)
-                ksp = _lu_solver(comm, A, "newmark_")
-            else:
-                ksp = ksp_lin
-            r.scale(-1.0)
-            ksp.solve(r, du)
-            u.vector.axpy(1.0, du)
-            u.x.scatter_forward()
-            if nonlinear:
-                ksp.destroy()
-                A.destroy()
-        un.array[:] = u.vector.array
-        vn.array[:] = v_vec.array
-        an.array[:] = a_vec.array
-        monitored.append(gather_dof_values(sector, u.x.array, monitor_dofs))
-        M.mult(vn, tmp)
-        kinetic = 0.5 * vn.dot(tmp)
-        K.mult(un, tmp)
-        energies.append(kinetic + 0.5 * un.dot(tmp))
-    v_out = fem.Function(sector.V, name="velocity")
-    v_out.vector.array[:] = vn.array
-    u_out = fem.Function(sector.V, name="u")
-    u_out.x.array[:] = u.x.array
-    return TransientResult(t=t, monitored=np.array(monitored), u=u_out, v=v_out, energy=np.array(energies))
 
 
 def solve_clamped_static(sector: Sector, rhs: np.ndarray, ops: SvkOperators | None = None,
