@@ -55,10 +55,10 @@ class Newmark:
 
     Args:
         M: mass (n, n), any matrix with ``@`` that ``factorise`` and ``tangent(x)`` add to. internal: x -> internal
-        force (n,); tangent: x -> its derivative (n, n). factorise: A -> solve, solve(B) = A^-1 B for B (n,) or (n, m)
-        (``dense_lu``, ``fem.mumps_solver``). force: t -> load (n,). C: damping (n, n) or None (undamped: no damping
-        term is computed at all). rtol, atol: a step has converged when |residual| <= max(rtol x scale, atol), scale the
-        largest of the
+            force (n,); tangent: x -> its derivative (n, n). factorise: A -> solve, solve(B) = A^-1 B for B (n,) or
+            (n, m) (``dense_lu``, ``fem.mumps_solver``). force: t -> load (n,). C: damping (n, n) or None (undamped: no
+            damping term is computed at all).
+        rtol, atol: a step has converged when |residual| <= max(rtol x scale, atol), scale the largest of the
             inertia, the load, the other forces and the contact force. The residual's round-off is ~u c0 |M x|,
             c0 = 1 / (beta h^2) (the inertia at x_n+1 and at x_n are computed apart), i.e. u / (omega h)^2 of the
             forces: an rtol below ~1e-12 is not met at fine steps, nor any rtol with atol = 0 where the forces vanish.
