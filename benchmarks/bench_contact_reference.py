@@ -79,7 +79,8 @@ def rom_runs(model, casing, speeds, duration, gnl, record, cap=None, h=None, dam
     is saved there every ``checkpoint_seconds``, and a run of the same model, speeds, step, length and record interval
     resumes from it (the r = 169 GNL model at 2e-7 s runs for over an hour); its wall time counts the time run before
     the restart."""
-    from rotor37_rom.dynamics.explicit import CentralDifference, loop_state, save_loop_state, simulate
+    from rotor37_rom.dynamics.explicit import CentralDifference, simulate
+    from rotor37_rom.dynamics.recorder import loop_state, save_loop_state
 
     scheme = CentralDifference(model, nonlinear=gnl, safety=0.5, damping=damping, frequency_cap=cap, h=h,
                                force=True)

@@ -1,14 +1,13 @@
-"""Implicit Newmark (average acceleration) and generalised alpha, written once for every model: the operators are
-given (pyMOR / dolfinx-demo style), so the same steps integrate the full order (sparse matrices, MUMPS) and a
-reduced model (dense matrices, LU).
+"""Implicit Newmark (average acceleration) and generalised alpha for undamped models, with the operators given
+(pyMOR / dolfinx-demo style): the full order's steps (sparse matrices, MUMPS) of a sector repeat or a blade.
 
 ``Newmark`` takes M (any matrix with ``@``), the internal force ``internal(x)``, its tangent ``tangent(x)``, a
-``factorise(A) -> solve`` function, the load ``force(t)``, optionally a damping matrix C and a unilateral contact
-(``StepContact``: gaps, normal and sliding rows, friction coefficient). Each step writes equilibrium at the alpha
-point (at t_n+1 for Newmark), starts from a predictor, iterates with a kept factorisation of the iteration matrix
-while that converges fast (modified Newton), else refactorises at the iterate (Newton with a backtracking line
-search), corrects every iterate by the contact multipliers that close its penetrations, and splits a step whose
-Newton fails in two halves, recursively. ``fem.solve_repeating_newmark`` runs it on the full order (a sector
+``factorise(A) -> solve`` function, the load ``force(t)`` and optionally a unilateral contact (``StepContact``:
+gaps, normal and sliding rows, friction coefficient). Each step writes equilibrium at the alpha point (at t_n+1 for
+Newmark), starts from a predictor, iterates with a kept factorisation of the iteration matrix while that converges
+fast (modified Newton), else refactorises at the iterate (Newton with a backtracking line search), corrects every
+iterate by the contact multipliers that close its penetrations, and splits a step whose Newton fails in two halves,
+recursively. ``fem.solve_repeating_newmark`` runs it on the full order (a sector
 repeat or a blade).
 
 ``simulate_newmark`` and ``simulate_linear_newmark`` (dense reduced models, the disk's forced response and the
@@ -48,7 +47,7 @@ class StepContact:
 
 
 class Newmark:
-    """Implicit Newmark (beta = 1/4, gamma = 1/2) of M x'' + C x' + internal(x) = force(t), or with ``rho_inf`` the
+    """Implicit Newmark (beta = 1/4, gamma = 1/2) of M x'' + internal(x) = force(t), or with ``rho_inf`` the
     generalised-alpha scheme (Chung & Hulbert 1993: alpha_m = (2 rho - 1) / (rho + 1), alpha_f = rho / (rho + 1);
     rho_inf = 1 is average acceleration written at the mid-point, rho_inf < 1 damps the modes the step does not
     resolve), optionally with unilateral contact.
@@ -56,8 +55,7 @@ class Newmark:
     Args:
         M: mass (n, n), any matrix with ``@`` that ``factorise`` and ``tangent(x)`` add to. internal: x -> internal
             force (n,); tangent: x -> its derivative (n, n). factorise: A -> solve, solve(B) = A^-1 B for B (n,) or
-            (n, m) (e.g. ``fem.mumps_solver``). force: t -> load (n,). C: damping (n, n) or None (undamped: no
-            damping term is computed at all).
+            (n, m) (e.g. ``fem.mumps_solver``). force: t -> load (n,).
         rtol, atol: a step has converged when |residual| <= max(rtol x scale, atol), scale the largest of the
             inertia, the load, the other forces and the contact force. The residual's round-off is ~u c0 |M x|,
             c0 = 1 / (beta h^2) (the inertia at x_n+1 and at x_n are computed apart), i.e. u / (omega h)^2 of the
@@ -70,12 +68,12 @@ class Newmark:
     factorisation and (generalised alpha) the internal forces of the last converged state.
     """
 
-    def __init__(self, M, internal: Callable, tangent: Callable, factorise: Callable, force: Callable, *, C=None,
+    def __init__(self, M, internal: Callable, tangent: Callable, factorise: Callable, force: Callable, *,
                  rho_inf: float | None = None, rtol: float = 1e-8, atol: float = 0.0, max_iterations: int = 30,
                  contact: StepContact | None = None, linear: bool = False, max_halvings: int = 5):
         if rho_inf is not None and not 0.0 <= rho_inf <= 1.0:
             raise ValueError(f"rho_inf must be in [0, 1] (or None: Newmark), got {rho_inf}")
-        self.M, self.C, self.internal, self.tangent = M, C, internal, tangent
+        self.M, self.internal, self.tangent = M, internal, tangent
         self.factorise, self.force = factorise, force
         if rho_inf is None:
             self.alpha_m = self.alpha_f = 0.0
@@ -115,8 +113,6 @@ class Newmark:
     def _refactorise(self, y, h):
         """The iteration matrix at y, factorised; with contact also its response to unit multipliers."""
         A = (1 - self.alpha_m) / (self.beta * h * h) * self.M + (1 - self.alpha_f) * self.tangent(y)
-        if self.C is not None:
-            A = A + (1 - self.alpha_f) * self.gamma / (self.beta * h) * self.C
         self.solve = self.factorise(A)
         self.h = h
         self.refreshes += 1
@@ -187,8 +183,8 @@ class Newmark:
 
 class _StepEquations:
     """One step's equations: the residual at the alpha point as a function of x_n+1 = y, with the inertia of
-    a(y) = c0 (y - x) - v / (beta h) - (1 / (2 beta) - 1) a, the damping of v(y) = v + h ((1 - gamma) a + gamma a(y))
-    and the load; the contact correction and admissibility at t_n+1."""
+    a(y) = c0 (y - x) - v / (beta h) - (1 / (2 beta) - 1) a and the load; the contact correction and admissibility at
+    t_n+1."""
 
     def __init__(self, nm: Newmark, x, v, a, t_new, h):
         self.nm, M, alpha_m, alpha_f, beta = nm, nm.M, nm.alpha_m, nm.alpha_f, nm.beta
@@ -200,10 +196,6 @@ class _StepEquations:
         if alpha_f:             # f(x_n): carried over from the step that converged to x_n (the same evaluation)
             carried = nm._carried
             self.inertia = self.inertia + alpha_f * (carried["f"] if carried["x"] is x else nm.internal(x))
-        if nm.C is not None:    # (1 - alpha_f) C v(y) + alpha_f C v: its part in y, and the rest
-            self.c_y = (1 - alpha_f) * nm.gamma / (beta * h)
-            v_rest = v + h * (1 - nm.gamma) * a - nm.gamma * h * (c0 * x + v / (beta * h) + (0.5 / beta - 1.0) * a)
-            self.inertia = self.inertia + nm.C @ ((1 - alpha_f) * v_rest + alpha_f * v)
         self.gap_free = None if nm.contact is None else nm.contact.gaps(t_new)
         self.last_y = self.last_f = None
 
@@ -211,8 +203,7 @@ class _StepEquations:
         nm = self.nm
         f = nm.internal(y)
         self.last_y, self.last_f = y, f
-        r = (1 - nm.alpha_m) * self.c0 * (nm.M @ y) + (1 - nm.alpha_f) * f + self.inertia
-        return r if nm.C is None else r + self.c_y * (nm.C @ y)
+        return (1 - nm.alpha_m) * self.c0 * (nm.M @ y) + (1 - nm.alpha_f) * f + self.inertia
 
     def correct(self, y):
         """y with the multipliers that close its penetrations through the kept compliance, and them."""

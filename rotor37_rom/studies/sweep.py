@@ -19,8 +19,8 @@ from typing import Sequence
 import numpy as np
 
 from rotor37_rom.dynamics.casing import Casing
-from rotor37_rom.dynamics.explicit import CentralDifference, loop_state, save_loop_state, simulate
-from rotor37_rom.dynamics.recorder import LoopState
+from rotor37_rom.dynamics.explicit import CentralDifference, simulate
+from rotor37_rom.dynamics.recorder import LoopState, loop_state, save_loop_state
 from rotor37_rom.npz import save_json, save_npz
 
 __all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "load_speed", "sweep_folder", "interaction_map",
