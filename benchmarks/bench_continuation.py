@@ -90,19 +90,20 @@ def main(argv=None) -> int:
     if args.per_step and size > 1:
         print("error: --per-step runs serially (it times one process's batches); drop mpirun", file=sys.stderr)
         return 2
-    config = cm.ContactMapConfig(model=args.model, gnl="on", frequency_cap=120.0, cubature=1e-4, precision="single",
-                                 cubature_speeds=study_training_speeds(), mu=0.0, direction="x",
-                                 speeds=(low, high, 2), revolutions=200.0, out=args.out, quiet=True)
-    model = load_reduced_model(config.model)
+    config = cm.ContactMapConfig.from_options(model=args.model, gnl="on", frequency_cap=120.0, cubature=1e-4,
+                                              precision="single", cubature_speeds=study_training_speeds(), mu=0.0,
+                                              direction="x", speeds=(low, high, 2), revolutions=200.0, out=args.out,
+                                              quiet=True)
+    model = load_reduced_model(config.rom.path)
     scheme = cm.time_scheme(config, model, True, comm)
     if args.per_step:
-        return per_step(scheme, config.casing, 0.5 * (low + high))
+        return per_step(scheme, config.sweep.casing, 0.5 * (low + high))
     rows = []
     for k, rule in enumerate(RULES):
         if k % size != rank:
             continue
         t0 = time.perf_counter()
-        points = continuation(scheme, low, high, args.step, config.casing, first_revolutions=200.0,
+        points = continuation(scheme, low, high, args.step, config.sweep.casing, first_revolutions=200.0,
                               revolutions=30.0, unsteady=rule, progress=True)
         wall = time.perf_counter() - t0
         rows.append({"rule": rule, "points": len(points), "steady": sum(p.steady for p in points),

@@ -23,7 +23,7 @@ from rotor37_rom.machine import write_results
 from rotor37_rom import fem  # noqa: E402
 from rotor37_rom.post.stress import cyclic_harmonic_frequencies  # noqa: E402
 from rotor37_rom.disk.harmonics import harmonic_frequencies  # noqa: E402
-from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model  # noqa: E402
+from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
 
 FAMILIES = ("1B", "1T", "2B")
 

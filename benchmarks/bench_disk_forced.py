@@ -4,14 +4,14 @@ reference, cost and error side by side.
 Load: 400 N along e_z at node LE of every sector, travelling with N_d nodal diameters, from rest, ``--periods`` periods.
 Reference: the full-order model of N / gcd(N, N_d) sectors closed on themselves (``fem.periodic``; implicit Newmark,
 exact SVK tangent), linear for every case and GNL for the cases of ``--gnl-reference`` (the expensive part: checkpointed
-under the output directory, resumed when run again). Reduced models: ``disk.builder.build_disk_model`` (r_b = 3, LE
-only, as the paper's §3.3 models) for each criterion and r_MD, integrated by the same Newmark at the same step, so the
-error is the reduction's. Each pair is scored by the performance indicator I (``disk.indicators.performance_indicator``:
-loaded node, tip nodes, field and strain-energy criteria), next to the smallest field and strain-energy errors any state
-of the model could have (``disk.indicators.best_approximation``: the reference's snapshots projected on the model's
-sector fields), which separates the basis's share of the error from that of the reduced dynamics. Each row keeps the
-error histories behind its I (``disk.indicators.indicator_histories``), which ``benchmarks/plot_disk_indicator.py``
-charts with I against r_MD.
+under the output directory, resumed when run again). Reduced models: ``reduction.disk_builder.build_disk_model`` (r_b =
+3, LE only, as the paper's §3.3 models) for each criterion and r_MD, integrated by the same Newmark at the same step, so
+the error is the reduction's. Each pair is scored by the performance indicator I
+(``disk.indicators.performance_indicator``: loaded node, tip nodes, field and strain-energy criteria), next to the
+smallest field and strain-energy errors any state of the model could have (``disk.indicators.best_approximation``: the
+reference's snapshots projected on the model's sector fields), which separates the basis's share of the error from that
+of the reduced dynamics. Each row keeps the error histories behind its I (``disk.indicators.indicator_histories``),
+which ``benchmarks/plot_disk_indicator.py`` charts with I against r_MD.
 
 A 400 N point force on the ci mesh's thin leading edge makes the GNL reference collapse locally (St. Venant-Kirchhoff
 softens in compression; a point force on a continuum has no finite limit): ``--patch MM`` spreads the same 400 N as
@@ -39,25 +39,24 @@ from pathlib import Path
 import numpy as np
 
 from rotor37_rom import fem
-from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model
+from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model
 from rotor37_rom.disk.indicators import best_approximation, indicator_histories, performance_indicator
 from rotor37_rom.fem.periodic import RepeatingSectors
+from rotor37_rom.checks import before_work
+from rotor37_rom.cli import run_main
 from rotor37_rom.machine import write_results
 from rotor37_rom.studies.forced_response import parse_args, parse_case, reduced, reference
 
 
 def main(argv=None) -> int:
-    try:
-        args = parse_args(argv, description=__doc__.splitlines()[0])
-    except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+    """The study; a bad option raises ValueError naming it (one line and exit status 2 through ``run_main``)."""
+    args = parse_args(argv, description=__doc__.splitlines()[0])
+    out = Path(args.out) / args.preset
+    before_work({"--out": out})
     cases = [parse_case(c) for c in args.cases]
-    gnl_cases = {parse_case(c) for c in args.gnl_reference}
+    gnl_cases = {parse_case(c, "--gnl-reference") for c in args.gnl_reference}
     if args.choice is not None:
         print(args.choice.describe())
-    out = Path(args.out) / args.preset
-    out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     sector = fem.create_disk_sector(preset=args.preset)
     system = RepeatingSectors(sector, 1)
@@ -141,4 +140,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_main(main))

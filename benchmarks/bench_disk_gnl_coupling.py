@@ -38,7 +38,7 @@ from rotor37_rom import fem  # noqa: E402
 from rotor37_rom.disk.indicators import best_approximation, performance_indicator  # noqa: E402
 from rotor37_rom.disk.assembly import face_shapes  # noqa: E402
 from rotor37_rom.disk.loads import travelling_load  # noqa: E402
-from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model  # noqa: E402
+from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
 from rotor37_rom.fem.periodic import RepeatingSectors  # noqa: E402
 from rotor37_rom.forces.tensors import QuadratureForces, compute_polynomial_forces  # noqa: E402
 from rotor37_rom.reduction.craig_bampton import CRITERIA  # noqa: E402

@@ -164,7 +164,7 @@ def main(argv=None) -> int:
     # the stress runs keep their own account (the map's wall time is the sittings of the map and its reference)
     sittings = Sittings(args.out / ("bench_disk_map_stress_sittings.json" if args.part == "stress"
                                     else "bench_disk_map_sittings.json"), rank == 0)
-    config = ContactMapConfig(disk=True, direction="cone", mu=0.15, frequency_cap=CAP_KHZ, speeds=SPEEDS,
+    config = ContactMapConfig.from_options(disk=True, direction="cone", mu=0.15, frequency_cap=CAP_KHZ, speeds=SPEEDS,
                               revolutions=args.revolutions, gnl="on", cubature=CUBATURE, precision=PRECISION,
                               stress=True, out=args.out, quiet=False)
     try:
@@ -181,16 +181,16 @@ def run(args, config: ContactMapConfig, grid: np.ndarray, comm, sittings: Sittin
     rank = 0 if comm is None else comm.rank
     sittings.enter("model, probe and cubature")
     rom = args.out / "rom.npz"
-    config = dataclasses.replace(config, model=rom) if rom.is_file() else config
+    config = config.with_options(model=rom) if rom.is_file() else config
     model, _ = reduced_model(config, comm)             # rank 0 builds it (or every rank reads rom.npz)
-    config = dataclasses.replace(config, model=rom)
+    config = config.with_options(model=rom)
     scheme = time_scheme(config.setting(True), model, True, comm)      # the map's own scheme (probe, cubature)
     spec = config.sweep_spec(model)
     if args.part == "stress":
         for i in args.stress_at:
             w = float(grid[i])
             sittings.enter(f"stress at {w:.1f} rad/s")
-            run_contact_map(dataclasses.replace(config, speeds=(w, w, 1), gnl="both", out=args.out / f"stress_{i}"),
+            run_contact_map(config.with_options(speeds=(w, w, 1), gnl="both", out=args.out / f"stress_{i}"),
                             comm, schemes={True: scheme})
         return 0
     if args.part in ("all", "map"):
@@ -231,8 +231,9 @@ def run(args, config: ContactMapConfig, grid: np.ndarray, comm, sittings: Sittin
     gnl = next((entry for label, entry in summary["runs"].items() if label.startswith("GNL")), {})
     sittings.close()
     totals = sittings.totals()
-    row = {"speeds": SPEEDS, "revolutions": config.revolutions, "r": model.r, "h": scheme.h, "cap_khz": CAP_KHZ,
-           "cubature": CUBATURE, "precision": PRECISION, "mu": config.mu, "direction": config.direction,
+    row = {"speeds": SPEEDS, "revolutions": config.sweep.revolutions, "r": model.r, "h": scheme.h, "cap_khz": CAP_KHZ,
+           "cubature": CUBATURE, "precision": PRECISION, "mu": config.sweep.casing.mu,
+           "direction": config.sweep.casing.direction,
            "ranks": 1 if comm is None else comm.size, "reference_speeds": speeds.tolist(), "responses": runs,
            "wall_s_by_phase": totals, "sittings": len(sittings.log), "map_wall_s": totals.get("map"),
            "map": {k: gnl.get(k) for k in ("peak_speed", "peak_amplitude", "diverged", "contact_checks",
@@ -243,7 +244,7 @@ def run(args, config: ContactMapConfig, grid: np.ndarray, comm, sittings: Sittin
           f"{totals.get('reference (exact tensors)', 0) / 60:.0f} min, floor "
           f"{totals.get('floor (exact x (1 + 1e-4))', 0) / 60:.0f} min)")
     name = "bench_disk_map" + ("" if args.part == "all" else "_reference")
-    name += "" if config.revolutions == REVOLUTIONS else f"_{config.revolutions:g}rev"
+    name += "" if config.sweep.revolutions == REVOLUTIONS else f"_{config.sweep.revolutions:g}rev"
     machine = write_results(name, [row])
     print(f"results/{name}.json ({machine})")
     return 0

@@ -36,7 +36,7 @@ from rotor37_rom.machine import write_results
 from rotor37_rom import fem  # noqa: E402
 from rotor37_rom.dynamics.casing import Casing  # noqa: E402
 from rotor37_rom.disk.assembly import mistuning_factors  # noqa: E402
-from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model  # noqa: E402
+from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
 from rotor37_rom.dynamics.explicit import CentralDifference  # noqa: E402
 from rotor37_rom.studies.mistuning import blade_amplitudes, earlier_rows, over_seeds
 from rotor37_rom.studies.sweep import SweepSpec, run_sweep  # noqa: E402

@@ -28,7 +28,7 @@ from rotor37_rom.machine import write_results
 from rotor37_rom import fem  # noqa: E402
 from rotor37_rom.post.stress import disk_stress  # noqa: E402
 from rotor37_rom.disk.loads import harmonic_node_load  # noqa: E402
-from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model  # noqa: E402
+from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
 from rotor37_rom.dynamics.explicit import CentralDifference, SimulationDiverged, simulate  # noqa: E402
 from rotor37_rom.dynamics.newmark import simulate_newmark  # noqa: E402
 

@@ -29,7 +29,7 @@ from rotor37_rom.machine import write_results
 from rotor37_rom import fem  # noqa: E402
 from rotor37_rom.dynamics.casing import Casing  # noqa: E402
 from rotor37_rom.disk.harmonics import travelling_wave_departure  # noqa: E402
-from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model  # noqa: E402
+from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
 from rotor37_rom.dynamics.explicit import CentralDifference, gnl_time_step, largest_states, simulate  # noqa: E402
 from rotor37_rom.reduction.craig_bampton import modal_damping  # noqa: E402
 

@@ -21,7 +21,7 @@ import json, resource, sys, time
 import numpy as np
 t0 = time.perf_counter()
 from rotor37_rom import fem
-from rotor37_rom.post.modes import classify_blade_modes
+from rotor37_rom.model.modes import classify_blade_modes
 t_import = time.perf_counter() - t0
 preset, table = sys.argv[1], (sys.argv[2] if sys.argv[2] != "none" else None)
 t0 = time.perf_counter()

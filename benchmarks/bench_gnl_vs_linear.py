@@ -315,7 +315,8 @@ def build_model(path: Path, preset: str, r_c: int, global_md: int) -> None:
     ``path``."""
     from rotor37_rom.model.reduced import save_reduced_model
 
-    model = contact_map.build_model(contact_map.ContactMapConfig(preset=preset, r_c=r_c, global_md=global_md, out=OUT))
+    model = contact_map.build_model(contact_map.ContactMapConfig.from_options(preset=preset, r_c=r_c,
+                                                                              global_md=global_md, out=OUT))
     path.parent.mkdir(parents=True, exist_ok=True)
     save_reduced_model(model, path)
 

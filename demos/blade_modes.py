@@ -25,7 +25,7 @@ import numpy as np
 
 from rotor37_rom.cli import TABLE_HELP, ArgumentParser, run_main
 from rotor37_rom.geometry.blade import MESH_PRESETS
-from rotor37_rom.post.modes import PAPER_CLAMPED_OMEGA
+from rotor37_rom.model.modes import PAPER_CLAMPED_OMEGA
 from rotor37_rom.studies.blade_modes import BladeModesConfig, BladeModesResult, run_blade_modes
 # -
 
@@ -38,7 +38,7 @@ from rotor37_rom.studies.blade_modes import BladeModesConfig, BladeModesResult, 
 # ## One blade: mesh, modes, labels, mass and tip clearance
 #
 # The labels come from the tip: bending moves the leading and trailing edges together, torsion in opposite senses
-# (`rotor37_rom.post.modes.classify_blade_modes`).
+# (`rotor37_rom.model.modes.classify_blade_modes`).
 #
 # ## The study
 #

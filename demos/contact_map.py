@@ -17,7 +17,7 @@
 #         --cubature 1e-4 --precision single --frequency-cap 120 --mu 0 --speeds 1200 1600 100 --revolutions 200 \
 #         --batch 50 --out results/headline     # the GNL headline map on 2 cores (docs/performance.md)
 #
-# The whole study is one library function, `run_contact_map(ContactMapConfig(...))` of
+# The whole study is one library function, `run_contact_map(ContactMapConfig.from_options(...))` of
 # `rotor37_rom.studies.contact_map`, which returns a `ContactMapResult`; this script only turns its options into that
 # configuration and prints the comparison with the paper. A bad option is one line on stderr and exit status 2.
 
@@ -36,10 +36,13 @@ from rotor37_rom.studies.contact_map import (PAPER, ContactMapConfig, ContactMap
 
 # ## Configuration
 #
-# One field of `ContactMapConfig` (`rotor37_rom.studies.contact_config`) per command-line option (`--frequency-cap`
-# is `frequency_cap`), with the same defaults. Every check names the option it concerns, so that the command line can
-# report it as is. Numbers are stored as floats, as the command line gives them: the cache keys of sweeps and
-# cubatures hash them, and a run from Python then reuses the files of the same run from the shell.
+# `ContactMapConfig` (`rotor37_rom.studies.contact_config`) composes the library's objects: the model to build or load
+# (`rom`), the time scheme (`scheme`), a `SweepSpec` with its `Casing` (`sweep`) and the continuation. Each command-
+# line option is one of its flat options (`--frequency-cap` is `frequency_cap`, held at `config.scheme.frequency_cap`;
+# `ContactMapConfig.OPTIONS` lists where each lives), with the same defaults. Every check names the option it
+# concerns, so that the command line can report it as is. Numbers are stored as floats, as the command line gives
+# them: the cache keys of sweeps and cubatures hash them, and a run from Python then reuses the files of the same run
+# from the shell.
 #
 # ## Results
 #
@@ -78,10 +81,10 @@ from rotor37_rom.studies.contact_map import (PAPER, ContactMapConfig, ContactMap
 
 # ## Command line
 #
-# The options are the fields of `ContactMapConfig` (their defaults too: an option not given is left to the
-# dataclass; `build_parser` lists them). `main` runs the study and prints the comparison with the paper; a ValueError
-# (a bad option, a file that is not a reduced model, a step the library refuses) is one line on stderr and exit
-# status 2.
+# The options are the flat options of `ContactMapConfig` (their defaults too: an option not given is left to the
+# configuration; `build_parser` lists them). `main` runs the study and prints the comparison with the paper; a
+# ValueError (a bad option, a file that is not a reduced model, a step the library refuses) is one line on stderr and
+# exit status 2.
 
 # +
 def print_report(result: ContactMapResult) -> None:
@@ -94,7 +97,7 @@ def print_report(result: ContactMapResult) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Parse the options, run the study, print the report; raises ValueError for a bad input."""
-    config = ContactMapConfig(**vars(build_parser().parse_args(argv)))
+    config = ContactMapConfig.from_options(**vars(build_parser().parse_args(argv)))
     logging.basicConfig(level=logging.WARNING, force=True)
     logging.getLogger().handlers[0].setLevel(logging.WARNING)
     comm = world_comm()

@@ -42,6 +42,11 @@ def build_parser() -> ArgumentParser:
     p.add_argument("--speed", type=float, default=1400.0, help="rotation speed of the contact run (rad/s)")
     p.add_argument("--revolutions", type=float, default=2.0)
     p.add_argument("--mu", type=float, default=0.0, help="friction coefficient")
+    p.add_argument("--direction", default="x", choices=["x", "radial", "cone"],
+                   help="contact normal: x (the blade frame's e_x, the paper's), radial, cone (default x)")
+    p.add_argument("--rotation-sense", type=int, default=-1, choices=[-1, 1],
+                   help="the rotor turns about +z towards -theta (-1, rotor 37's) or +theta (+1); a sense that turns "
+                        "the blade with its trailing edge ahead (a mirrored blade) is refused (default -1)")
     p.add_argument("--out", default="results/own_blade")
     return p
 

@@ -98,7 +98,7 @@ def build_parser() -> ArgumentParser:
     parser.add_argument("--forces", help=f"reduced forces: {', '.join(FORCES)}")
     parser.add_argument("--levels", type=int, help="load levels on each side of delta = 0 (1..50)")
     parser.add_argument("--global-md", type=int,
-                        help="also build r_MD = 0 + the MDs of the first N clamped normal modes (0: skip; 0..10)")
+                        help="also build r_MD = 0 + the MDs of the first N clamped normal modes (0: skip; 0..20)")
     parser.add_argument("--out", type=Path, help="output folder (default results/reduced_blade)")
     parser.add_argument("--tolerance", type=float, metavar="TOL",
                         help="build only the cheapest reduced model within this relative error of the clearance "

@@ -16,6 +16,7 @@ from typing import Iterator, Sequence
 
 import numpy as np
 
+from rotor37_rom.checks import readable_file
 from .parametric import N_TABLE_SECTIONS, BladeLaw, default_blade_law
 from .tables import BladeTable
 
@@ -451,8 +452,7 @@ def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], ti
     from . import mesh_import
 
     path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"blade file {path} does not exist")
+    readable_file("blade file", path)
     suffix = path.suffix.lower()
     cad = (".step", ".stp", ".brep")
     if suffix not in cad + mesh_import.MESH_SUFFIXES:

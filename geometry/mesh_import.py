@@ -154,7 +154,10 @@ def read_mesh(path: str | os.PathLike, scale: float = 1.0) -> ImportedMesh:
         first = ([ln for ln in (str(exc) + "\n" + said.getvalue()).splitlines() if ln.strip()][:1]
                  or [type(exc).__name__])[0].strip()
         raise ValueError(f"mesh file {path} could not be read ({type(exc).__name__}: {first})") from None
-    points = np.asarray(mesh.points, dtype=float)[:, :3] * scale
+    points = np.asarray(mesh.points, dtype=float)
+    if points.ndim != 2 or points.shape[0] == 0:
+        raise ValueError(f"mesh file {path} holds no nodes: is it a {suffix} mesh?")
+    points = points[:, :3] * scale
     if points.shape[1] != 3:
         raise ValueError(f"mesh file {path} is not three-dimensional")
     solids = [(k, b) for k, b in enumerate(mesh.cells) if b.type.startswith(_SOLID_PREFIXES)]

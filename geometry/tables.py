@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rotor37_rom.checks import readable_file
+
 __all__ = [
     "BladeTable",
     "HubShroudTable",
@@ -92,8 +94,7 @@ def read_blade_table(path: str | os.PathLike) -> BladeTable:
         ValueError: one line naming the file and what is wrong with it (missing, garbled, inconsistent).
     """
     path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"blade table file {path} does not exist")
+    readable_file("blade table file", path)
     sections: list[list[list[float]]] = []
     try:
         text = path.read_text(errors="strict")
@@ -131,8 +132,7 @@ def read_blade_table(path: str | os.PathLike) -> BladeTable:
 def read_hub_shroud_table(path: str | os.PathLike) -> HubShroudTable:
     """Read NASA Table V (``rotor37hub-shroud.dat``): four labelled vectors, 8 values a line, in cm."""
     path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"hub/shroud table file {path} does not exist")
+    readable_file("hub/shroud table file", path)
     vectors: dict[str, list[float]] = {}
     current = None
     for line in path.read_text(errors="replace").splitlines():

@@ -11,12 +11,16 @@ meshing.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
+import re
 import sys
 from pathlib import Path
 from typing import Callable, Sequence
 
+from rotor37_rom.checks import DryRun, dry_run
 from rotor37_rom.geometry.tables import default_data_dir, read_blade_table
+from rotor37_rom.interruption import Interrupted, stop_cleanly
 
 __all__ = ["ArgumentParser", "run_main", "resolve_table", "TABLE_HELP"]
 
@@ -36,7 +40,15 @@ def _one_line(message: str) -> str:
 
 
 class ArgumentParser(argparse.ArgumentParser):
-    """argparse with its errors on one line ("error: argument --speed: invalid float value: 'x'"), exit status 2."""
+    """argparse with its errors on one line ("error: argument --speed: invalid float value: 'x'"), exit status 2, and
+    the dry run's ``--check`` (handled by ``run_main``) listed in its help."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        # "-inf", "-nan" and "-1e300" are values (of a number option), not options: their checks then name the option
+        self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+|inf|infinity|nan)([eE][-+]?\d+)?$", re.I)
+        self.add_argument("--check", action="store_true", default=argparse.SUPPRESS,
+                          help="check the options, files and folders, then stop before any work (exit status 0)")
 
     def error(self, message: str):
         if _rank() == 0:
@@ -46,9 +58,28 @@ class ArgumentParser(argparse.ArgumentParser):
 
 def run_main(main: Callable[[Sequence[str] | None], int], argv: Sequence[str] | None = None) -> int:
     """Call ``main(argv)``; a ValueError (a bad option or an input the library refuses) is one line on stderr
-    ("error: <message>", printed by rank 0 only under mpirun) and exit status 2."""
+    ("error: <message>", printed by rank 0 only under mpirun) and exit status 2. With ``--check`` among the options
+    the run is a dry run (``checks.dry_run``): its options, files and folders are checked, it stops before any work
+    (meshing, computing, writing) and says so, exit status 0. SIGTERM or SIGINT stop it cleanly
+    (``interruption.stop_cleanly``: the running loop's checkpoint written), with one line on how to resume and exit
+    status 128 + the signal's number."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    check = "--check" in argv and "--help" not in argv and "-h" not in argv
+    if check:
+        argv = [a for a in argv if a != "--check"]
     try:
-        return main(argv)
+        with dry_run() if check else contextlib.nullcontext(), stop_cleanly():
+            return main(argv)
+    except Interrupted as exc:
+        if _rank() == 0:
+            print(f"stopped by {exc.name}: " + ("the checkpoints are written; " if exc.saved else "")
+                  + "run the same command again to resume" + ("" if exc.saved else " from the last checkpoint"),
+                  file=sys.stderr)
+        return 128 + exc.number
+    except DryRun:
+        if _rank() == 0:
+            print("checked: the options, files and folders are valid; nothing was run (--check)")
+        return 0
     except ValueError as exc:
         if _rank() == 0:
             print(f"error: {_one_line(exc)}", file=sys.stderr)

@@ -85,7 +85,7 @@ def disk_cache(tmp_path_factory):
 def disk_model(ci_disk, ci_disk_ops, disk_cache):
     """A small disk model of the ci sector (LE only: r_b = 3, r_c = 8, 4 modal derivatives by MI 2b, 96 interface
     modes; r = 636), exact forces; (model, build report)."""
-    from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model
+    from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model
 
     config = DiskReductionConfig(tip_nodes="LE", r_c=8, r_md=4, criterion="MI2b", r_cyclic=96)
     return build_disk_model(ci_disk, config, ops=ci_disk_ops, cache_dir=disk_cache)

@@ -8,7 +8,7 @@ from rotor37_rom import fem
 from rotor37_rom.geometry import blade as geo
 from rotor37_rom.geometry.parametric import BladeLaw, default_blade_law, fit_blade_law, section_parameters
 from rotor37_rom.geometry.tables import read_blade_table
-from rotor37_rom.post.modes import PAPER_CLAMPED_OMEGA, classify_blade_modes
+from rotor37_rom.model.modes import PAPER_CLAMPED_OMEGA, classify_blade_modes
 
 PAPER = np.array([PAPER_CLAMPED_OMEGA[k] for k in ("1B", "1T", "2B")])
 U = np.finfo(float).eps / 2  # unit round-off of float64

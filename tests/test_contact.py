@@ -9,7 +9,7 @@ import scipy.linalg
 from rotor37_rom.dynamics.casing import Casing, casing_profile, contact_frames, ramp_rate
 from rotor37_rom.dynamics.explicit import CentralDifference, SimulationDiverged, simulate, tangent_highest_frequency
 from rotor37_rom.forces.tensors import PolynomialForces
-from rotor37_rom.post.modes import normalise_signs
+from rotor37_rom.model.modes import normalise_signs
 from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model, with_force_precision
 
 
@@ -375,12 +375,12 @@ def test_gnl_step_report_names_the_states_that_set_the_step(ci_rom, capsys):
     # the map's step: from every state (keep, the default) or without the outliers (--step-outliers drop)
     for policy, h, says in (("keep", rep["h"], "times as many steps (--step-outliers drop)"),
                             ("drop", rep["h_without_outliers"], "--step-outliers drop takes the step without them")):
-        config = contact_map.ContactMapConfig(frequency_cap=120.0, step_outliers=policy)
+        config = contact_map.ContactMapConfig.from_options(frequency_cap=120.0, step_outliers=policy)
         # the same step up to round-off (the demo's cap in rad/s is 120 kHz converted in another order)
         assert contact_map.capped_gnl_step(config, ci_rom, ci_rom, states) == pytest.approx(h, rel=1e-12)
         out = capsys.readouterr().out
         assert f"h = {h:.3g} s" in out and says in out
-    config = contact_map.ContactMapConfig(frequency_cap=120.0, step_outliers="drop")
+    config = contact_map.ContactMapConfig.from_options(frequency_cap=120.0, step_outliers="drop")
     assert contact_map.capped_gnl_step(config, ci_rom, ci_rom, small) == pytest.approx(rep["h_without_outliers"],
                                                                                       rel=1e-12)  # none: as keep
 

@@ -1,6 +1,7 @@
 """Demos as library calls (#18, #69): demos/contact_map.py's work is run_contact_map(ContactMapConfig) ->
 ContactMapResult of rotor37_rom.studies.contact_map, which a test calls in-process; its command line is that
 configuration, and a bad input is one line on stderr naming the option, with exit status 2."""
+import dataclasses
 import json
 import os
 import subprocess
@@ -25,9 +26,9 @@ def test_contact_map_perturbation_keeps_the_step(ci_rom, tmp_path):
     cap, the cap's with it. At the stability limit (--safety 1) the stiffer model is refused."""
     path = save_reduced_model(ci_rom, tmp_path / "rom.npz")
     for gnl, cap in ((False, None), (True, None), (False, 60.0)):
-        schemes = [contact_map.time_scheme(contact_map.ContactMapConfig(model=path, perturbation=eps, quiet=True,
-                                                                        frequency_cap=cap, out=tmp_path),
-                                           ci_rom, gnl, None) for eps in (0.0, 1e-4)]
+        schemes = [contact_map.time_scheme(contact_map.ContactMapConfig.from_options(
+                       model=path, perturbation=eps, quiet=True, frequency_cap=cap, out=tmp_path), ci_rom, gnl, None)
+                   for eps in (0.0, 1e-4)]
         plain, pert = schemes
         assert pert.h == plain.h and pert.nonlinear == plain.nonlinear == gnl
         assert pert.frequency_cap == plain.frequency_cap
@@ -42,7 +43,7 @@ def test_contact_map_perturbation_keeps_the_step(ci_rom, tmp_path):
             Q = np.full((ci_rom.r, 1), 1e-4)
             g, g_pert = plain.model.nonlinear_force(Q), pert.model.nonlinear_force(Q)
             assert np.abs(g_pert - (1 + 1e-4) * g).max() <= 1e-12 * np.abs(g).max()
-    at_limit = contact_map.ContactMapConfig(model=path, perturbation=1e-4, safety=1.0, out=tmp_path)
+    at_limit = contact_map.ContactMapConfig.from_options(model=path, perturbation=1e-4, safety=1.0, out=tmp_path)
     with pytest.raises(ValueError, match="stability limit"):         # at the limit, a stiffer model cannot run
         contact_map.time_scheme(at_limit, ci_rom, False, None)
 
@@ -53,11 +54,11 @@ def test_time_scheme_takes_a_record_step(ci_rom, tmp_path):
     is a step, refused as one, not "no step"."""
     path = save_reduced_model(ci_rom, tmp_path / "rom.npz")
     for cap in (None, 60.0):
-        config = contact_map.ContactMapConfig(model=path, perturbation=1e-4, quiet=True, frequency_cap=cap,
+        config = contact_map.ContactMapConfig.from_options(model=path, perturbation=1e-4, quiet=True, frequency_cap=cap,
                                               out=tmp_path)
         plain = contact_map.time_scheme(config, ci_rom, cap is None, None)
         half = contact_map.time_scheme(config, ci_rom, cap is None, None, h=plain.h / 2)
-        assert half.h == plain.h / 2 and config.h is None
+        assert half.h == plain.h / 2 and config.scheme.h is None
         assert half.frequency_cap == plain.frequency_cap and half.nonlinear == plain.nonlinear
         assert np.array_equal(half.model.K, plain.model.K) and half.model.metadata["perturbation"] == 1e-4
     with pytest.raises(ValueError, match="time step h must be > 0"):
@@ -68,7 +69,7 @@ def test_contact_map_runs_in_process(ci_rom, tmp_path):
     """run_contact_map on 2 speeds x 0.3 revolutions (GNL off): the result object holds what summary.json says, its
     NFRC is the map of the sweep folder it wrote, and it lists the files it wrote."""
     out = tmp_path / "map"
-    config = contact_map.ContactMapConfig(model=save_reduced_model(ci_rom, tmp_path / "rom.npz"),
+    config = contact_map.ContactMapConfig.from_options(model=save_reduced_model(ci_rom, tmp_path / "rom.npz"),
                                           speeds=(1400, 1450, 2), revolutions=0.3, gnl="off", quiet=True, out=out)
     result = contact_map.run_contact_map(config)
     summary = json.loads((out / "summary.json").read_text())
@@ -108,14 +109,41 @@ def test_contact_map_command_line_is_the_config(tmp_path):
     """The options parse into the config a Python caller writes (numbers as floats: the same cache keys)."""
     argv = ["--model", str(tmp_path / "rom.npz"), "--speeds", "1400", "1450", "2", "--revolutions", "0.3", "--gnl",
             "off", "--mu", "0", "--quiet", "--out", str(tmp_path)]
-    parsed = contact_map.ContactMapConfig(**vars(contact_map.build_parser().parse_args(argv)))
-    assert parsed == contact_map.ContactMapConfig(model=tmp_path / "rom.npz", speeds=(1400, 1450, 2), revolutions=0.3,
-                                                  gnl="off", mu=0, quiet=True, out=tmp_path)
-    assert contact_map.ContactMapConfig(**vars(contact_map.build_parser().parse_args([]))) \
+    parsed = contact_map.ContactMapConfig.from_options(**vars(contact_map.build_parser().parse_args(argv)))
+    assert parsed == contact_map.ContactMapConfig.from_options(model=tmp_path / "rom.npz", speeds=(1400, 1450, 2),
+                                                               revolutions=0.3, gnl="off", mu=0, quiet=True,
+                                                               out=tmp_path)
+    assert contact_map.ContactMapConfig.from_options(**vars(contact_map.build_parser().parse_args([]))) \
         == contact_map.ContactMapConfig()
     argv = ["--cubature", "1e-4", "--cubature-speeds", "1500", "1300"]
-    assert contact_map.ContactMapConfig(**vars(contact_map.build_parser().parse_args(argv))) \
-        == contact_map.ContactMapConfig(cubature=1e-4, cubature_speeds=(1300, 1500, 1300))
+    assert contact_map.ContactMapConfig.from_options(**vars(contact_map.build_parser().parse_args(argv))) \
+        == contact_map.ContactMapConfig.from_options(cubature=1e-4, cubature_speeds=(1300, 1500, 1300))
+
+
+def test_contact_map_config_composes_the_library_objects(tmp_path):
+    """ContactMapConfig is made of the library's own objects (#69): its flat options land on a Casing and a SweepSpec
+    (the ones a sweep runs: the same cache keys), the model to build and the scheme; the options come back out, and a
+    configuration written with the objects equals one written with the options."""
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.studies.sweep import SweepSpec
+
+    options = dict(model=tmp_path / "rom.npz", mu=0.1, hb=0.7e-3, direction="cone", revolutions=3, batch=4,
+                   frequency_cap=120, continuation=5, steady_window=1, speeds=(1400, 1450, 2))
+    config = contact_map.ContactMapConfig.from_options(**options)
+    casing = Casing(mu=0.1, h_b=0.7e-3, direction="cone")
+    assert config.sweep == SweepSpec(revolutions=3.0, casing=casing, batch_size=4)
+    assert config == contact_map.ContactMapConfig(
+        rom=contact_map.MapModel(path=tmp_path / "rom.npz"), scheme=contact_map.MapScheme(frequency_cap=120.0),
+        sweep=SweepSpec(revolutions=3, casing=casing, batch_size=4),
+        continuation=contact_map.MapContinuation(step=5), speeds=(1400, 1450, 2))
+    assert all(config.options()[k] == v for k, v in options.items())
+    assert type(config.sweep.revolutions) is float and type(config.sweep.casing.mu) is float    # the cache keys'
+    changed = config.with_options(mu=0.2)
+    assert changed.sweep.casing == dataclasses.replace(casing, mu=0.2) and changed.rom == config.rom
+    with pytest.raises(TypeError, match="no option frobnicate"):
+        contact_map.ContactMapConfig.from_options(frobnicate=1)
+    with pytest.raises(TypeError, match="sweep must be a SweepSpec"):
+        contact_map.ContactMapConfig(sweep=casing)
 
 
 @pytest.mark.parametrize("fields, flag", [
@@ -137,7 +165,7 @@ def test_contact_map_command_line_is_the_config(tmp_path):
     ({"capped_training": True, "tolerance": 0.05}, "--capped-training")])
 def test_contact_map_config_names_the_option(fields, flag):
     with pytest.raises(ValueError, match=f"^{flag}[ :]"):
-        contact_map.ContactMapConfig(**fields)
+        contact_map.ContactMapConfig.from_options(**fields)
 
 
 @pytest.mark.parametrize("args, flag", [
@@ -163,8 +191,8 @@ def test_report_passes_the_contact_normal_to_both_maps():
     normal it does not know is refused naming the option, before any work."""
     report = blade_report
     config = report.ReportConfig(direction="cone", mu=0.15)
-    assert [c.casing.direction for c in config.map_configs] == ["cone", "cone"]
-    assert [c.casing.mu for c in config.map_configs] == [0.15, 0.15]
+    assert [c.sweep.casing.direction for c in config.map_configs] == ["cone", "cone"]
+    assert [c.sweep.casing.mu for c in config.map_configs] == [0.15, 0.15]
     assert report.onset_text(None) == report.onset_text(float("inf")) == "never"
     with pytest.raises(ValueError, match="^--direction: "):
         report.ReportConfig(direction="z")

@@ -135,10 +135,10 @@ def test_contact_map_takes_a_disk_model(disk_model, tmp_path):
     from rotor37_rom.studies.sweep import load_sweep
 
     model, _ = disk_model
-    config = contact_map.ContactMapConfig(model=save_reduced_model(model, tmp_path / "disk.npz"), sector=5,
-                                          speeds=(1400, 1500, 2), revolutions=1.0, gnl="off", frequency_cap=16.0,
-                                          direction="cone", hb=0.55e-3, quiet=True, out=tmp_path / "map",
-                                          continuation=100.0, continuation_range=(1400.0, 1500.0))
+    config = contact_map.ContactMapConfig.from_options(
+        model=save_reduced_model(model, tmp_path / "disk.npz"), sector=5, speeds=(1400, 1500, 2), revolutions=1.0,
+        gnl="off", frequency_cap=16.0, direction="cone", hb=0.55e-3, quiet=True, out=tmp_path / "map",
+        continuation=100.0, continuation_range=(1400.0, 1500.0))
     result = contact_map.run_contact_map(config)
     run, summary = result.runs["no GNL, cap 16 kHz"], result.summary
     up, down = run.branches["up"].points, run.branches["down"].points
@@ -153,7 +153,16 @@ def test_contact_map_takes_a_disk_model(disk_model, tmp_path):
     assert entry["contact_checks"]["max_penetration"] <= 1e-12
     assert 4 * result.linear_resonance > result.eigenfrequencies[0]
     with pytest.raises(ValueError, match="--sector"):
-        contact_map.ContactMapConfig(model=config.model, sector=36)
+        contact_map.ContactMapConfig.from_options(model=config.rom.path, sector=36)
+    # a speed file lost and the map run again (#70): computed again with its batch, bit-identical
+    lost = sorted(run.folder.glob("omega_*.npz"))[-1]
+    with np.load(lost) as data:
+        before = {k: data[k] for k in ("u_r", "lam", "q_final", "q_prev", "work")}
+    lost.unlink()
+    contact_map.run_contact_map(config)
+    with np.load(lost) as again:
+        for key, value in before.items():
+            np.testing.assert_array_equal(again[key], value, err_msg=key)
 
 
 def test_disk_gnl_map_probes_once(disk_model, tmp_path, monkeypatch):
@@ -164,7 +173,7 @@ def test_disk_gnl_map_probes_once(disk_model, tmp_path, monkeypatch):
     from rotor37_rom.studies import contact_map, contact_scheme
 
     model, _ = disk_model
-    config = contact_map.ContactMapConfig(model=save_reduced_model(model, tmp_path / "disk.npz"),
+    config = contact_map.ContactMapConfig.from_options(model=save_reduced_model(model, tmp_path / "disk.npz"),
                                           speeds=(1400, 1500, 2), revolutions=0.2, gnl="on", frequency_cap=16.0,
                                           direction="cone", hb=0.55e-3, quiet=True, out=tmp_path / "map")
     first = contact_map.run_contact_map(config).runs["GNL, cap 16 kHz"]
@@ -176,7 +185,7 @@ def test_disk_gnl_map_probes_once(disk_model, tmp_path, monkeypatch):
     for module in (contact_map, contact_scheme):                          # the study's own runs and the probe's
         monkeypatch.setattr(module, "simulate", no_simulation)
     again = contact_map.run_contact_map(config).runs["GNL, cap 16 kHz"]
-    linear = CentralDifference(model, nonlinear=False, safety=0.5, frequency_cap=config.frequency_cap_rad_s)
+    linear = CentralDifference(model, nonlinear=False, safety=0.5, frequency_cap=config.scheme.frequency_cap_rad_s)
     assert again.h == first.h <= linear.h
     np.testing.assert_array_equal(again.imap.nfrc, first.imap.nfrc)
 

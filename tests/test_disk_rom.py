@@ -25,7 +25,7 @@ from rotor37_rom.model.disk_basis import DiskBasis, sector_force_basis
 from rotor37_rom.disk.indicators import best_approximation, indicator_histories, performance_indicator
 from rotor37_rom.disk.loads import harmonic_field_load, harmonic_node_load, repeat_count
 from rotor37_rom.disk.harmonics import harmonic_frequencies, sector_harmonics
-from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model
+from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model
 from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model
 from rotor37_rom.dynamics.newmark import simulate_newmark
 from conftest import random_sector  # noqa: E402

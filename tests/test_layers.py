@@ -137,6 +137,25 @@ def test_the_package_has_no_import_cycle():
     assert _cycle({"a": {"b"}, "b": set(), "c": {"a", "b"}}) is None
 
 
+def _subpackage(module: str) -> str:
+    """The part of the package a module belongs to: its subpackage (rotor37_rom.fem, ...) or, for a module at the
+    top (rotor37_rom.npz), itself."""
+    return ".".join(module.split(".")[:2])
+
+
+def test_subpackages_import_one_way():
+    """The architecture reads from the imports: no subpackage reaches itself through another (fem uses the pure
+    algebra of disk and dynamics, the builders use fem, studies use viz; never back), deferred imports included."""
+    graph = {}
+    for module, edges in _package_graph().items():
+        graph.setdefault(_subpackage(module), set()).update(_subpackage(m) for m in edges)
+    graph = {node: edges - {node, "rotor37_rom"} for node, edges in graph.items()}
+    assert _cycle(graph) is None, " -> ".join(_cycle(graph))
+    # a module's edges collapse onto its subpackage: a two-way import between subpackages is a cycle here
+    assert _subpackage("rotor37_rom.disk.builder") == "rotor37_rom.disk" and _subpackage("rotor37_rom.npz") \
+        == "rotor37_rom.npz"
+
+
 def test_scripts_are_not_imported_and_do_not_touch_the_search_path():
     """The library holds the logic: no module of the package, no test, demo or benchmark imports a demo or a benchmark
     (by name or by file), and no file reads or changes the interpreter's module search path (the attribute ``path``

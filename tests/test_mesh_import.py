@@ -333,3 +333,63 @@ def test_own_blade_demo(tmp_path):
     assert summary["r"] == 45 and len(summary["mu_star_per_node"]) == 8
     assert summary["mu_star_le_half"] is not None and 0 < summary["mu_star_le_half"] < 1
     assert not summary["diverged"] and summary["le_max_radial_mm"] > 0
+    assert summary["frame"] == {"axis": "+z", "rotation_sense": -1, "contact_normal": "x",
+                                "tip_stagger_deg": pytest.approx(np.degrees(0.1943543), abs=1e-3)}
+    with pytest.raises(ValueError, match=r"^--rotation-sense \+1 turns this blade with its trailing edge ahead"):
+        run_own_blade(OwnBladeConfig(rotation_sense=1, out=str(tmp_path / "other_sense")))
+    with pytest.raises(ValueError, match=r"^--rotation-sense"):
+        OwnBladeConfig(rotation_sense=0)
+
+
+def _mirrored_deck(deck, path):
+    """The deck's blade mirrored through the plane y = 0 (theta -> -theta: its hand reversed), its tetrahedra
+    reordered to keep a positive volume, its node sets kept."""
+    import meshio
+
+    mesh = meshio.read(deck)
+    points = mesh.points * np.array([1.0, -1.0, 1.0])
+    (block,) = mesh.cells
+    cells = block.data[:, [0, 2, 1, 3]] if block.type == "tetra" else block.data[:, [0, 2, 1, 3, 6, 5, 4, 7, 9, 8]]
+    meshio.write(path, meshio.Mesh(points, [(block.type, cells)], point_sets=mesh.point_sets))
+    return path
+
+
+@pytest.mark.slow
+def test_a_mirrored_blade_turning_the_other_way_is_the_same_blade(ci_blade, tmp_path):
+    """The frame and the hand are the user's (#71): the ci blade mirrored through y = 0 and turning the other way
+    (sense +1) is the same physical blade: the same clamped frequencies, the same contact nodes mirrored, the same
+    sprag-slip onset mu* at every contact node with either normal (x, radial) and the same 1-revolution map at two
+    speeds, to the round-off of the two solves (1e-8); the mirrored blade with rotor 37's sense (-1) is refused
+    (its trailing edge would lead). A sign error in the sliding direction or the normal gives other onsets."""
+    from rotor37_rom.dynamics.casing import Casing, check_hand, contact_matrices
+    from rotor37_rom.dynamics.explicit import CentralDifference, simulate
+    from rotor37_rom.dynamics.friction import sprag_slip_friction
+    from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
+
+    deck = fem.write_sector_mesh(ci_blade, tmp_path / "blade_mm.inp", units="mm")
+    mirror = _mirrored_deck(deck, tmp_path / "mirror_mm.inp")
+    blades = [fem.create_sector_from_file(f, clamp="CLAMP", tip="TIP", units="mm", contact=8, verbose=False)
+              for f in (deck, mirror)]
+    np.testing.assert_allclose(blades[1].tip_nodes, blades[0].tip_nodes * [1.0, -1.0, 1.0], atol=1e-12)
+    assert check_hand(blades[0].tip_nodes, -1) > 0 and check_hand(blades[1].tip_nodes, +1) < 0
+    with pytest.raises(ValueError, match=r"--rotation-sense -1 turns this blade with its trailing edge ahead"):
+        check_hand(blades[1].tip_nodes, -1)
+    config = ReductionConfig(r_c=8, r_md=0, forces="none", keep_basis=False)
+    models = [build_reduced_model(b, config)[0] for b in blades]
+    omega = [np.sqrt(np.linalg.eigvalsh(np.linalg.solve(m.M, m.K))[:4].real) for m in models]
+    np.testing.assert_allclose(omega[1], omega[0], rtol=1e-8)
+    for direction in ("x", "radial"):
+        onsets = []
+        for model, sense in zip(models, (-1, +1)):
+            N, S, _, _ = contact_matrices(model.nodes, model.r, Casing(direction=direction, rotation_sense=sense))
+            onsets.append([sprag_slip_friction(model.K, N, S, [k]) for k in range(N.shape[0])])
+        finite = np.isfinite(onsets[0])
+        assert finite.any() and np.array_equal(finite, np.isfinite(onsets[1])), onsets
+        np.testing.assert_allclose(np.array(onsets[1])[finite], np.array(onsets[0])[finite], rtol=1e-8)
+    runs = [simulate(CentralDifference(m, nonlinear=False, safety=0.5), [1350.0, 1450.0],
+                     Casing(mu=0.15, rotation_sense=sense), revolutions=1.0) for m, sense in zip(models, (-1, +1))]
+    for p in range(2):
+        scale = np.abs(runs[0].u_r[p]).max()
+        assert scale > 1e-5                                       # in contact: the casing pushes the tip 0.1 mm
+        np.testing.assert_allclose(runs[1].u_r[p], runs[0].u_r[p], rtol=0, atol=1e-8 * scale)
+        np.testing.assert_allclose(runs[1].lam[p], runs[0].lam[p], rtol=0, atol=1e-8 * np.abs(runs[0].lam[p]).max())

@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotor37_rom.studies.model_choice import STUDY_FILE, choose_model, load_study, pareto_front, scenes
+from rotor37_rom.pareto import pareto_front
+from rotor37_rom.studies.model_choice import STUDY_FILE, choose_model, load_study, scenes
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -138,11 +139,10 @@ def test_study_options_are_the_library_configurations_fields():
     reference is a field of the configuration its scene measured (``study_file.SCENE_CONFIG``), and a choice's options
     map onto another configuration in one place (``ModelChoice.config_options``: ``global_md`` is
     ``ReductionConfig.global_md_modes``)."""
-    import dataclasses
     import importlib
 
     from rotor37_rom.reduction.builder import ReductionConfig
-    from rotor37_rom.studies.speed_accuracy.study_file import SCENE_CONFIG, config_options
+    from rotor37_rom.studies.speed_accuracy.study_file import SCENE_CONFIG, config_options, option_names
 
     study = load_study()
     assert set(scenes(study)) <= set(SCENE_CONFIG)
@@ -153,7 +153,10 @@ def test_study_options_are_the_library_configurations_fields():
         for options in [c["options"] for c in data["candidates"]] + [data["reference"].get("options", {})]:
             if "model" in options:               # a full-order model: no reduced configuration
                 continue
-            assert set(config_options(options, config)) <= {f.name for f in dataclasses.fields(config)}, scene
+            assert set(config_options(options, config)) <= option_names(config), scene
+            if name == "ContactMapConfig":                   # the options make a configuration, on its parts
+                made = config.from_options(**config_options(options, config)).options()
+                assert all(made[k] == v for k, v in options.items()), scene
     choice = choose_model("clearance", 0.2, study, where=lambda c: "r_c" in c["options"])
     assert ReductionConfig(**choice.config_options(ReductionConfig)).global_md_modes == choice.options["global_md"]
     with pytest.raises(ValueError, match="model are not fields of ReductionConfig"):
@@ -213,15 +216,15 @@ def test_contact_map_takes_the_chosen_options():
         gnl = "both" if both else "off" if chosen["map-linear"] else "on" if chosen["map-gnl"] else None
         if gnl is None:
             with pytest.raises(ValueError, match="--tolerance: tolerance"):
-                cm.ContactMapConfig(tolerance=tol, gnl="both")
+                cm.ContactMapConfig.from_options(tolerance=tol, gnl="both")
             continue
-        config = cm.ContactMapConfig(tolerance=tol, gnl=gnl)
+        config = cm.ContactMapConfig.from_options(tolerance=tol, gnl=gnl)
         used = [s for s in settings if chosen[s]]
         for scene in used:
             choice = choose_model(scene, tol)
             assert choice.name == chosen[scene]
             setting = config.setting(settings[scene])
-            assert all(getattr(setting, k) == v for k, v in choice.options.items() if k != "r_c")
+            assert all(setting.options()[k] == v for k, v in choice.options.items() if k != "r_c")
         assert config.modes[0] == max(choose_model(s, tol).options.get("r_c", 15) for s in used)
 
 
@@ -239,19 +242,19 @@ def test_contact_map_takes_the_disk_choice():
             within = [c for c in scene["candidates"] if _expected(c, scene) <= tol]
             if not within:
                 with pytest.raises(ValueError, match="--tolerance: tolerance"):
-                    cm.ContactMapConfig(disk=True, gnl=setting, tolerance=tol)
+                    cm.ContactMapConfig.from_options(disk=True, gnl=setting, tolerance=tol)
                 continue
             best = min(within, key=lambda c: c["cost"])
-            config = cm.ContactMapConfig(disk=True, gnl=setting, tolerance=tol)
+            config = cm.ContactMapConfig.from_options(disk=True, gnl=setting, tolerance=tol)
             assert config.choice(gnl).name == best["name"]
             opts = best["options"]
             assert config.modes == (opts["r_c"], opts["r_md"]) and config.interface_modes == opts["r_cyclic"]
             chosen = config.setting(gnl)
-            assert all(getattr(chosen, k) == v for k, v in opts.items() if k != "r_c")
+            assert all(chosen.options()[k] == v for k, v in opts.items() if k != "r_c")
             assert config.model_beyond_choice(gnl) == {}
     # GNL off and on in one run: one disk model serves both, the larger of the two choices in each option, and each
     # setting says where the model it runs on exceeds its choice
-    both = cm.ContactMapConfig(disk=True, gnl="both", tolerance=0.2)
+    both = cm.ContactMapConfig.from_options(disk=True, gnl="both", tolerance=0.2)
     chosen = {gnl: both.choice(gnl).options for gnl in (False, True)}
     built = {k: max(c[k] for c in chosen.values()) for k in ("r_c", "r_md", "r_cyclic")}
     assert both.modes == (built["r_c"], built["r_md"]) and both.interface_modes == built["r_cyclic"]
@@ -306,7 +309,7 @@ def test_disk_forced_scenes_score_the_indicator():
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["--tolerance", "2"], "error: --tolerance: tolerance must be in (0, 1)"),
+    (["--tolerance", "2"], "error: --tolerance must be in (0, 1)"),
     (["--tolerance", "1e-9"], "error: --tolerance: tolerance 1e-09 is below every measured model of scene "
                               "'disk-forced-linear'"),
     (["--tolerance", "1e-9", "--gnl-reference", "0:4000", "--patch", "3"],

@@ -571,8 +571,8 @@ class _CubicSprings:
 def test_nonlinear_newmark_is_second_order():
     """simulate_newmark on a 2-DOF hardening (Duffing) chain, strongly nonlinear (g ~ K q at the peak), against an
     ODE reference to 1e-12: halving dt divides the error by 4 +- 15 % (the average-acceleration rule is second
-    order; the band covers the next term of the expansion at these step sizes), and the linear case equals
-    simulate_linear_newmark exactly."""
+    order; the band covers the next term of the expansion at these step sizes), with viscous damping as well, and the
+    linear case equals simulate_linear_newmark exactly."""
     import scipy.integrate
 
     from rotor37_rom.dynamics.newmark import simulate_linear_newmark, simulate_newmark
@@ -597,8 +597,20 @@ def test_nonlinear_newmark_is_second_order():
         errors.append(np.linalg.norm(Q[:, -1] - ref))
     ratios = np.array(errors[:-1]) / np.array(errors[1:])
     assert np.all(np.abs(ratios - 4.0) < 0.6), ratios
-    _, Q1 = simulate_newmark(M, 0.1 * K / 100, K, f, 1e-3, 200)
-    _, Q2 = simulate_linear_newmark(M, 0.1 * K / 100, K, f, 1e-3, 200)
+    # viscous damping (the builders' training runs): second order too, against the damped ODE's reference
+    C = 0.1 * K / 100
+
+    def damped(t, y):
+        q, v = y[:2], y[2:]
+        return np.concatenate([v, np.linalg.solve(M, f(t) - K @ q - C @ v - g.evaluate(q)[:, 0])])
+
+    ref = scipy.integrate.solve_ivp(damped, (0, T_end), np.zeros(4), rtol=1e-12, atol=1e-14).y[:2, -1]
+    errors = [np.linalg.norm(simulate_newmark(M, C, K, f, T_end / n, n, forces=g)[1][:, -1] - ref)
+              for n in (400, 800, 1600)]
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    assert np.all(np.abs(ratios - 4.0) < 0.6), ratios
+    _, Q1 = simulate_newmark(M, C, K, f, 1e-3, 200)
+    _, Q2 = simulate_linear_newmark(M, C, K, f, 1e-3, 200)
     np.testing.assert_array_equal(Q1, Q2)
 
 

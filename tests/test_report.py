@@ -76,7 +76,7 @@ def test_report_at_ci(tmp_path):
 
     for (c, run), gnl in zip(result.runs, (False, True)):
         chosen = config.choice(gnl).options
-        assert all(getattr(c, k) == v for k, v in chosen.items() if k != "r_c")
+        assert all(c.options()[k] == v for k, v in chosen.items() if k != "r_c")
         assert run.label == setting_names(c, c.gnl == "on")[0]
     assert set(written) == set(result.stress) == {run.label for _, run in result.runs}
     for (c, run), (label, p) in zip(result.runs, result.stress.items()):
@@ -87,7 +87,7 @@ def test_report_at_ci(tmp_path):
         pictures = [config.out / "stress" / f"stress_{part}_{tag}.png" for part in ("blade", "disk")]
         assert p.bounded, row
         s, h = p.peak, run.retried.get(p.speed, run.h)
-        start = np.ceil(c.revolutions * 2 * np.pi / p.speed / h) * h
+        start = np.ceil(c.sweep.revolutions * 2 * np.pi / p.speed / h) * h
         assert start <= s["t_max"] <= start + 2 * np.pi / p.speed + h
         assert s["u_le"] <= Casing().c0 + 1e-12
         assert mid[s["cell"]].tolist() == s["location"]

@@ -71,7 +71,7 @@ def _state(ci_rom, amplitude=1e-3):
     """1B + 0.3 x 1T of the reduced model, scaled so that the tip moves by ``amplitude`` (m)."""
     import scipy.linalg
 
-    from rotor37_rom.post.modes import normalise_signs
+    from rotor37_rom.model.modes import normalise_signs
 
     _, V = scipy.linalg.eigh(ci_rom.K, ci_rom.M)
     V = normalise_signs(V[:, :2])                         # the same state on every machine

@@ -10,9 +10,10 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["Casing", "casing_profile", "casing_clearance", "node_angles", "friction_power", "contact_frames",
-           "contact_matrices", "ramp_rate",
-           "ContactSolver", "ContactSetError", "CONE_SLOPE",
+from rotor37_rom.checks import real_number
+
+__all__ = ["Casing", "blade_hand", "check_hand", "casing_profile", "casing_clearance", "node_angles", "friction_power",
+           "contact_frames", "contact_matrices", "ramp_rate", "ContactSolver", "ContactSetError", "CONE_SLOPE",
            "DIRECTIONS"]
 
 
@@ -49,6 +50,27 @@ def ramp_rate(duration: np.ndarray, fraction: float = 0.2, level: float = 0.99) 
 
 CONE_SLOPE = 0.2737          # rotor 37's casing over the tip: r = 251.97 mm - 0.2737 (z - 6.32 mm) (NASA Table V)
 DIRECTIONS = ("x", "radial", "cone")
+
+
+def blade_hand(tip_nodes: np.ndarray) -> float:
+    """The blade's stagger at its tip, as an angle about e_z: theta(TE) - theta(LE) (rad) of its contact nodes (LE
+    first, TE last). A blade turns with its trailing edge behind its leading edge (the relative flow runs from LE to
+    TE against the rotation): rotor 37's is +0.19 rad and it turns towards -theta."""
+    tip = np.asarray(tip_nodes, float).reshape(-1, 3)
+    return float(np.angle(np.exp(1j * (np.arctan2(tip[-1, 1], tip[-1, 0]) - np.arctan2(tip[0, 1], tip[0, 0])))))
+
+
+def check_hand(tip_nodes: np.ndarray, rotation_sense: int, option: str = "--rotation-sense",
+               below: float = np.radians(0.5)) -> float:
+    """The blade's tip stagger (``blade_hand``), after checking that the rotation sense turns it with its trailing
+    edge behind: ValueError naming ``option`` otherwise (a mirrored blade, or a blade given the other machine's
+    sense), with the sense its hand asks for. A tip staggered less than ``below`` cannot tell: accepted."""
+    stagger = blade_hand(tip_nodes)
+    if abs(stagger) >= below and stagger * rotation_sense > 0:
+        raise ValueError(f"{option} {rotation_sense:+d} turns this blade with its trailing edge ahead of its leading "
+                         f"edge (theta(TE) - theta(LE) = {np.degrees(stagger):+.1f} deg at the tip: the hand of a "
+                         f"mirrored rotor 37); its hand asks for {option} {-rotation_sense:+d}")
+    return stagger
 
 
 def contact_frames(nodes: np.ndarray, direction: str = "x", rotation_sense: int = -1, cone_slope: float = CONE_SLOPE):
@@ -134,22 +156,17 @@ class Casing:
     cone_slope: float = CONE_SLOPE
 
     def __post_init__(self):
-        if not (0.0 < self.c0 < 0.05):
-            raise ValueError(f"casing clearance c0 must be in (0, 0.05) m, got {self.c0}")
-        if not (0.0 <= self.h_b < 0.05):
-            raise ValueError(f"bump height h_b must be in [0, 0.05) m, got {self.h_b}")
-        if not (0.0 <= self.mu <= 2.0):
-            raise ValueError(f"friction coefficient mu must be in [0, 2], got {self.mu}")
-        if not (0.0 < self.ramp_fraction <= 1.0) or not (0.0 < self.ramp_level < 1.0):
-            raise ValueError("ramp_fraction must be in (0, 1] and ramp_level in (0, 1)")
+        real_number("casing clearance c0", self.c0, 0, 0.05, open_low=True, open_high=True, unit=" m")
+        real_number("bump height h_b", self.h_b, 0, 0.05, open_high=True, unit=" m")
+        real_number("friction coefficient mu", self.mu, 0, 2)
+        real_number("ramp_fraction", self.ramp_fraction, 0, 1, open_low=True)
+        real_number("ramp_level", self.ramp_level, 0, 1, open_low=True, open_high=True)
         if self.direction not in DIRECTIONS:
             raise ValueError(f"direction must be one of {DIRECTIONS}, got {self.direction!r}")
-        if not (0.0 <= self.cone_slope <= 1.0):
-            raise ValueError(f"cone_slope must be in [0, 1] (a casing half-angle up to 45 deg), got {self.cone_slope}")
-        if self.rotation_sense not in (-1, 1):
-            raise ValueError(f"rotation_sense must be -1 or +1, got {self.rotation_sense}")
-        if not (0.0 < self.width < np.pi / 2):
-            raise ValueError(f"bump width must be in (0, pi/2) rad, got {self.width}")
+        real_number("cone_slope", self.cone_slope, 0, 1)     # a casing half-angle up to 45 deg
+        if self.rotation_sense not in (-1, 1) or isinstance(self.rotation_sense, bool):
+            raise ValueError(f"rotation_sense must be -1 or +1, got {self.rotation_sense!r}")
+        real_number("bump width", self.width, 0, np.pi / 2, open_low=True, open_high=True, unit=" rad")
 
     @property
     def p0(self) -> float:

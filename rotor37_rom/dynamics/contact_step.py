@@ -26,6 +26,8 @@ def per_simulation_casings(casings: Casing | Sequence[Casing] | None, P: int) ->
         return None
     if isinstance(casings, Casing):
         casings = [casings] * P
+    if isinstance(casings, (str, bytes)) or not all(isinstance(c, Casing) for c in casings):
+        raise TypeError(f"casing must be a Casing, one per simulation or None, got {casings!r}")
     casings = list(casings)
     if len(casings) != P:
         raise ValueError(f"casing: give one Casing or one per simulation ({P}), got {len(casings)}")

@@ -27,6 +27,7 @@ above it, for linear and GNL models; with GNL the step then comes from the tange
 """
 from __future__ import annotations
 
+import contextlib
 import copy
 import dataclasses
 import json
@@ -37,10 +38,12 @@ from typing import Callable, Sequence
 import numpy as np
 import scipy.linalg
 
+from rotor37_rom.checks import real_number
 from rotor37_rom.dynamics.casing import Casing, contact_matrices
 from rotor37_rom.dynamics.contact_step import ContactStep, per_simulation_casings, row_operator
 from rotor37_rom.dynamics.recorder import LoopState, Recorder, loop_state, save_loop_state
 from rotor37_rom.disk.harmonics import HarmonicBlocks
+from rotor37_rom.interruption import checkpointing, requested, stop_if_requested
 
 __all__ = ["CentralDifference", "SimulationResult", "SimulationDiverged", "capped_mass", "gnl_time_step",
            "gnl_step_report", "step_outliers", "tangent_frequencies",
@@ -238,8 +241,15 @@ class CentralDifference:
     def __init__(self, model, h: float | None = None, nonlinear: bool = True, safety: float = 0.9,
                  force: bool = False, damping: bool = True, massless_boundary: bool = False,
                  frequency_cap: float | None = None):
-        if not (0.0 < safety <= 1.0):
-            raise ValueError(f"safety factor must be in (0, 1], got {safety}")
+        missing = [name for name in ("r", "M", "K", "C", "nodes", "forces") if not hasattr(model, name)]
+        if missing:
+            raise TypeError(f"model must be a reduced model (model.reduced.ReducedModel), got {type(model).__name__}"
+                            f" without {', '.join(missing)}")
+        real_number("safety factor", safety, 0, 1, open_low=True)
+        if h is not None:
+            real_number("time step h", h, 0, open_low=True, unit=" s")
+        if frequency_cap is not None:
+            real_number("frequency_cap", frequency_cap, 0, open_low=True, unit=" rad/s")
         self.model = model
         self.r = model.r
         self.boundary_rows = np.asarray(model.nodes.boundary_rows, dtype=np.int64)   # node displacements in q
@@ -450,6 +460,8 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         raise ValueError(f"on_blowup must be 'raise' or 'flag', got {on_blowup!r}")
     if record_every < 1:
         raise ValueError(f"record_every must be >= 1, got {record_every}")
+    if not isinstance(scheme, CentralDifference):
+        raise TypeError(f"scheme must be a CentralDifference, got {type(scheme).__name__}")
     h, r = scheme.h, scheme.r
     steps = _run_steps(omega, h, revolutions, n_steps)
     run_length = steps * h if duration is None else np.broadcast_to(np.asarray(duration, float), (P,))
@@ -469,8 +481,9 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         _start_works(st, scheme, energy_forces, energy, forcing is not None, steps, record_every)
     Q, Qp, work = st.Q, st.Qp, st.work
 
-    with np.errstate(over="ignore", invalid="ignore"):     # a blow-up is detected and reported below
-        t_wall = time.perf_counter()
+    with np.errstate(over="ignore", invalid="ignore"), \
+            (checkpointing() if checkpoint is not None else contextlib.nullcontext()):   # SIGTERM: saved, then stop
+        t_wall, elapsed = time.perf_counter(), st.elapsed        # the wall of earlier sittings carried on
         last_ckpt, ckpt_interval = t_wall, checkpoint_seconds
         active = np.nonzero(~st.done)[0]
         n_max = int(steps.max())
@@ -502,16 +515,21 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
                 rec.record(st, active, Qn, lam_now,
                            discrete_energy(scheme.M, scheme.K, energy_forces, Qn, Qa, h) if energy else None)
             if n % check_every == 0 or n in ends:
+                st.elapsed = elapsed + (time.perf_counter() - t_wall)       # what a finished run's record says
                 active = _end_runs(st, active, Qn, scheme, steps, blowup_limit, on_blowup, on_finish, rec)
             if progress is not None and (n % check_every == 0 or not active.size):
                 progress(stepped)
                 stepped = 0
             if checkpoint is not None and time.perf_counter() - last_ckpt > ckpt_interval:
                 t_save = time.perf_counter()
+                st.elapsed = elapsed + (t_save - t_wall)
                 checkpoint(st)
                 last_ckpt = time.perf_counter()
                 if checkpoint_seconds > 0:                 # 0: every step (as asked); else <= 2 % of the wall
                     ckpt_interval = max(checkpoint_seconds, 50.0 * (last_ckpt - t_save))
+            if checkpoint is not None and requested() is not None:
+                st.elapsed = elapsed + (time.perf_counter() - t_wall)
+                stop_if_requested(lambda: checkpoint(st))
     wall = time.perf_counter() - t_wall
     recs = [rec.record_of(st, p) for p in range(P)]
     return SimulationResult(

@@ -26,6 +26,7 @@ class LoopState:
         energy: per run (n_rec,) discrete energies, or None; q_rec: per run (r, n_rec) states, or None.
         work: (4, P) running works (``WORK_TERMS``), or None before they are set up; work_rec: per run (4, n_rec)
             running works at the records (energy runs), or None.
+        elapsed: wall time (s) the loop has run these runs for, over every sitting (a resumed run adds its own).
     """
 
     n: int
@@ -43,6 +44,7 @@ class LoopState:
     q_rec: list | None = None
     work: np.ndarray | None = None
     work_rec: list | None = None
+    elapsed: float = 0.0
 
 
 class Recorder:
@@ -110,7 +112,7 @@ class Recorder:
                 "q_prev": st.Qp[:, p].copy(), "omega": float(self.omega[p]), "max_penetration": float(st.max_pen[p]),
                 "min_multiplier": float(st.min_lam[p]), "friction_power": float(st.fric_pow[p]),
                 "contact_steps": int(st.contact_steps[p]), "diverged_step": int(st.diverged[p]),
-                "work": st.work[:, p].copy()}
+                "work": st.work[:, p].copy(), "wall": float(st.elapsed)}
 
 
 def save_loop_state(path: "str | Path", st: LoopState, speeds: np.ndarray, **extra) -> None:
@@ -121,7 +123,7 @@ def save_loop_state(path: "str | Path", st: LoopState, speeds: np.ndarray, **ext
 
     arrays = {**extra, "speeds": np.asarray(speeds, float), "n": st.n, "Q": st.Q, "Qp": st.Qp,
               "done": st.done, "max_pen": st.max_pen, "min_lam": st.min_lam, "fric_pow": st.fric_pow,
-              "contact_steps": st.contact_steps, "diverged": st.diverged, "work": st.work}
+              "contact_steps": st.contact_steps, "diverged": st.diverged, "work": st.work, "elapsed": st.elapsed}
     for p in range(len(st.u_r)):
         arrays[f"u_r{p}"] = st.u_r[p]
         arrays[f"lam{p}"] = st.lam[p]
@@ -136,4 +138,5 @@ def loop_state(data, P: int) -> LoopState:
     return LoopState(n=int(data["n"]), **{k: data[k] for k in _ARRAYS},
                      work=data["work"] if "work" in data else None,   # older checkpoints: works from the resumed step
                      u_r=[data[f"u_r{p}"] for p in range(P)], lam=[data[f"lam{p}"] for p in range(P)],
-                     q_rec=[data[f"q_rec{p}"] for p in range(P)] if "q_rec0" in data else None, energy=None)
+                     q_rec=[data[f"q_rec{p}"] for p in range(P)] if "q_rec0" in data else None, energy=None,
+                     elapsed=float(data["elapsed"]) if "elapsed" in data else 0.0)    # older checkpoints: unknown

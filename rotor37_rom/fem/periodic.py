@@ -14,6 +14,7 @@ Part of the dolfinx adapter (``rotor37_rom.fem``); serial. The references the re
 """
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import logging
 import time
@@ -27,6 +28,7 @@ from rotor37_rom.dynamics.casing import (Casing, casing_clearance, contact_frame
                                          ramp_rate)
 from rotor37_rom.disk.symmetry import repeating_sector_maps
 from rotor37_rom.dynamics.newmark import Newmark, StepContact
+from rotor37_rom.interruption import checkpointing, requested, stop_if_requested
 from rotor37_rom.npz import save_npz
 
 from .operators import (SvkOperators, _require_serial, assemble_mass, assemble_stiffness, assemble_tangent_scipy,
@@ -293,28 +295,32 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
         LOG.info("resuming from %s at step %d", checkpoint, start)
     stepper.refreshes = refreshes
 
-    for k in range(start, n_steps + 1):
-        x_old = x
-        x, v, a, it, lam = stepper.step(x, v, a, k * dt, dt, contact is not None and lams[-1].any())
-        its.append(it)
-        per_sector = system.fields(x)
-        tips.append(tip_values(per_sector))
-        if contact is not None:
-            lams.append(lam)
-            checks[0] = max(checks[0], -(clearance(k * dt) - contact.N @ x).min())
-            on = lam > 0
-            if on.any():                                         # sliding: rotation + the node's own motion
-                power = friction_power(casing.mu * lam, omega, contact.radius, contact.S @ (x - x_old) / dt)
-                checks[1] = max(checks[1], float(power[on].max()))
-        if k % snapshot_every == 0:
-            fields.append(per_sector)
-            snaps.append(k)
-        if checkpoint is not None and (time.perf_counter() - saved > checkpoint_seconds or k == n_steps):
-            save_npz(checkpoint, signature=signature, x=x, v=v, a=a, tips=np.array(tips),
-                     fields=np.array(fields).reshape((-1, n_repeat, sector.n_dofs)),
-                     snaps=np.array(snaps, np.int64), its=np.array(its, np.int64), refreshes=stepper.refreshes,
-                     step=k, elapsed=time.perf_counter() - t_wall, lams=np.array(lams), checks=checks)
-            saved = time.perf_counter()
+    # SIGTERM or SIGINT in a checkpointed run: the checkpoint written at the step, then the run stops
+    with checkpointing() if checkpoint is not None else contextlib.nullcontext():
+        for k in range(start, n_steps + 1):
+            x_old = x
+            x, v, a, it, lam = stepper.step(x, v, a, k * dt, dt, contact is not None and lams[-1].any())
+            its.append(it)
+            per_sector = system.fields(x)
+            tips.append(tip_values(per_sector))
+            if contact is not None:
+                lams.append(lam)
+                checks[0] = max(checks[0], -(clearance(k * dt) - contact.N @ x).min())
+                on = lam > 0
+                if on.any():                                         # sliding: rotation + the node's own motion
+                    power = friction_power(casing.mu * lam, omega, contact.radius, contact.S @ (x - x_old) / dt)
+                    checks[1] = max(checks[1], float(power[on].max()))
+            if k % snapshot_every == 0:
+                fields.append(per_sector)
+                snaps.append(k)
+            if checkpoint is not None and (time.perf_counter() - saved > checkpoint_seconds or k == n_steps
+                                           or requested() is not None):
+                save_npz(checkpoint, signature=signature, x=x, v=v, a=a, tips=np.array(tips),
+                         fields=np.array(fields).reshape((-1, n_repeat, sector.n_dofs)),
+                         snaps=np.array(snaps, np.int64), its=np.array(its, np.int64), refreshes=stepper.refreshes,
+                         step=k, elapsed=time.perf_counter() - t_wall, lams=np.array(lams), checks=checks)
+                saved = time.perf_counter()
+                stop_if_requested(lambda: None)                        # saved just above
     refreshes = stepper.refreshes
     LOG.info("repeating-sector Newmark: %d steps, %d factorisations, %.1f s", n_steps, refreshes,
              time.perf_counter() - t_wall)

@@ -15,7 +15,7 @@ from dolfinx import fem
 
 from rotor37_rom import forms
 from rotor37_rom.disk.symmetry import harmonic_indices
-from rotor37_rom.post.modes import classify_blade_modes
+from rotor37_rom.model.modes import classify_blade_modes
 
 from .cyclic import CyclicOperators
 from .operators import (JIT_PARAMS, SvkOperators, _assemble_matrix, assemble_mass, assemble_stiffness,

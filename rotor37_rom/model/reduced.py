@@ -11,6 +11,7 @@ from typing import Sequence
 
 import numpy as np
 
+from rotor37_rom.checks import readable_file
 from rotor37_rom.model.disk_basis import DiskBasis
 from rotor37_rom.forces.protocol import NonlinearForce
 from rotor37_rom.forces.sector import SectorForces
@@ -125,8 +126,7 @@ def saved_model_key(path: str | Path) -> str:
     (np.load reads an .npz's arrays lazily: the matrices are not read); refuses a missing or corrupted file, or one
     whose stored key does not match its metadata, as ``load_reduced_model`` does."""
     path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"reduced model file {path} does not exist")
+    readable_file("reduced model file", path)
     try:
         with np.load(path, allow_pickle=False) as data:
             info = json.loads(str(data["meta"]))
@@ -149,8 +149,7 @@ def _checked_key(info: dict, path: Path) -> str:
 def load_reduced_model(path: str | Path, expected_key: str | None = None) -> ReducedModel:
     """Read a reduced model; refuse a corrupted file or one whose key differs from ``expected_key``."""
     path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"reduced model file {path} does not exist")
+    readable_file("reduced model file", path)
     try:
         with np.load(path, allow_pickle=False) as data:
             arrays = {k: data[k] for k in data.files}

@@ -15,8 +15,9 @@ import numpy as np
 
 from rotor37_rom import __version__, fem
 from rotor37_rom.forces.cubature import train_ecsw
-from rotor37_rom.post.modes import normalise_signs
+from rotor37_rom.model.modes import normalise_signs
 from rotor37_rom.forces.tensors import QuadratureForces, compute_polynomial_forces
+from rotor37_rom.reduction.config import ReductionConfig
 from rotor37_rom.reduction.craig_bampton import (CRITERIA, GLOBAL_MD_MAX, CraigBamptonBasis, craig_bampton,
     fixed_interface_correction, lift_states, modal_damping, select_pairs, selection_weights)
 from rotor37_rom.model.nodes import NodeMap
@@ -29,66 +30,6 @@ __all__ = ["ReductionConfig", "build_reduced_model", "hyper_reduce", "release_fr
            "training_states", "clearance_consumption_study"]
 
 LOG = logging.getLogger(__name__)
-FORCE_METHODS = ("intrusive", "quadrature", "step", "ecsw", "none")
-
-
-@dataclasses.dataclass(frozen=True)
-class ReductionConfig:
-    """Reduction parameters (SI units).
-
-    Attributes:
-        r_c: fixed-interface modes (>= 1).
-        r_md: modal derivatives kept (0 .. (r_b + r_c)(r_b + r_c + 1)/2).
-        criterion: MD selection: 'MMI', 'MI2a', 'MI2b', 'SMVW', 'random'.
-        md_method: 'exact' (UFL second derivative, eq. 17) or 'fd' (finite-difference tangent, eq. 19).
-        fd_step: displacement amplitude (m) of the finite-difference step (largest nodal displacement of eps phi_k).
-        forces: 'intrusive' (exact tensors), 'quadrature' (exact, tensor-free), 'step', 'ecsw', 'none'.
-        step_amplitude: largest displacement (m) of each enforced STEP displacement.
-        ecsw_tol: relative training tolerance of ECSW; ecsw_states: number of training states.
-        training_force: amplitude (N) of the harmonic training force at node LE along e_z (§3.3.1: 400 N).
-        training_omega: its pulsation (rad/s) (§3.3.1: 4000); one period, 400 Newmark steps.
-        keep_basis: store Phi in the model (to rebuild fields).
-        global_md_modes: n > 0 adds the modal derivatives of all pairs of the first n clamped normal modes (1B, 1T,
-            2B, ...), fixed-interface corrected: n(n+1)/2 vectors that carry the global quadratic kinematics
-            (foreshortening) which otherwise needs hundreds of constraint-mode pairs. 0 = the paper's basis.
-        contact_patch: 0 (the paper's point contact: the boundary DOFs are the tip nodes' own), or a radius (m):
-            each contact node's boundary coordinates are the area-mean displacement of the tip facets within it
-            (``fem.tip_patch_interface``), so its contact force acts as a uniform traction on that patch and no
-            constraint mode or modal derivative carries a point load's singular field (issue #23).
-    """
-
-    r_c: int = 15
-    r_md: int = 30
-    criterion: str = "MI2b"
-    md_method: str = "exact"
-    fd_step: float = 1e-6
-    forces: str = "intrusive"
-    step_amplitude: float = 1e-3
-    ecsw_tol: float = 1e-3
-    ecsw_states: int = 80
-    training_force: float = 400.0
-    training_omega: float = 4000.0
-    keep_basis: bool = True
-    global_md_modes: int = 0
-    contact_patch: float = 0.0
-
-    def __post_init__(self):
-        if not (np.isfinite(self.contact_patch) and 0 <= self.contact_patch <= 0.01):
-            raise ValueError(f"contact_patch must be in [0, 0.01] m, got {self.contact_patch}")
-        if self.r_c < 1:
-            raise ValueError(f"r_c must be >= 1, got {self.r_c}")
-        if self.r_md < 0:
-            raise ValueError(f"r_md must be >= 0, got {self.r_md}")
-        if not (0 <= self.global_md_modes <= GLOBAL_MD_MAX):
-            raise ValueError(f"global_md_modes must be in [0, {GLOBAL_MD_MAX}], got {self.global_md_modes}")
-        if self.criterion not in CRITERIA:
-            raise ValueError(f"criterion must be one of {CRITERIA}, got {self.criterion!r}")
-        if self.md_method not in ("exact", "fd"):
-            raise ValueError(f"md_method must be 'exact' or 'fd', got {self.md_method!r}")
-        if self.forces not in FORCE_METHODS:
-            raise ValueError(f"forces must be one of {FORCE_METHODS}, got {self.forces!r}")
-        if not (0 < self.fd_step < 1e-2) or not (0 < self.step_amplitude < 1e-1):
-            raise ValueError("fd_step must be in (0, 1e-2) m and step_amplitude in (0, 0.1) m")
 
 
 def mesh_signature(sector: fem.Sector) -> str:
@@ -199,6 +140,16 @@ def cached_model(metadata: dict, cache_dir: str | Path | None, prefix: str):
     return cache, None
 
 
+def begin_build(sector, ops, metadata: dict, cache_dir: str | Path | None, prefix: str):
+    """The start of a build: (cache path, the cached model or None, the report, its ``Laps``, the free operators
+    (K_f, M_f, free) or None when the model is cached)."""
+    cache, cached = cached_model(metadata, cache_dir, prefix)
+    if cached is not None:
+        return cache, cached, {"cached": True}, None, None
+    report: dict = {"cached": False}
+    return cache, None, report, Laps(report), fem.assemble_free_operators(sector, ops)
+
+
 class Laps:
     """Wall time between calls, stored under report['timings'][name]."""
 
@@ -227,12 +178,10 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
         del meta_config["contact_patch"]
     metadata = {"config": meta_config, "boundary_dofs": boundary_dofs.tolist(),
                 "mesh": mesh_signature(sector), "source": sector.source, "version": __version__}
-    cache, cached = cached_model(metadata, cache_dir, "rom")
+    cache, cached, report, lap, operators = begin_build(sector, ops, metadata, cache_dir, "rom")
     if cached is not None:
-        return cached, {"cached": True}
-    report: dict = {"cached": False}
-    lap = Laps(report)
-    K_f, M_f, free = fem.assemble_free_operators(sector, ops)
+        return cached, report
+    K_f, M_f, free = operators
     n_full = sector.V.dofmap.index_map.size_local * sector.V.dofmap.index_map_bs
     position = np.searchsorted(free, boundary_dofs)
     if boundary_dofs.size == 0 or boundary_dofs.min() < 0 or boundary_dofs.max() >= n_full \
@@ -411,7 +360,7 @@ def clearance_consumption_study(sector, mode: str = "1B", zeta: float = 1e-3, n_
     import time
 
     from rotor37_rom.post.clearance import ClearanceCurves, clearance_change
-    from rotor37_rom.post.modes import classify_blade_modes
+    from rotor37_rom.model.modes import classify_blade_modes
     from rotor37_rom.model.reduced import solve_reduced_static
 
     if mode not in ("1B", "1T"):

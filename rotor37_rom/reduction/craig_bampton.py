@@ -155,7 +155,7 @@ def craig_bampton(K, M, boundary, n_interface: int,
     omega, V = eigensolve(K_ii, M_ii, n_interface)
     V = np.asarray(V, float)
     V = V / np.sqrt(np.einsum("ij,ij->j", V, M_ii @ V))
-    from rotor37_rom.post.modes import normalise_signs
+    from rotor37_rom.model.modes import normalise_signs
 
     Theta = np.zeros((n, n_interface))
     Theta[interior] = normalise_signs(V)

@@ -2,7 +2,7 @@
 
 The blade is meshed with gmsh (the built-in parametric blade, and the exact loft of NASA Table IV when
 ``../shared/data/rotor37`` is present or ``table`` names the file), its first clamped modes computed with SLEPc,
-1B/1T/2B identified from the motion of the tip's leading and trailing edges (``post.modes.classify_blade_modes``:
+1B/1T/2B identified from the motion of the tip's leading and trailing edges (``model.modes.classify_blade_modes``:
 bending moves them together, torsion in opposite senses), and the frequencies compared with Delhez et al. (2023). XDMF
 files, pyvista pictures of the mode shapes and one summary JSON per blade go to ``out``.
 
@@ -18,9 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
+from rotor37_rom.checks import before_work
 from rotor37_rom.cli import resolve_table
 from rotor37_rom.geometry.blade import MESH_PRESETS
-from rotor37_rom.post.modes import PAPER_CLAMPED_OMEGA
+from rotor37_rom.model.modes import PAPER_CLAMPED_OMEGA
 
 __all__ = ["BladeModesConfig", "BladeModes", "BladeModesResult", "run_blade_modes", "study_blade", "write_summary"]
 
@@ -104,7 +105,7 @@ def study_blade(config: BladeModesConfig, table: Path | None, comm) -> tuple[Bla
     """Mesh one blade, compute its clamped modes, write the XDMF (and PNGs); returns its modes and the files."""
     from rotor37_rom import fem
     from rotor37_rom.geometry.tables import default_data_dir, read_hub_shroud_table
-    from rotor37_rom.post.modes import classify_blade_modes
+    from rotor37_rom.model.modes import classify_blade_modes
     from rotor37_rom.viz.plotting import render_mode_shapes, write_xdmf
 
     t0 = time.perf_counter()
@@ -143,6 +144,7 @@ def run_blade_modes(config: BladeModesConfig, comm=None) -> BladeModesResult:
     from mpi4py import MPI
 
     comm = comm or MPI.COMM_WORLD
+    before_work({"--out": config.out})
     blades, files = [], []
     for table in config.blades:
         blade, written = study_blade(config, table, comm)

@@ -26,8 +26,9 @@ from pathlib import Path
 
 import numpy as np
 
+from rotor37_rom.checks import before_work
 from rotor37_rom.post.clearance import delta_range_within
-from rotor37_rom.post.modes import PAPER_CLAMPED_OMEGA
+from rotor37_rom.model.modes import PAPER_CLAMPED_OMEGA
 from rotor37_rom.studies.blade_modes import BladeModesConfig, BladeModesResult, run_blade_modes
 from rotor37_rom.studies.clearance_consumption import (PAPER_LINEAR_RANGE, ReducedBladeConfig, ReducedBladeResult,
     run_reduced_blade)
@@ -93,8 +94,8 @@ class ReportConfig:
         self.modes_config, self.clearance_config                          # noqa: B018 (each checks its options)
         maps = self.map_configs[0]                                        # the maps' checks, and their numbers
         object.__setattr__(self, "speeds", maps.speeds)
-        object.__setattr__(self, "revolutions", maps.revolutions)
-        object.__setattr__(self, "mu", maps.mu)
+        object.__setattr__(self, "revolutions", maps.sweep.revolutions)
+        object.__setattr__(self, "mu", maps.sweep.casing.mu)
 
     @property
     def modes_config(self) -> BladeModesConfig:
@@ -129,7 +130,7 @@ class ReportConfig:
             options = {} if choice is None else {k: v for k, v in choice.options.items() if k != "r_c"}
             if choice is None and not gnl:
                 options["frequency_cap"] = self.linear_cap
-            configs.append(ContactMapConfig(gnl="on" if gnl else "off", **options, **common))
+            configs.append(ContactMapConfig.from_options(gnl="on" if gnl else "off", **options, **common))
         return configs
 
 
@@ -208,7 +209,7 @@ def peak_stress(config: ContactMapConfig, run: MapResult, sector, model, recover
     from rotor37_rom.studies.sweep import sweep_folder
 
     nonlinear = config.gnl == "on"
-    speed = resonance(run, config.revolutions)
+    speed = resonance(run, config.sweep.revolutions)
     if not np.isfinite(speed):
         return PeakStress(run.label, nonlinear, speed, False)
     scheme = time_scheme(config, model, nonlinear, None, h=run.h)                 # the map's forces (its cubature)
@@ -255,6 +256,7 @@ def run_report(config: ReportConfig) -> ReportResult:
 
     if MPI.COMM_WORLD.size > 1:
         raise ValueError("demos/report.py runs serially (demos/contact_map.py runs a map under mpirun)")
+    before_work({"--out": config.out})
     seconds = {}
 
     def lap(name: str, t0: float) -> None:
@@ -328,13 +330,13 @@ def summary_table(result: ReportResult) -> Table:
     start, stop, n = cfg.speeds
     for c, run in result.runs:
         paper = PAPER["zero IC, GNL" if c.gnl == "on" else "zero IC, no GNL"]
-        w = resonance(run, c.revolutions)
+        w = resonance(run, c.sweep.revolutions)
         ours = (f"{w:.0f} ({amplitude_at(run, w) * 1e3:.2f} mm; {percent(w / lin - 1)} over omega_1 / 4)"
                 if np.isfinite(w) else "no bounded speed dominated by 1B/EO4")
         rows.append([f"zero-IC 1B/EO4 resonance, {run.label} (rad/s)", ours,
                      f"{paper:.0f} ({percent(paper / PAPER['linear 1B/EO4'] - 1)})",
-                     f"mu = {c.mu:g}, normal {c.direction}, {n:d} speed{'s' * (n > 1)} in {start:g}-{stop:g} x "
-                     f"{c.revolutions:g} rev (paper: mu = 0.15, "
+                     f"mu = {c.sweep.casing.mu:g}, normal {c.sweep.casing.direction}, {n:d} speed{'s' * (n > 1)} in "
+                     f"{start:g}-{stop:g} x {c.sweep.revolutions:g} rev (paper: mu = 0.15, "
                      "every 2 rad/s x 200 rev)"])
     past = [f"{run.label}: {', '.join(f'{w:.0f}' for w in run.speeds[run.diverged])} rad/s"
             for _, run in result.runs if run.diverged.any()]
@@ -415,7 +417,7 @@ def maps_section(result: ReportResult) -> Section:
     rows, figures = [], []
     for c, run in result.runs:
         paper = PAPER["zero IC, GNL" if c.gnl == "on" else "zero IC, no GNL"]
-        w = resonance(run, c.revolutions)
+        w = resonance(run, c.sweep.revolutions)
         largest = (f"{run.peak_speed:.0f} ({np.nanmax(run.nfrc) * 1e3:.3g} mm)" if np.isfinite(run.peak_speed)
                    else "none")
         rows.append([run.label, run.h, w, amplitude_at(run, w) * 1e3 if np.isfinite(w) else float("nan"), largest,
@@ -510,7 +512,8 @@ def write_html(result: ReportResult) -> Path:
              f"(results of an earlier run with the same settings are reused): "
              f"{', '.join(f'{k} {v:.0f} s' for k, v in result.seconds.items())}. The measured record at the paper's "
              "scale is in docs/results.md."]
-    params = {"config": cfg, "model": result.maps[-1].summary.get("sizes"), "casing": vars(cfg.map_configs[0].casing),
+    params = {"config": cfg, "model": result.maps[-1].summary.get("sizes"),
+              "casing": vars(cfg.map_configs[0].sweep.casing),
               "maps": {run.label: {"h (s)": run.h, "h_crit (s)": run.h_crit} for _, run in result.runs},
               "wall times (s)": {k: round(v, 1) for k, v in result.seconds.items()}}
     sections = [modes_section(result), clearance_section(result), maps_section(result), stress_section(result)]

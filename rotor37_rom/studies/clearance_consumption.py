@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rotor37_rom.checks import before_work
 from rotor37_rom.cli import resolve_table
 from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.model.reduced import ReducedModel
@@ -229,6 +230,7 @@ def run_reduced_blade(config: ReducedBladeConfig) -> ReducedBladeResult:
 
     if MPI.COMM_WORLD.size > 1:
         raise ValueError("demos/reduced_blade.py runs serially")
+    before_work({"--out": config.out})
     sector = fem.create_blade_sector(MPI.COMM_SELF, table=resolve_table(config.table), preset=config.preset)
     ops = fem.create_svk_operators(sector)
     omega = np.asarray(fem.compute_clamped_modes(sector, 3, ops).omega)

@@ -1,5 +1,6 @@
-"""The contact-map study's configuration (demos/contact_map.py): ``ContactMapConfig``, one field per command-line
-option with the same defaults, and that command line (``build_parser``).
+"""The contact-map study's configuration (demos/contact_map.py): ``ContactMapConfig``, composed of the library's
+objects (the model to build or load, the time scheme, a ``SweepSpec`` with its ``Casing``, the continuation), and its
+command line (``build_parser``), whose flat options map onto it (``OPTIONS``, ``ContactMapConfig.from_options``).
 
 Every check names the option it concerns, so that the command line can report it as is. Numbers are stored as floats,
 as the command line gives them: the cache keys of sweeps and cubatures hash them, and a run from Python then reuses the
@@ -15,22 +16,24 @@ import dataclasses
 import functools
 import numbers
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
+from rotor37_rom.checks import fits_in_memory, flagged, real_number, whole_number
 from rotor37_rom.cli import ArgumentParser
-from rotor37_rom.dynamics.casing import Casing
 from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.model.reduced import ReducedModel
-from rotor37_rom.reduction.craig_bampton import GLOBAL_MD_MAX
+from rotor37_rom.reduction.config import DiskReductionConfig, ReductionConfig
 from rotor37_rom.studies.sweep import SweepSpec
 
-__all__ = ["ContactMapConfig", "build_parser", "map_model", "continued_revolutions", "GNL_SETTINGS", "PRECISIONS",
-           "N_SECTORS"]
+__all__ = ["ContactMapConfig", "MapModel", "MapScheme", "MapContinuation", "OPTIONS", "build_parser", "map_model",
+           "continued_revolutions", "GNL_SETTINGS", "PRECISIONS", "N_SECTORS"]
 
 GNL_SETTINGS = {"off": (False,), "on": (True,), "both": (False, True)}
 PRECISIONS = ("double", "single")
 N_SECTORS = 36                                     # rotor 37's blades (the disk sector of fem.create_disk_sector)
+MAX_SPEED = 1e5                                    # rad/s (about 1 million rpm): above any bladed rotor's
 
 
 def map_model(tolerance: float, gnl: bool, fallback: bool = False, disk: bool = False):
@@ -61,31 +64,84 @@ def continued_revolutions(revolutions: float) -> float:
     return max(5.0, revolutions * 0.15)
 
 
+def _flag(option: str) -> str:
+    """The command-line option of a flat option name: r_c -> --r-c."""
+    return "--" + option.replace("_", "-")
+
+
+def _real(option: str, value, *args, **kwargs) -> None:
+    """``checks.real_number`` under the option's command-line name."""
+    real_number(_flag(option), value, *args, **kwargs)
+
+
+def _whole(option: str, value, *args) -> None:
+    """``checks.whole_number`` under the option's command-line name."""
+    whole_number(_flag(option), value, *args)
+
+
 @dataclasses.dataclass(frozen=True)
-class ContactMapConfig:
-    """What to compute: the reduced model, the speeds, the scheme, the casing and the continuation.
+class MapModel:
+    """The reduced model a map runs on: built here (the clamped blade of ``preset``, or the 36-sector bladed disk),
+    or a saved one (``path``). What the builders share with it they check themselves (``ReductionConfig``,
+    ``DiskReductionConfig``); the errors name the command line's options.
 
     Attributes:
         preset: mesh preset of the blade the model is built on (and the cubature trained on): ci, coarse, paper.
-        model: a saved reduced model (.npz) to load instead of building one (under MPI rank 0 builds it, the
-            others load it).
-        disk: build the model of the 36-sector bladed disk (``disk_builder``: every sector's 8 tip nodes, modal
-            derivatives by MI 2b, ``r_cyclic`` interface modes) instead of the clamped blade's.
+        path: a saved reduced model (.npz, option ``model``) to load instead of building one (under MPI rank 0
+            builds it, the others load it).
+        disk: build the model of the 36-sector bladed disk (``reduction.disk_builder``: every sector's 8 tip nodes,
+            modal derivatives by MI 2b, ``r_cyclic`` interface modes) instead of the clamped blade's.
         r_c: fixed-interface modes (per sector) of the model built (>= 1). None: 15 for the blade, 10 for the disk.
         r_md: modal derivatives (per sector) selected by the criterion (>= 0). None: 0 for the blade, 10 for the disk.
-        global_md: also the modal derivatives of the first N clamped modes (0..20; the blade's).
+        global_md: also the modal derivatives of the first N clamped modes (0..20; the blade's; ReductionConfig's
+            ``global_md_modes``).
         contact_patch: 0 (point contact at the tip nodes, the paper's), or a radius (m, at most 0.01) of the tip
             patches over which each node's contact force spreads (``ReductionConfig.contact_patch``; the blade's
-            model built here, not a --model or the disk's).
+            model built here, not a saved one or the disk's).
         r_cyclic: the disk's interface modes (eq. 51, >= 1; the paper's 144).
         mistuning: the disk's blade-to-blade stiffness scatter, a standard deviation in [0, 1) (0: tuned).
         seed: of the mistuning's random factors.
-        sector: the sector whose node LE makes the map and the NFRC (0 .. 35; the blade: 0).
-        stress: a disk's von Mises stress at t_max of each map's largest response, every sector rebuilt from q (the
-            blade's: demos/report.py).
-        speeds: (START, STOP, N): N angular speeds (rad/s) from START to STOP.
-        revolutions: rotor revolutions simulated at each speed (> 0).
-        gnl: geometric nonlinearity: 'off', 'on' or 'both' (one map each).
+    """
+
+    preset: str = "ci"
+    path: Path | None = None
+    disk: bool = False
+    r_c: int | None = None
+    r_md: int | None = None
+    global_md: int = 3
+    contact_patch: float = 0.0
+    r_cyclic: int = 144
+    mistuning: float = 0.0
+    seed: int = 0
+
+    def __post_init__(self):
+        if self.preset not in MESH_PRESETS:
+            raise ValueError(f"--preset must be one of {', '.join(MESH_PRESETS)}, got {self.preset!r}")
+        for option, field, value, config in (("r_c", "r_c", self.r_c, ReductionConfig),
+                                             ("r_md", "r_md", self.r_md, ReductionConfig),
+                                             ("global_md", "global_md_modes", self.global_md, ReductionConfig),
+                                             ("contact_patch", "contact_patch", self.contact_patch, ReductionConfig),
+                                             ("r_cyclic", "r_cyclic", self.r_cyclic, DiskReductionConfig),
+                                             ("seed", "seed", self.seed, DiskReductionConfig)):
+            if value is not None:
+                flagged(_flag(option), lambda: config(**{field: value}))
+        if self.contact_patch and (self.disk or self.path is not None):
+            raise ValueError("--contact-patch shapes the blade's model built here: not with --disk or --model")
+        real_number("--mistuning (standard deviation of the blades' stiffness factors)", self.mistuning, 0, 1,
+                    open_high=True)
+        if self.mistuning > 0 and not self.disk:
+            raise ValueError("--mistuning needs --disk (it scatters the disk's blades)")
+        for name in ("contact_patch", "mistuning"):
+            object.__setattr__(self, name, float(getattr(self, name)))
+        if self.path is not None:
+            object.__setattr__(self, "path", Path(self.path))
+
+
+@dataclasses.dataclass(frozen=True)
+class MapScheme:
+    """How each speed is integrated: the explicit scheme's step, the frequency cap, the GNL forces' evaluation.
+
+    Attributes:
         safety: h = safety x 2 / omega_max of the linear model, in (0, 1].
         h: time step (s); overrides ``safety``. None: from ``safety``.
         frequency_cap: spectral mass scaling (kHz): the modes above it are slowed to it; a GNL step then comes from
@@ -113,45 +169,9 @@ class ContactMapConfig:
             ``cubature`` and ``frequency_cap``). For bases whose unscaled GNL step makes the exact runs hours long
             (the modal derivatives of 10 clamped modes, r = 104); the cubature is then trained on the capped
             dynamics the map runs. False: unscaled training runs (the headline maps').
-        tolerance: choose r_c, the frequency cap, the step and the force evaluation of each setting (GNL off, on) as
-            the cheapest model of the speed-accuracy study within this relative error
-            (``studies.model_choice.choose_model`` on the scenes 'map-linear' and 'map-gnl', read from
-            rotor37_rom/data/speed_accuracy.json), in (0, 1); with ``disk`` (tuned) r_c, r_md, r_cyclic, the cap and the
-            force evaluation from the scenes 'disk-map-linear' and 'disk-map-gnl' (measured with the cone normal and mu
-            = 0.15). The options it sets must not be given with it. None: the options as given.
         retry_diverged: runs that blew up run again with the step halved, up to this many times (0..4).
-        mu: Coulomb friction coefficient of the casing contact (paper 0.15).
-        c0: clearance at rest (m).
-        hb: height h_b of the casing's two bumps (m).
-        direction: contact normal: 'x' (the paper's e_x), 'radial' or 'cone' (the conical casing's normal, 15.3 deg
-            from radial: no sprag-slip divergence at any mu on this blade, docs/results.md).
-        batch: speeds integrated together in one batch (>= 1).
-        continuation: speed step (rad/s) of a continuation up and down (0: none).
-        continuation_range: (LOW, HIGH) speeds (rad/s) of the continuation; None: the map's range.
-        steady_window: a continued run is steady when its max over the last N revolutions and the N before agree.
-        unsteady_step: the continuation's point when no halving is steady: 'smallest' (the paper read literally:
-            the step stays divided) or 'full' (the full step, marked not steady; ``studies.sweep.continuation``).
-        out: folder of the charts, summary.json, the sweeps' records and the caches.
-        cache: folder of the model, cubature, training-run and probe caches; None: OUT/cache. Maps in other folders
-            given the same cache share its cubature (e.g. a few speeds run again at another step).
-        quiet: no progress bars and no sprag-slip note.
     """
 
-    preset: str = "ci"
-    model: Path | None = None
-    disk: bool = False
-    r_c: int | None = None
-    r_md: int | None = None
-    global_md: int = 3
-    contact_patch: float = 0.0
-    r_cyclic: int = 144
-    mistuning: float = 0.0
-    seed: int = 0
-    sector: int = 0
-    stress: bool = False
-    speeds: tuple[float, float, int] = (1200.0, 1600.0, 21)
-    revolutions: float = 20.0
-    gnl: str = "both"
     safety: float = 0.5
     h: float | None = None
     frequency_cap: float | None = None
@@ -162,141 +182,23 @@ class ContactMapConfig:
     precision: str = "double"
     cubature_speeds: tuple[float, ...] | None = None
     capped_training: bool = False
-    tolerance: float | None = None
     retry_diverged: int = 0
-    mu: float = 0.15
-    c0: float = 0.5e-3
-    hb: float = 0.625e-3
-    direction: str = "x"
-    batch: int = 16
-    continuation: float = 0.0
-    continuation_range: tuple[float, float] | None = None
-    steady_window: int = 1
-    unsteady_step: str = "smallest"
-    out: Path = Path("results/contact_map")
-    cache: Path | None = None
-    quiet: bool = False
 
     def __post_init__(self):
-        """Check every option (ValueError naming it) and store the numbers as the command line gives them."""
-        self._check_model()
-        self._check_sweep()
-        self._check_casing()
-        self._check_scheme()
-        self._check_continuation()
-        self._normalise()
-
-    def _check_model(self) -> None:
-        """The mesh preset and the sizes of a model to build."""
-        if self.preset not in MESH_PRESETS:
-            raise ValueError(f"--preset must be one of {', '.join(MESH_PRESETS)}, got {self.preset!r}")
-        if self.r_c is not None and not self.r_c >= 1:
-            raise ValueError(f"--r-c must be >= 1, got {self.r_c}")
-        if self.r_md is not None and not self.r_md >= 0:
-            raise ValueError(f"--r-md must be >= 0, got {self.r_md}")
-        if not 0 <= self.global_md <= GLOBAL_MD_MAX:
-            raise ValueError(f"--global-md must be in 0..{GLOBAL_MD_MAX}, got {self.global_md}")
-        if not self.r_cyclic >= 1:
-            raise ValueError(f"--r-cyclic must be >= 1, got {self.r_cyclic}")
-        if not (np.isfinite(self.contact_patch) and 0 <= self.contact_patch <= 0.01):
-            raise ValueError(f"--contact-patch must be in [0, 0.01] m, got {self.contact_patch}")
-        if self.contact_patch and (self.disk or self.model is not None):
-            raise ValueError("--contact-patch shapes the blade's model built here: not with --disk or --model")
-        if not 0 <= self.mistuning < 1:
-            raise ValueError(f"--mistuning must be in [0, 1) (standard deviation of the blades' stiffness factors), "
-                             f"got {self.mistuning}")
-        if self.mistuning > 0 and not self.disk:
-            raise ValueError("--mistuning needs --disk (it scatters the disk's blades)")
-        limit = N_SECTORS - 1 if self.disk or self.model is not None else 0
-        if not 0 <= self.sector <= limit:
-            raise ValueError(f"--sector must be in [0, {limit}] ({'the disk' if limit else 'a single blade'}'s "
-                             f"sectors), got {self.sector}")
-        if self.stress and not (self.disk or self.model is not None):
-            raise ValueError("--stress is the disk's (--disk or a disk --model); the blade's stress at t_max is "
-                             "demos/report.py's")
-
-    @property
-    def modes(self) -> tuple[int, int]:
-        """(r_c, r_md) of the model built: the options, or 15, 0 for the blade and 10, 10 for the disk; with
-        ``tolerance`` the largest r_c (and r_md, a disk's) the settings' choices need."""
-        r_c, r_md = (self.r_c if self.r_c is not None else (10 if self.disk else 15),
-                     self.r_md if self.r_md is not None else (10 if self.disk else 0))
-        if self.tolerance is not None and self.r_c is None:
-            chosen = [self.choice(gnl).options for gnl in GNL_SETTINGS[self.gnl]]
-            return max(c.get("r_c", r_c) for c in chosen), max(c.get("r_md", r_md) for c in chosen)
-        return r_c, r_md
-
-    @property
-    def interface_modes(self) -> int:
-        """r_cyclic of the disk model built: the option, or with ``tolerance`` the largest the settings' choices
-        need (one model serves GNL off and on)."""
-        if self.tolerance is not None and self.disk:
-            return max(self.choice(gnl).options.get("r_cyclic", self.r_cyclic) for gnl in GNL_SETTINGS[self.gnl])
-        return self.r_cyclic
-
-    def choice(self, gnl: bool):
-        """The speed-accuracy study's cheapest model within ``tolerance`` for one setting (a ModelChoice)."""
-        return map_model(self.tolerance, gnl, disk=self.disk)
-
-    def model_beyond_choice(self, gnl: bool) -> dict:
-        """The options of the model built (r_c, r_md, a disk's r_cyclic) where they exceed one setting's choice: one
-        model serves GNL off and on, the larger of their choices. Empty without ``tolerance`` or where they agree."""
-        if self.tolerance is None:
-            return {}
-        built = {"r_c": self.modes[0], "r_md": self.modes[1], **({"r_cyclic": self.interface_modes} if self.disk
-                                                                  else {})}
-        chosen = self.choice(gnl).options
-        return {k: v for k, v in built.items() if k in chosen and chosen[k] != v}
-
-    def setting(self, gnl: bool) -> "ContactMapConfig":
-        """The configuration one setting (GNL off or on) runs with: with ``tolerance``, its chosen options."""
-        if self.tolerance is None:
-            return self
-        options = {k: v for k, v in self.choice(gnl).options.items() if k != "r_c"}
-        return dataclasses.replace(self, tolerance=None, **options)
-
-    def _check_sweep(self) -> None:
-        """Speeds, run length, batches and retries."""
-        if len(self.speeds) != 3 or not 0 < self.speeds[0] <= self.speeds[1] or not self.speeds[2] >= 1 \
-                or not float(self.speeds[2]).is_integer():
-            raise ValueError(f"--speeds: need 0 < START <= STOP and an integer N >= 1, got {list(self.speeds)}")
-        if not self.revolutions > 0:
-            raise ValueError(f"--revolutions must be > 0, got {self.revolutions}")
-        if self.gnl not in GNL_SETTINGS:
-            raise ValueError(f"--gnl must be one of {', '.join(GNL_SETTINGS)}, got {self.gnl!r}")
-        if not self.batch >= 1:
-            raise ValueError(f"--batch must be >= 1, got {self.batch}")
-        if not 0 <= self.retry_diverged <= 4:
-            raise ValueError(f"--retry-diverged must be in 0..4, got {self.retry_diverged}")
-
-    def _check_casing(self) -> None:
-        """Each casing option alone through rotor37_rom.dynamics.casing.Casing (its checks are per field)."""
-        for flag, name, value in (("--c0", "c0", self.c0), ("--hb", "h_b", self.hb), ("--mu", "mu", self.mu),
-                                  ("--direction", "direction", self.direction)):
-            try:
-                Casing(**{name: value})
-            except ValueError as exc:
-                raise ValueError(f"{flag}: {exc}") from None
-
-    def _check_scheme(self) -> None:
-        """Time step, frequency cap and the GNL forces."""
-        if not 0 < self.safety <= 1:
-            raise ValueError(f"--safety must be in (0, 1], got {self.safety}")
-        if self.h is not None and not self.h > 0:
-            raise ValueError(f"--h must be > 0 s, got {self.h}")
-        if self.frequency_cap is not None and not self.frequency_cap > 0:
-            raise ValueError(f"--frequency-cap must be > 0 kHz, got {self.frequency_cap}")
-        if not 0 < self.tangent_safety <= 1:
-            raise ValueError(f"--tangent-safety must be in (0, 1], got {self.tangent_safety}")
+        _real("safety", self.safety, 0, 1, open_low=True)
+        if self.h is not None:
+            _real("h", self.h, 0, 1, open_low=True, unit=" s")
+        if self.frequency_cap is not None:
+            _real("frequency_cap", self.frequency_cap, 0, 1e4, open_low=True, unit=" kHz")
+        _real("tangent_safety", self.tangent_safety, 0, 1, open_low=True)
         if self.step_outliers not in ("keep", "drop"):
             raise ValueError(f"--step-outliers must be 'keep' or 'drop', got {self.step_outliers!r}")
         if self.step_outliers == "drop" and (self.frequency_cap is None or self.h is not None):
             raise ValueError("--step-outliers drop needs --frequency-cap and no --h (it chooses the GNL step from "
                              "the tangent limit)")
-        if not (isinstance(self.perturbation, numbers.Real) and abs(self.perturbation) < 0.01):
-            raise ValueError(f"--perturbation must be a number with |eps| < 0.01, got {self.perturbation}")
-        if self.cubature is not None and not 0 < self.cubature < 1:
-            raise ValueError(f"--cubature must be in (0, 1), got {self.cubature}")
+        _real("perturbation", self.perturbation, -0.01, 0.01, open_low=True, open_high=True)
+        if self.cubature is not None:
+            _real("cubature", self.cubature, 0, 1, open_low=True, open_high=True)
         if self.precision not in PRECISIONS:
             raise ValueError(f"--precision must be one of {', '.join(PRECISIONS)}, got {self.precision!r}")
         if self.precision != "double" and self.cubature is None:
@@ -309,59 +211,267 @@ class ContactMapConfig:
                     and all(isinstance(w, numbers.Real) and np.isfinite(w) and w > 0 for w in speeds)):
                 raise ValueError(f"--cubature-speeds must be one or more finite speeds > 0 rad/s, got "
                                  f"{self.cubature_speeds!r}")
-        if self.capped_training and self.tolerance is not None:
-            raise ValueError("--capped-training: not with --tolerance (the study measured the chosen models trained "
-                             "unscaled)")
         if self.capped_training and (self.cubature is None or self.frequency_cap is None):
             raise ValueError("--capped-training needs --cubature and --frequency-cap (it runs the cubature's training "
                              "runs with the cap)")
-        if self.tolerance is not None:
-            if not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
-                raise ValueError(f"--tolerance must be in (0, 1) (a relative error: 0.05 = 5 %), got {self.tolerance}")
-            if self.disk and self.mistuning > 0:
-                raise ValueError("--tolerance with --mistuning: the speed-accuracy study measured the tuned disk; "
-                                 "give the options")
-            chosen = set().union(*(self.choice(gnl).options for gnl in GNL_SETTINGS[self.gnl]))
-            defaults = {f.name: f.default for f in dataclasses.fields(self)}
-            given = [name for name in sorted(chosen - {"r_c"}) if getattr(self, name) != defaults[name]]
-            if self.r_c is not None:
-                given.append("r_c")
-            if given or self.model is not None or self.h is not None:
-                names = [f"--{n.replace('_', '-')}" for n in given] + (["--model"] if self.model else []) \
-                    + (["--h"] if self.h is not None else [])
-                raise ValueError(f"--tolerance chooses {', '.join(names)}: give either the tolerance or the options")
+        _whole("retry_diverged", self.retry_diverged, 0, 4)
+        for name in ("safety", "h", "frequency_cap", "tangent_safety", "cubature", "perturbation"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, float(getattr(self, name)))
+        if self.cubature_speeds is not None:
+            object.__setattr__(self, "cubature_speeds", tuple(sorted({float(w) for w in self.cubature_speeds})))
 
-    def _check_continuation(self) -> None:
-        """Continuation step, range and steadiness window."""
-        if not self.continuation >= 0:
-            raise ValueError(f"--continuation must be >= 0 rad/s (0: none), got {self.continuation}")
-        if self.continuation_range is not None and (len(self.continuation_range) != 2
-                                                    or not 0 < self.continuation_range[0] < self.continuation_range[1]):
-            raise ValueError(f"--continuation-range: need 0 < LOW < HIGH rad/s, got {list(self.continuation_range)}")
-        half = continued_revolutions(self.revolutions) / 2
-        if not 1 <= self.steady_window <= half:
-            raise ValueError(f"--steady-window must be in 1..{int(half)} revolutions (half of a continued run), got "
-                             f"{self.steady_window}")
+    @property
+    def frequency_cap_rad_s(self) -> float | None:
+        """``frequency_cap`` in rad/s (None: no cap)."""
+        return None if self.frequency_cap is None else 2 * np.pi * 1e3 * self.frequency_cap
+
+
+@dataclasses.dataclass(frozen=True)
+class MapContinuation:
+    """A sequential continuation in speed up and down beside the map (``studies.sweep.continuation``).
+
+    Attributes:
+        step: speed step (rad/s; option ``continuation``); 0: none.
+        range: (LOW, HIGH) speeds (rad/s; option ``continuation_range``); None: the map's range.
+        steady_window: a continued run is steady when its max over the last N revolutions and the N before agree.
+        unsteady_step: the continuation's point when no halving is steady: 'smallest' (the paper read literally:
+            the step stays divided) or 'full' (the full step, marked not steady).
+    """
+
+    step: float = 0.0
+    range: tuple[float, float] | None = None
+    steady_window: int = 1
+    unsteady_step: str = "smallest"
+
+    def __post_init__(self):
+        real_number("--continuation (the speed step, rad/s; 0: none)", self.step, 0, MAX_SPEED)
+        if self.range is not None and not (
+                isinstance(self.range, (tuple, list)) and len(self.range) == 2
+                and all(isinstance(w, numbers.Real) and np.isfinite(w) for w in self.range)
+                and 0 < self.range[0] < self.range[1] <= MAX_SPEED):
+            raise ValueError(f"--continuation-range: need 0 < LOW < HIGH <= {MAX_SPEED:g} rad/s, got {self.range!r}")
+        _whole("steady_window", self.steady_window, 1)
         if self.unsteady_step not in ("smallest", "full"):
             raise ValueError(f"--unsteady-step must be 'smallest' or 'full', got {self.unsteady_step!r}")
+        object.__setattr__(self, "step", float(self.step))
+        if self.range is not None:
+            object.__setattr__(self, "range", tuple(float(w) for w in self.range))
+
+
+#: The command line's options (and the speed-accuracy study's, which are among them) -> (the part of a
+#: ContactMapConfig that holds it, its field there); '' is the configuration itself
+OPTIONS = {
+    **{name: ("rom", name) for name in ("preset", "disk", "r_c", "r_md", "global_md", "contact_patch", "r_cyclic",
+                                        "mistuning", "seed")},
+    "model": ("rom", "path"),
+    **{f.name: ("scheme", f.name) for f in dataclasses.fields(MapScheme)},
+    "revolutions": ("sweep", "revolutions"), "batch": ("sweep", "batch_size"),
+    "mu": ("sweep.casing", "mu"), "c0": ("sweep.casing", "c0"), "hb": ("sweep.casing", "h_b"),
+    "direction": ("sweep.casing", "direction"),
+    "continuation": ("continuation", "step"), "continuation_range": ("continuation", "range"),
+    "steady_window": ("continuation", "steady_window"), "unsteady_step": ("continuation", "unsteady_step"),
+    **{name: ("", name) for name in ("speeds", "gnl", "sector", "stress", "tolerance", "out", "cache", "quiet")},
+}
+
+
+def _part(obj, where: str):
+    """The part of ``obj`` at a dotted path ('' : obj itself)."""
+    for name in filter(None, where.split(".")):
+        obj = getattr(obj, name)
+    return obj
+
+
+@dataclasses.dataclass(frozen=True)
+class ContactMapConfig:
+    """What to compute: the reduced model, the time scheme, the speeds and the casing, the continuation. It composes
+    the library's objects: ``rom`` (MapModel), ``scheme`` (MapScheme), ``sweep`` (a ``studies.sweep.SweepSpec``:
+    revolutions per speed, batch size and the ``dynamics.casing.Casing``) and ``continuation`` (MapContinuation).
+    The command line and the speed-accuracy study name flat options (``OPTIONS``): ``from_options`` makes a
+    configuration of them, ``options`` gives them back and ``with_options`` changes some.
+
+    Attributes:
+        speeds: (START, STOP, N): N angular speeds (rad/s) from START to STOP.
+        gnl: geometric nonlinearity: 'off', 'on' or 'both' (one map each).
+        sector: the sector whose node LE makes the map and the NFRC (0 .. 35; the blade: 0).
+        stress: a disk's von Mises stress at t_max of each map's largest response, every sector rebuilt from q (the
+            blade's: demos/report.py).
+        tolerance: choose r_c, the frequency cap, the step and the force evaluation of each setting (GNL off, on) as
+            the cheapest model of the speed-accuracy study within this relative error
+            (``studies.model_choice.choose_model`` on the scenes 'map-linear' and 'map-gnl', read from
+            rotor37_rom/data/speed_accuracy.json), in (0, 1); with a disk (tuned) r_c, r_md, r_cyclic, the cap and the
+            force evaluation from the scenes 'disk-map-linear' and 'disk-map-gnl' (measured with the cone normal and mu
+            = 0.15). The options it sets must not be given with it. None: the options as given.
+        out: folder of the charts, summary.json, the sweeps' records and the caches.
+        cache: folder of the model, cubature, training-run and probe caches; None: OUT/cache. Maps in other folders
+            given the same cache share its cubature (e.g. a few speeds run again at another step).
+        quiet: no progress bars and no sprag-slip note.
+    """
+
+    OPTIONS: ClassVar[dict] = OPTIONS
+
+    rom: MapModel = MapModel()
+    scheme: MapScheme = MapScheme()
+    sweep: SweepSpec = SweepSpec(revolutions=20.0)
+    continuation: MapContinuation = MapContinuation()
+    speeds: tuple[float, float, int] = (1200.0, 1600.0, 21)
+    gnl: str = "both"
+    sector: int = 0
+    stress: bool = False
+    tolerance: float | None = None
+    out: Path = Path("results/contact_map")
+    cache: Path | None = None
+    quiet: bool = False
+
+    @classmethod
+    def from_options(cls, **options) -> "ContactMapConfig":
+        """The configuration of flat options (``OPTIONS``: the command line's names), the others at their defaults;
+        a bad value is refused naming its option (--name)."""
+        unknown = sorted(set(options) - set(OPTIONS))
+        if unknown:
+            raise TypeError(f"ContactMapConfig has no option {', '.join(unknown)}")
+        parts = {}
+        for option, value in options.items():
+            where, field = OPTIONS[option]
+            parts.setdefault(where, {})[field] = value
+        default = cls.__dataclass_fields__
+        casing = default["sweep"].default.casing
+        for field, value in parts.get("sweep.casing", {}).items():           # each alone: the error names it
+            option = next(o for o, (w, f) in OPTIONS.items() if w == "sweep.casing" and f == field)
+            casing = flagged(_flag(option), lambda: dataclasses.replace(casing, **{field: value}))
+        sweep = dataclasses.replace(default["sweep"].default, casing=casing)
+        for field, value in parts.get("sweep", {}).items():
+            option = next(o for o, (w, f) in OPTIONS.items() if w == "sweep" and f == field)
+            sweep = flagged(_flag(option), lambda: dataclasses.replace(sweep, **{field: value}))
+        return cls(rom=MapModel(**parts.get("rom", {})), scheme=MapScheme(**parts.get("scheme", {})), sweep=sweep,
+                   continuation=MapContinuation(**parts.get("continuation", {})), **parts.get("", {}))
+
+    def options(self) -> dict:
+        """The flat options of this configuration (``OPTIONS``)."""
+        return {option: getattr(_part(self, where), field) for option, (where, field) in OPTIONS.items()}
+
+    def with_options(self, **options) -> "ContactMapConfig":
+        """This configuration with some flat options changed (checked again)."""
+        return type(self).from_options(**{**self.options(), **options})
+
+    def __post_init__(self):
+        """Check the options that tie the parts together (each part checks its own) and store the numbers as the
+        command line gives them."""
+        for name, kind in (("rom", MapModel), ("scheme", MapScheme), ("sweep", SweepSpec),
+                           ("continuation", MapContinuation)):
+            if not isinstance(getattr(self, name), kind):
+                raise TypeError(f"ContactMapConfig.{name} must be a {kind.__name__}, got "
+                                f"{type(getattr(self, name)).__name__}")
+        self._check_sweep()
+        self._check_tolerance()
+        self._normalise()
+
+    def _check_sweep(self) -> None:
+        """Speeds, the map's node, stress, the continuation's steadiness window."""
+        speeds = self.speeds
+        if not (isinstance(speeds, (tuple, list)) and len(speeds) == 3
+                and all(isinstance(w, numbers.Real) and np.isfinite(w) for w in speeds)
+                and 0 < speeds[0] <= speeds[1] <= MAX_SPEED and speeds[2] >= 1 and float(speeds[2]).is_integer()):
+            raise ValueError(f"--speeds: need 0 < START <= STOP <= {MAX_SPEED:g} rad/s and an integer N >= 1, got "
+                             f"{list(speeds)}")
+        if self.gnl not in GNL_SETTINGS:
+            raise ValueError(f"--gnl must be one of {', '.join(GNL_SETTINGS)}, got {self.gnl!r}")
+        # what a batch holds: every record_dt, per run the monitored nodes' normal displacements and the contact
+        # forces (a blade: 8 + 8; a disk, or a model file that may be one: 37 + 288), at the slowest speed
+        rows = 8 + 8 if not (self.rom.disk or self.rom.path is not None) else 37 + 8 * N_SECTORS
+        records = self.sweep.revolutions * 2 * np.pi / speeds[0] / self.sweep.record_dt + 1
+        batch = min(self.sweep.batch_size, int(speeds[2]))
+        fits_in_memory("--revolutions", 8.0 * rows * records * batch,
+                       f"{batch} runs x {records:.3g} records x {rows} values, at {speeds[0]:g} rad/s",
+                       hint="fewer revolutions or a smaller --batch")
+        limit = N_SECTORS - 1 if self.rom.disk or self.rom.path is not None else 0
+        if not (isinstance(self.sector, numbers.Integral) and 0 <= self.sector <= limit):
+            raise ValueError(f"--sector must be in [0, {limit}] ({'the disk' if limit else 'a single blade'}'s "
+                             f"sectors), got {self.sector}")
+        if self.stress and not (self.rom.disk or self.rom.path is not None):
+            raise ValueError("--stress is the disk's (--disk or a disk --model); the blade's stress at t_max is "
+                             "demos/report.py's")
+        half = continued_revolutions(self.sweep.revolutions) / 2
+        if not self.continuation.steady_window <= half:
+            raise ValueError(f"--steady-window must be in 1..{int(half)} revolutions (half of a continued run), got "
+                             f"{self.continuation.steady_window}")
+
+    def _check_tolerance(self) -> None:
+        """With ``tolerance``: in (0, 1), and none of the options it chooses given."""
+        if self.tolerance is None:
+            return
+        if self.scheme.capped_training:
+            raise ValueError("--capped-training: not with --tolerance (the study measured the chosen models trained "
+                             "unscaled)")
+        if not (isinstance(self.tolerance, numbers.Real) and 0 < self.tolerance < 1):
+            raise ValueError(f"--tolerance must be in (0, 1) (a relative error: 0.05 = 5 %), got {self.tolerance}")
+        if self.rom.disk and self.rom.mistuning > 0:
+            raise ValueError("--tolerance with --mistuning: the speed-accuracy study measured the tuned disk; "
+                             "give the options")
+        chosen = set().union(*(self.choice(gnl).options for gnl in GNL_SETTINGS[self.gnl]))
+        mine, defaults = self.options(), _default_options()
+        given = [name for name in sorted(chosen - {"r_c"}) if mine[name] != defaults[name]]
+        if self.rom.r_c is not None:
+            given.append("r_c")
+        if given or self.rom.path is not None or self.scheme.h is not None:
+            names = [_flag(n) for n in given] + (["--model"] if self.rom.path else []) \
+                + (["--h"] if self.scheme.h is not None else [])
+            raise ValueError(f"--tolerance chooses {', '.join(names)}: give either the tolerance or the options")
 
     def _normalise(self) -> None:
         """Floats, tuples and paths, as the command line gives them (same cache keys from Python and the shell)."""
-        for name in ("revolutions", "safety", "h", "frequency_cap", "tangent_safety", "cubature", "mu", "c0", "hb",
-                     "continuation", "mistuning", "perturbation"):
-            if getattr(self, name) is not None:
-                object.__setattr__(self, name, float(getattr(self, name)))
+        casing = self.sweep.casing
+        casing = dataclasses.replace(casing, c0=float(casing.c0), h_b=float(casing.h_b), mu=float(casing.mu))
+        object.__setattr__(self, "sweep", dataclasses.replace(self.sweep, revolutions=float(self.sweep.revolutions),
+                                                              casing=casing))
         start, stop, n = self.speeds
         object.__setattr__(self, "speeds", (float(start), float(stop), int(n)))
-        if self.continuation_range is not None:
-            object.__setattr__(self, "continuation_range", tuple(float(w) for w in self.continuation_range))
-        if self.cubature_speeds is not None:
-            object.__setattr__(self, "cubature_speeds", tuple(sorted({float(w) for w in self.cubature_speeds})))
+        if self.tolerance is not None:
+            object.__setattr__(self, "tolerance", float(self.tolerance))
         object.__setattr__(self, "out", Path(self.out))
         if self.cache is not None:
             object.__setattr__(self, "cache", Path(self.cache))
-        if self.model is not None:
-            object.__setattr__(self, "model", Path(self.model))
+
+    @property
+    def modes(self) -> tuple[int, int]:
+        """(r_c, r_md) of the model built: the options, or 15, 0 for the blade and 10, 10 for the disk; with
+        ``tolerance`` the largest r_c (and r_md, a disk's) the settings' choices need."""
+        rom = self.rom
+        r_c, r_md = (rom.r_c if rom.r_c is not None else (10 if rom.disk else 15),
+                     rom.r_md if rom.r_md is not None else (10 if rom.disk else 0))
+        if self.tolerance is not None and rom.r_c is None:
+            chosen = [self.choice(gnl).options for gnl in GNL_SETTINGS[self.gnl]]
+            return max(c.get("r_c", r_c) for c in chosen), max(c.get("r_md", r_md) for c in chosen)
+        return r_c, r_md
+
+    @property
+    def interface_modes(self) -> int:
+        """r_cyclic of the disk model built: the option, or with ``tolerance`` the largest the settings' choices
+        need (one model serves GNL off and on)."""
+        if self.tolerance is not None and self.rom.disk:
+            return max(self.choice(gnl).options.get("r_cyclic", self.rom.r_cyclic) for gnl in GNL_SETTINGS[self.gnl])
+        return self.rom.r_cyclic
+
+    def choice(self, gnl: bool):
+        """The speed-accuracy study's cheapest model within ``tolerance`` for one setting (a ModelChoice)."""
+        return map_model(self.tolerance, gnl, disk=self.rom.disk)
+
+    def model_beyond_choice(self, gnl: bool) -> dict:
+        """The options of the model built (r_c, r_md, a disk's r_cyclic) where they exceed one setting's choice: one
+        model serves GNL off and on, the larger of their choices. Empty without ``tolerance`` or where they agree."""
+        if self.tolerance is None:
+            return {}
+        built = {"r_c": self.modes[0], "r_md": self.modes[1], **({"r_cyclic": self.interface_modes} if self.rom.disk
+                                                                  else {})}
+        chosen = self.choice(gnl).options
+        return {k: v for k, v in built.items() if k in chosen and chosen[k] != v}
+
+    def setting(self, gnl: bool) -> "ContactMapConfig":
+        """The configuration one setting (GNL off or on) runs with: with ``tolerance``, its chosen options."""
+        if self.tolerance is None:
+            return self
+        options = {k: v for k, v in self.choice(gnl).options.items() if k != "r_c"}
+        return self.with_options(tolerance=None, **options)
 
     @property
     def cache_dir(self) -> Path:
@@ -376,13 +486,8 @@ class ContactMapConfig:
 
     @property
     def continuation_span(self) -> tuple[float, float]:
-        """(LOW, HIGH) of the continuation (rad/s): ``continuation_range`` or the map's range."""
-        return self.continuation_range or self.speeds[:2]
-
-    @property
-    def casing(self) -> Casing:
-        """The casing and contact law."""
-        return Casing(c0=self.c0, h_b=self.hb, mu=self.mu, direction=self.direction)
+        """(LOW, HIGH) of the continuation (rad/s): its range or the map's."""
+        return self.continuation.range or self.speeds[:2]
 
     @property
     def node(self) -> str:
@@ -390,7 +495,8 @@ class ContactMapConfig:
         return f"{self.sector}:LE"
 
     def sweep_spec(self, model: ReducedModel) -> SweepSpec:
-        """The contact scenario each speed runs; a disk records node LE of every sector and TE of ``sector``."""
+        """The contact scenario each speed runs (``sweep``); a disk records node LE of every sector and TE of
+        ``sector``."""
         monitor = None
         if model.nodes.n_sectors > 1:
             try:
@@ -401,16 +507,17 @@ class ContactMapConfig:
                 raise ValueError(f"--sector: {exc}") from None
         elif self.sector != 0:
             raise ValueError(f"--sector must be 0 for a single blade's model, got {self.sector}")
-        return SweepSpec(revolutions=self.revolutions, casing=self.casing, batch_size=self.batch, monitor=monitor)
+        return dataclasses.replace(self.sweep, monitor=monitor)
 
-    @property
-    def frequency_cap_rad_s(self) -> float | None:
-        """``frequency_cap`` in rad/s (None: no cap)."""
-        return None if self.frequency_cap is None else 2 * np.pi * 1e3 * self.frequency_cap
+
+@functools.lru_cache(maxsize=1)
+def _default_options() -> dict:
+    """The flat options of ContactMapConfig's defaults."""
+    return ContactMapConfig().options()
 
 
 def build_parser() -> ArgumentParser:
-    """The command line: one option per ContactMapConfig field (defaults: the dataclass's)."""
+    """The command line: one option per entry of ``OPTIONS`` (defaults: the configuration's)."""
     parser = ArgumentParser(description="interaction maps of the reduced blade with casing contact",
                             argument_default=argparse.SUPPRESS)
     parser.add_argument("--preset", help=f"mesh preset: {', '.join(MESH_PRESETS)} (default ci)")

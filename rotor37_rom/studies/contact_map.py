@@ -22,19 +22,21 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 import scipy.linalg
 
+from rotor37_rom.checks import before_work
 from rotor37_rom.disk.assembly import mistuning_factors
 from rotor37_rom.disk.harmonics import sector_harmonics
 from rotor37_rom.dynamics.casing import Casing, contact_matrices
 from rotor37_rom.dynamics.explicit import CentralDifference, simulate
 from rotor37_rom.dynamics.friction import sprag_slip_friction
-from rotor37_rom.model.reduced import ReducedModel, load_reduced_model, save_reduced_model
+from rotor37_rom.model.reduced import ReducedModel, load_reduced_model, save_reduced_model, saved_model_key
 from rotor37_rom.npz import save_json
-from rotor37_rom.studies.contact_config import (GNL_SETTINGS, N_SECTORS, PRECISIONS, ContactMapConfig, build_parser,
-    continued_revolutions, map_model)
+from rotor37_rom.studies.contact_config import (GNL_SETTINGS, N_SECTORS, PRECISIONS, ContactMapConfig, MapContinuation,
+    MapModel, MapScheme, build_parser, continued_revolutions, map_model)
 from rotor37_rom.studies.contact_scheme import (capped_gnl_step, capped_probe, capped_probe_states, cubature_model,
     print_step_outliers, setting_names, time_scheme)
-from rotor37_rom.studies.sweep import (ContinuationPoint, InteractionMap, continuation, interaction_map, idle_barrier,
-    load_speed, load_sweep, record_row, rerun_diverged, run_sweep, sector_maxima, sweep_folder)
+from rotor37_rom.studies.sweep import (ContinuationPoint, InteractionMap, compute_seconds, continuation,
+    interaction_map, idle_barrier, load_speed, load_sweep, record_row, rerun_diverged, run_sweep, sector_maxima,
+    sweep_folder)
 from rotor37_rom.viz.charts import plot_interaction_map, plot_nfrc, plot_time_history
 
 if TYPE_CHECKING:
@@ -43,10 +45,9 @@ if TYPE_CHECKING:
 __all__ = ["run_contact_map", "ContactMapResult", "MapResult", "Branch", "reduced_model", "build_model",
            "eigenfrequencies", "eo4_frequency", "sprag_slip_onsets", "carry_on", "carry_on_record", "stress_mesh",
            "disk_stress_of", "disk_peak_stress", "merge_earlier_runs", "write_summary", "world_comm", "PAPER",
-           # the configuration and the time scheme, so that the study is one module to its callers
-           "ContactMapConfig", "build_parser", "map_model", "continued_revolutions", "GNL_SETTINGS", "PRECISIONS",
-           "N_SECTORS", "time_scheme", "setting_names", "cubature_model", "capped_probe", "capped_gnl_step",
-           "capped_probe_states", "print_step_outliers"]
+           "ContactMapConfig", "MapModel", "MapScheme", "MapContinuation", "build_parser", "map_model",
+           "continued_revolutions", "GNL_SETTINGS", "PRECISIONS", "N_SECTORS", "time_scheme", "setting_names",
+           "cubature_model", "capped_probe", "capped_gnl_step", "capped_probe_states", "print_step_outliers"]
 
 PAPER = {"linear 1B/EO4": 1317.0, "zero IC, no GNL": 1446.0, "zero IC, GNL": 1535.0,
          "continuation, no GNL": 1520.0, "continuation, GNL": 1551.0}
@@ -135,10 +136,10 @@ class ContactMapResult:
 
 
 def reduced_model(config: ContactMapConfig, comm: MPI.Comm | None) -> tuple[ReducedModel, list[Path]]:
-    """The model of ``config.model``, or one built and saved; returns it and the files written."""
-    if config.model is not None:
+    """The model of ``config.rom.path``, or one built and saved; returns it and the files written."""
+    if config.rom.path is not None:
         try:
-            return load_reduced_model(config.model), []
+            return load_reduced_model(config.rom.path), []
         except ValueError as exc:
             raise ValueError(f"--model: {exc}") from None
     if comm is None or comm.size == 1:
@@ -160,20 +161,20 @@ def reduced_model(config: ContactMapConfig, comm: MPI.Comm | None) -> tuple[Redu
 
 
 def build_model(config: ContactMapConfig) -> ReducedModel:
-    """Build the reduced model of the ``config.preset`` blade, or of the bladed disk (cached in ``config.cache_dir``),
-    in this process alone."""
+    """Build the reduced model of the ``config.rom.preset`` blade, or of the bladed disk (cached in
+    ``config.cache_dir``), in this process alone."""
     from mpi4py import MPI
 
     from rotor37_rom import fem
 
     r_c, r_md = config.modes
     t0 = time.perf_counter()
-    if config.disk:
-        from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model
+    if config.rom.disk:
+        from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model
 
-        sector = fem.create_disk_sector(MPI.COMM_SELF, preset=config.preset)
-        factors = None if config.mistuning == 0 else tuple(mistuning_factors(N_SECTORS, config.mistuning,
-                                                                              config.seed).tolist())
+        sector = fem.create_disk_sector(MPI.COMM_SELF, preset=config.rom.preset)
+        factors = None if config.rom.mistuning == 0 else tuple(mistuning_factors(N_SECTORS, config.rom.mistuning,
+                                                                              config.rom.seed).tolist())
         # without GNL no sector force is evaluated: the exact tensors (most of a build) are not built
         reduction = DiskReductionConfig(tip_nodes="all", r_c=r_c, r_md=r_md, criterion="MI2b",
                                         r_cyclic=config.interface_modes, mistuning=factors,
@@ -182,11 +183,11 @@ def build_model(config: ContactMapConfig) -> ReducedModel:
     else:
         from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
 
-        sector = fem.create_blade_sector(MPI.COMM_SELF, preset=config.preset)
-        reduction = ReductionConfig(r_c=r_c, r_md=r_md, global_md_modes=config.global_md, forces="intrusive",
-                                    contact_patch=config.contact_patch)
+        sector = fem.create_blade_sector(MPI.COMM_SELF, preset=config.rom.preset)
+        reduction = ReductionConfig(r_c=r_c, r_md=r_md, global_md_modes=config.rom.global_md, forces="intrusive",
+                                    contact_patch=config.rom.contact_patch)
         model, _ = build_reduced_model(sector, reduction, cache_dir=config.cache_dir)
-    print(f"reduced model: {config.preset} preset ({sector.n_dofs} DOF) -> r = {model.r} {model.sizes} "
+    print(f"reduced model: {config.rom.preset} preset ({sector.n_dofs} DOF) -> r = {model.r} {model.sizes} "
           f"in {time.perf_counter() - t0:.1f} s")
     return model
 
@@ -227,7 +228,7 @@ def model_summary(config: ContactMapConfig, model: ReducedModel, omega: np.ndarr
     return {"r": model.r, "sizes": model.sizes, "omega_1_3": omega.tolist(),
             "linear_resonance": eo4_frequency(model) / 4, "node": config.node, "disk": model.sectors is not None,
             "mistuning": model.metadata.get("config", {}).get("mistuning"),
-            "speeds": list(config.speeds), "revolutions": config.revolutions, "casing": vars(config.casing),
+            "speeds": list(config.speeds), "revolutions": config.sweep.revolutions, "casing": vars(config.sweep.casing),
             "runs": {}, "sprag_slip": {k: ([_finite(x) for x in v] if isinstance(v, list) else _finite(v))
                                        for k, v in onset.items()}}
 
@@ -242,7 +243,7 @@ def sweep_map(config: ContactMapConfig, scheme: CentralDifference, comm: MPI.Com
     folder = run_sweep(scheme, speeds, spec, sweeps, comm=comm, progress=not config.quiet)
     # rank 0 reads the records (~1 GB for the 100-speed headline map); rerun_diverged tells the others
     records = [r for r in load_sweep(folder) if np.isclose(float(r["omega"]), speeds).any()] if rank == 0 else []
-    records, retried = rerun_diverged(scheme, records, spec, sweeps, config.retry_diverged, comm=comm,
+    records, retried = rerun_diverged(scheme, records, spec, sweeps, config.scheme.retry_diverged, comm=comm,
                                       progress=not config.quiet)
     return folder, records, retried, time.perf_counter() - t0
 
@@ -253,7 +254,7 @@ def continuation_branches(config: ContactMapConfig, scheme: CentralDifference, r
     speed was run again), the first run as long as the map's, the next 15 % of it (the paper: 200 then 30).
     Under MPI the two branches run on ranks 0 and 1 at once; rank 0 gets both. Each branch is written after every
     accepted speed (``sweep.continuation(out=...)``), so a killed run resumes. Returns {'up' | 'down': Branch}."""
-    if config.continuation <= 0:
+    if config.continuation.step <= 0:
         return {}
     run_scheme = scheme.with_step(min(retried.values())) if retried else scheme
     start, stop = config.continuation_span
@@ -263,11 +264,11 @@ def continuation_branches(config: ContactMapConfig, scheme: CentralDifference, r
     for k, (name, (a, b)) in enumerate(legs.items()):
         if k % size == rank:
             t0 = time.perf_counter()
-            points = continuation(run_scheme, a, b, config.continuation, config.casing,
-                                  first_revolutions=config.revolutions,
-                                  revolutions=continued_revolutions(config.revolutions),
-                                  out=config.out / "continuation" / tag, window=config.steady_window,
-                                  unsteady=config.unsteady_step, node=config.node,
+            points = continuation(run_scheme, a, b, config.continuation.step, config.sweep.casing,
+                                  first_revolutions=config.sweep.revolutions,
+                                  revolutions=continued_revolutions(config.sweep.revolutions),
+                                  out=config.out / "continuation" / tag, window=config.continuation.steady_window,
+                                  unsteady=config.continuation.unsteady_step, node=config.node,
                                   progress=not config.quiet)
             mine[name] = Branch(points, run_scheme.h, time.perf_counter() - t0)
     if comm is not None:
@@ -283,8 +284,8 @@ def chart_map(config: ContactMapConfig, result: MapResult, records: list[dict], 
     out, imap = config.out, result.imap
     files = [plot_interaction_map(imap, out / f"interaction_map_{result.tag}.png", eigenfrequencies=omega,
                                   linear_resonance=lin_res,
-                                  title=f"node {config.node}, {result.label}, r = {r}, {config.revolutions:g} rev., "
-                                        f"h = {result.h:.3g} s")]
+                                  title=f"node {config.node}, {result.label}, r = {r}, "
+                                        f"{config.sweep.revolutions:g} rev., h = {result.h:.3g} s")]
     ok = np.isfinite(imap.nfrc)
     worst = records[int(np.nanargmax(np.where(ok, imap.nfrc, -1)))] if ok.any() else records[0]
     curves = {name: worst["u_r"][record_row(worst, f"{config.sector}:{name}")] for name in ("LE", "TE")
@@ -303,18 +304,21 @@ def chart_map(config: ContactMapConfig, result: MapResult, records: list[dict], 
 def summary_entry(config: ContactMapConfig, scheme: CentralDifference, result: MapResult, records: list[dict]
                   ) -> dict:
     """The summary.json entry of one map: step, forces, NFRC, contact works and checks, continuation branches."""
-    imap, wall = result.imap, result.wall_s
+    imap, wall, compute = result.imap, result.wall_s, compute_seconds(records)
     works = np.array([np.asarray(r.get("work", np.full(4, np.nan)), float)[:2] for r in records])
-    entry = {"h": scheme.h, "h_crit": scheme.h_crit, "frequency_cap_khz": config.frequency_cap,
-             "step_outliers": config.step_outliers if scheme.nonlinear else None,
-             "perturbation": config.perturbation, "model_key": scheme.model.key,
+    entry = {"h": scheme.h, "h_crit": scheme.h_crit, "frequency_cap_khz": config.scheme.frequency_cap,
+             "step_outliers": config.scheme.step_outliers if scheme.nonlinear else None,
+             "perturbation": config.scheme.perturbation, "model_key": scheme.model.key,
              "cubature": scheme.model.metadata.get("hyper_reduction"),
              # from the metadata: a disk's sector forces wrap the quadrature forces that carry the precision
              "force_precision": scheme.model.metadata.get("force_precision", "double"), "peak_speed": result.peak_speed,
              "peak_amplitude": float(np.nanmax(imap.nfrc)),
-             "diverged": imap.speeds[imap.diverged].tolist(), "wall_s": wall,
+             "diverged": imap.speeds[imap.diverged].tolist(), "wall_s": wall, "compute_s": compute,
              "retried": {f"{w:g}": hk for w, hk in result.retried.items()},
-             "rev_per_s": config.revolutions * len(records) / wall if wall > 1 else None, "nfrc": imap.nfrc.tolist(),
+             # per process-second over every sitting (a resumed map's too); older folders: this sitting's wall
+             "rev_per_s": config.sweep.revolutions * len(records) / compute if compute else
+             config.sweep.revolutions * len(records) / wall if wall > 1 else None,
+             "nfrc": imap.nfrc.tolist(),
              "work_normal_J": works[:, 0].tolist(), "work_friction_J": works[:, 1].tolist(),
              "speeds": imap.speeds.tolist(), "contact_checks": {
                  "max_penetration": max(float(r["max_penetration"]) for r in records),
@@ -329,8 +333,8 @@ def summary_entry(config: ContactMapConfig, scheme: CentralDifference, result: M
         entry[f"continuation_{name}"] = [(p.omega, p.amplitude, p.steady, p.halvings, p.period)
                                          for p in branch.points]
         entry[f"continuation_{name}_h"], entry[f"continuation_{name}_wall_s"] = branch.h, branch.wall_s
-        entry["continuation_steady_window"] = config.steady_window
-        entry["continuation_unsteady_step"] = config.unsteady_step
+        entry["continuation_steady_window"] = config.continuation.steady_window
+        entry["continuation_unsteady_step"] = config.continuation.unsteady_step
     return entry
 
 
@@ -349,8 +353,8 @@ def carry_on_record(config: ContactMapConfig, run_scheme: CentralDifference, rec
                     monitor: Sequence[int] | None = None):
     """One revolution from a sweep ``record``'s final state, run with the scheme (and step) it ran with, the casing
     where it was. Returns (SimulationResult, the time (s) the record's run ended at)."""
-    steps = int(np.ceil(config.revolutions * 2 * np.pi / speed / run_scheme.h))
-    casing = config.casing
+    steps = int(np.ceil(config.sweep.revolutions * 2 * np.pi / speed / run_scheme.h))
+    casing = config.sweep.casing
     res = simulate(run_scheme, [speed], casing, revolutions=1, initial=(record["q_final"], record["q_prev"]),
                    duration=1e-12, phase=casing.rotation_sense * speed * steps * run_scheme.h,
                    record_every=max(1, int(round(1e-6 / run_scheme.h))), record_q=True, on_blowup="flag",
@@ -367,9 +371,9 @@ def stress_mesh(config: ContactMapConfig, model: ReducedModel):
 
     if model.sectors is None:
         raise ValueError("--stress needs a disk model (this one is a single blade's: demos/report.py draws its stress)")
-    sector = fem.create_disk_sector(MPI.COMM_SELF, preset=config.preset)     # rank 0's own copy under mpirun
+    sector = fem.create_disk_sector(MPI.COMM_SELF, preset=config.rom.preset)     # rank 0's own copy under mpirun
     if mesh_signature(sector) != model.metadata.get("mesh"):
-        raise ValueError(f"--preset: the model was not built on the {config.preset} disk sector's mesh")
+        raise ValueError(f"--preset: the model was not built on the {config.rom.preset} disk sector's mesh")
     return sector
 
 
@@ -476,6 +480,8 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
     (None: serial); ``schemes``: the schemes of the GNL settings (True/False) when the caller has them already
     (``time_scheme``). Raises ValueError for an input the library refuses (a corrupted model, a step above the
     stability limit, ...)."""
+    before_work({"--out": config.out, "--cache": config.cache_dir},                         # before any work
+                {"--model": (config.rom.path, saved_model_key)})
     rank = 0 if comm is None else comm.rank
     if comm is not None:
         # rank 0 alone imports dolfinx for its serial work (the build, the cubature, the stress) and PETSc's
@@ -484,12 +490,12 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
         importlib.import_module("rotor37_rom.fem")
     model, files = reduced_model(config, comm)
     omega = eigenfrequencies(model)
-    onset = sprag_slip_onsets(model, config.casing, config.sector)
+    onset = sprag_slip_onsets(model, config.sweep.casing, config.sector)
     summary = model_summary(config, model, omega, onset)
     if rank == 0 and not config.quiet:
         print(f"sustained sliding diverges (sprag-slip) from mu = {onset['weakest_node']:.3f} on one contact node, "
-              f"{onset['all_nodes']:.3f} on all of them; this run: mu = {config.mu:g} (growth can start below: "
-              f"docs/results.md, 'Friction')")
+              f"{onset['all_nodes']:.3f} on all of them; this run: mu = {config.sweep.casing.mu:g} (growth can start "
+              f"below: docs/results.md, 'Friction')")
     runs, mesh = {}, None
     for gnl in GNL_SETTINGS[config.gnl]:
         setting = config.setting(gnl)
@@ -514,7 +520,7 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
                                                     options=choice.options, expected_error=choice.error,
                                                     run_on_larger_model=config.model_beyond_choice(gnl))
         print_map(result, summary["linear_resonance"])
-        if gnl and setting.step_outliers == "drop" and result.imap.diverged.any():
+        if gnl and setting.scheme.step_outliers == "drop" and result.imap.diverged.any():
             print(f"         {int(result.imap.diverged.sum())} speeds still blew up with --step-outliers drop (their "
                   f"retries halve a step above the one from every state): run them with --step-outliers keep before "
                   f"reading them as grown")

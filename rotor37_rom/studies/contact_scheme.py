@@ -40,23 +40,23 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
     ``config.cache_dir``: a restarted map does not retrain, and another tolerance reuses the exact training runs.
     Under MPI rank 0 trains (serial FE quadrature on its own copy of the mesh) while the others wait."""
     importlib.import_module("rotor37_rom.fem")    # on every rank: importing dolfinx initializes PETSc (collective)
-    train = training_speeds(config.speed_grid) if config.cubature_speeds is None else \
-        np.asarray(config.cubature_speeds, float)
-    revolutions = min(config.revolutions, 12.0)
+    train = training_speeds(config.speed_grid) if config.scheme.cubature_speeds is None else \
+        np.asarray(config.scheme.cubature_speeds, float)
+    revolutions = min(config.sweep.revolutions, 12.0)
     if capped_probe(config, model):
         # a disk's unscaled GNL step (~5e-8 s) would make the training runs hours long: they run capped, at the
         # tangent limit on the capped probe's states (exact forces); a blade's with --capped-training. The training
         # runs take the step from every probe state (--step-outliers is the map's): a step check at 'keep' then
         # finds the same cubature
-        scheme = CentralDifference(model, nonlinear=True, safety=config.safety,
-                                   frequency_cap=config.frequency_cap_rad_s,
-                                   h=config.h or capped_gnl_step(dataclasses.replace(config, step_outliers="keep"),
+        scheme = CentralDifference(model, nonlinear=True, safety=config.scheme.safety,
+                                   frequency_cap=config.scheme.frequency_cap_rad_s,
+                                   h=config.scheme.h or capped_gnl_step(config.with_options(step_outliers="keep"),
                                                                   model, model, None,
                                                                   verbose=comm is None or comm.rank == 0))
     else:
-        scheme = CentralDifference(model, nonlinear=True, safety=config.safety)
-    runs = [model.key, train.tolist(), revolutions, scheme.h, vars(config.casing)]
-    key = hashlib.sha256(json.dumps(runs + [config.cubature, "step states: largest and training"],
+        scheme = CentralDifference(model, nonlinear=True, safety=config.scheme.safety)
+    runs = [model.key, train.tolist(), revolutions, scheme.h, vars(config.sweep.casing)]
+    key = hashlib.sha256(json.dumps(runs + [config.scheme.cubature, "step states: largest and training"],
                                     sort_keys=True, default=str).encode()).hexdigest()[:16]
     cache = config.cache_dir / f"cubature_{key}.npz"
     runs_key = json.dumps(runs + ["states every 1e-5 s; step states: largest and training"], sort_keys=True,
@@ -93,7 +93,7 @@ def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: Centr
     from rotor37_rom.reduction.builder import hyper_reduce
     from rotor37_rom.dynamics.explicit import contact_training_states
 
-    casing = config.casing
+    casing = config.sweep.casing
     t0 = time.perf_counter()
     runs = load_npz(runs_cache, ("train", "step"), what="training runs")
     if runs is not None:
@@ -104,8 +104,8 @@ def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: Centr
         save_npz(runs_cache, train=Q_train, step=step_states)
         checkpoint.unlink(missing_ok=True)
     create = fem.create_disk_sector if model.sectors is not None else fem.create_blade_sector
-    sector = create(MPI.COMM_SELF, preset=config.preset)
-    reduced, rep = hyper_reduce(sector, model, Q_train, tol=config.cubature, level="point",
+    sector = create(MPI.COMM_SELF, preset=config.rom.preset)
+    reduced, rep = hyper_reduce(sector, model, Q_train, tol=config.scheme.cubature, level="point",
                                 label=f"contact runs {train.tolist()} x {revolutions:g} rev, mu = {casing.mu:g}")
     print(f"cubature: {rep['points']} of {rep['exact'].w.size} quadrature points (training error "
           f"{rep['result'].training_error:.1e}) from {Q_train.shape[1]} states of exact GNL runs at "
@@ -117,7 +117,7 @@ def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: Centr
 def capped_probe(config: ContactMapConfig, model: ReducedModel) -> bool:
     """Whether the GNL training runs and step probe run with the frequency cap: a disk's always (its unscaled step
     is ~5e-8 s), a blade's with --capped-training."""
-    return config.frequency_cap is not None and (model.sectors is not None or config.capped_training)
+    return config.scheme.frequency_cap is not None and (model.sectors is not None or config.scheme.capped_training)
 
 
 def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: ReducedModel,
@@ -126,24 +126,24 @@ def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: Re
     for a disk, whose unscaled step is ~5e-8 s, or with --capped-training, a capped GNL probe at 4 of the speeds,
     its 8 largest states)."""
     if states is None:
-        revolutions = min(4.0, config.revolutions)
+        revolutions = min(4.0, config.sweep.revolutions)
         if capped_probe(config, model):
             probe = training_speeds(config.speed_grid, 4)
             states, h_probe = capped_probe_states(config, model, probe, revolutions)
             kind = f"capped (h = {h_probe:.3g} s)"
         else:
             probe = config.speed_grid[:: max(1, config.speeds[2] // 16)]
-            states = probe_states(model, probe, config.casing, revolutions=revolutions)
+            states = probe_states(model, probe, config.sweep.casing, revolutions=revolutions)
             kind = "unscaled"
         if verbose:
             print(f"GNL step from the tangent limit on a {revolutions:g}-revolution {kind} probe at {len(probe)} "
                   f"speeds")
-    step = gnl_step_report(run_model, states, config.frequency_cap_rad_s, safety=config.tangent_safety,
-                           cap_safety=config.safety)
-    drop = config.step_outliers == "drop" and step["h_without_outliers"] > step["h"]
+    step = gnl_step_report(run_model, states, config.scheme.frequency_cap_rad_s, safety=config.scheme.tangent_safety,
+                           cap_safety=config.scheme.safety)
+    drop = config.scheme.step_outliers == "drop" and step["h_without_outliers"] > step["h"]
     h = step["h_without_outliers"] if drop else step["h"]
     if verbose:
-        print(f"GNL with a {config.frequency_cap:g} kHz cap: h = {h:.3g} s")
+        print(f"GNL with a {config.scheme.frequency_cap:g} kHz cap: h = {h:.3g} s")
         print_step_outliers(step, dropped=drop)
     return h
 
@@ -175,15 +175,16 @@ def capped_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np
     """The 8 largest states of a capped GNL run of the disk or blade (exact forces) at the ``probe`` speeds, its step
     halved until no speed blows up (the capped modes stiffen with the amplitude), and that step. Cached in
     ``config.cache_dir`` (a resumed map does not probe again; every rank computes or reads the same)."""
-    scheme = CentralDifference(model, nonlinear=True, safety=config.safety, frequency_cap=config.frequency_cap_rad_s)
-    key = json.dumps([model.key, probe.tolist(), revolutions, scheme.h, scheme.frequency_cap, vars(config.casing),
+    scheme = CentralDifference(model, nonlinear=True, safety=config.scheme.safety,
+                               frequency_cap=config.scheme.frequency_cap_rad_s)
+    key = json.dumps([model.key, probe.tolist(), revolutions, scheme.h, scheme.frequency_cap, vars(config.sweep.casing),
                       "8 largest states"], sort_keys=True, default=str)
     cache = config.cache_dir / f"gnl_probe_{hashlib.sha256(key.encode()).hexdigest()[:16]}.npz"
     cached = load_npz(cache, ("states", "h"), what="probe")
     if cached is not None:
         return cached["states"], float(cached["h"])
     for _ in range(5):
-        res = simulate(scheme, probe, config.casing, revolutions=revolutions, on_blowup="flag", record_q=True,
+        res = simulate(scheme, probe, config.sweep.casing, revolutions=revolutions, on_blowup="flag", record_q=True,
                        record_every=max(1, int(round(2e-5 / scheme.h))))
         if (res.diverged_step < 0).all():
             break
@@ -202,30 +203,31 @@ def time_scheme(config: ContactMapConfig, model: ReducedModel, gnl: bool, comm: 
     perturbation, the perturbed model's scheme with the same cap at the unperturbed model's step (the cap applies to
     the perturbed model: its modes above the cap stay at the cap, their capped mass scaled with their stiffness).
     ``h``: the step to run at instead of the setting's (a record's own, e.g. a retried speed's); the forces stay the
-    setting's (a disk's cubature is trained at the setting's step, so replacing ``config.h`` would train another)."""
-    run_model, states, h = model, None, config.h if h is None else h
-    if gnl and config.cubature is not None:
+    setting's (a disk's cubature is trained at the setting's step, so replacing ``config.scheme.h`` would train
+    another)."""
+    run_model, states, h = model, None, config.scheme.h if h is None else h
+    if gnl and config.scheme.cubature is not None:
         run_model, states = cubature_model(config, model, comm)
-        run_model = with_force_precision(run_model, config.precision)
-    if gnl and config.frequency_cap is not None and h is None:
+        run_model = with_force_precision(run_model, config.scheme.precision)
+    if gnl and config.scheme.frequency_cap is not None and h is None:
         h = capped_gnl_step(config, model, run_model, states, verbose=comm is None or comm.rank == 0)
-    scheme = CentralDifference(run_model, nonlinear=gnl, h=h, safety=config.safety,
-                               frequency_cap=config.frequency_cap_rad_s)
-    if not config.perturbation:
+    scheme = CentralDifference(run_model, nonlinear=gnl, h=h, safety=config.scheme.safety,
+                               frequency_cap=config.scheme.frequency_cap_rad_s)
+    if not config.scheme.perturbation:
         return scheme
-    return CentralDifference(perturbed_model(run_model, config.perturbation), nonlinear=gnl, h=scheme.h,
-                             frequency_cap=config.frequency_cap_rad_s)
+    return CentralDifference(perturbed_model(run_model, config.scheme.perturbation), nonlinear=gnl, h=scheme.h,
+                             frequency_cap=config.scheme.frequency_cap_rad_s)
 
 
 def setting_names(config: ContactMapConfig, gnl: bool) -> tuple[str, str]:
     """(chart label, file tag) of one setting, e.g. ('GNL, cubature 0.0001, single', 'gnl_cub0.0001_f32')."""
     parts = [("GNL", "gnl") if gnl else ("no GNL", "linear")]
-    if gnl and config.cubature is not None:
-        parts.append((f"cubature {config.cubature:g}", f"cub{config.cubature:g}"))
-        if config.precision == "single":
+    if gnl and config.scheme.cubature is not None:
+        parts.append((f"cubature {config.scheme.cubature:g}", f"cub{config.scheme.cubature:g}"))
+        if config.scheme.precision == "single":
             parts.append(("single", "f32"))
-    if config.frequency_cap is not None:
-        parts.append((f"cap {config.frequency_cap:g} kHz", f"cap{config.frequency_cap:g}k"))
-    if config.perturbation:
-        parts.append((f"x (1 + {config.perturbation:g})", f"pert{config.perturbation:g}"))
+    if config.scheme.frequency_cap is not None:
+        parts.append((f"cap {config.scheme.frequency_cap:g} kHz", f"cap{config.scheme.frequency_cap:g}k"))
+    if config.scheme.perturbation:
+        parts.append((f"x (1 + {config.scheme.perturbation:g})", f"pert{config.scheme.perturbation:g}"))
     return ", ".join(p[0] for p in parts), "_".join(p[1] for p in parts)

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from rotor37_rom import fem
-from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model
+from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model
 from rotor37_rom.dynamics.explicit import simulate
 
 MAP_SPEEDS, MAP_REVOLUTIONS = np.linspace(1200.0, 1650.0, 90), 200.0     # the full-disk map

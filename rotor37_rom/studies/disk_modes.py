@@ -20,9 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
+from rotor37_rom.checks import before_work
 from rotor37_rom.cli import resolve_table
 from rotor37_rom.geometry.blade import MESH_PRESETS
-from rotor37_rom.post.modes import classify_blade_modes
+from rotor37_rom.model.modes import classify_blade_modes
 
 __all__ = ["BladedDiskConfig", "BladedDiskResult", "run_bladed_disk"]
 
@@ -70,6 +71,7 @@ def run_bladed_disk(config: BladedDiskConfig) -> BladedDiskResult:
     from rotor37_rom.fem.safe import compute_safe_diagram
 
     comm = MPI.COMM_WORLD
+    before_work({"--out": config.out})
     seconds, files = {}, []
     t0 = time.perf_counter()
     sector = fem.create_disk_sector(comm, table=config.table, preset=config.preset)

@@ -9,13 +9,15 @@ and checkpointed; reduced runs by the same Newmark at the same step, so the erro
 """
 from __future__ import annotations
 
-import argparse
+import re
 import time
 from pathlib import Path
 
 import numpy as np
 
 from rotor37_rom import fem
+from rotor37_rom.checks import fits_in_memory, real_number, whole_number
+from rotor37_rom.cli import ArgumentParser
 from rotor37_rom.disk.loads import harmonic_field_load, harmonic_node_load, repeat_count
 from rotor37_rom.dynamics.newmark import simulate_newmark
 from rotor37_rom.fem.periodic import sector_harmonic_load, solve_repeating_newmark
@@ -25,13 +27,13 @@ from rotor37_rom.reduction.craig_bampton import CRITERIA
 AMPLITUDE = 400.0
 
 
-def parse_case(text: str) -> tuple[int, float]:
-    """(N_d, omega) of a case written '<N_d>:<omega rad/s>'; ValueError otherwise."""
+def parse_case(text: str, option: str = "--cases") -> tuple[int, float]:
+    """(N_d, omega) of a case written '<N_d>:<omega rad/s>'; ValueError naming ``option`` otherwise."""
     nd, _, omega = text.partition(":")
     try:
         return int(nd), float(omega)
     except ValueError:
-        raise ValueError(f"a case reads '<N_d>:<omega rad/s>', e.g. 9:13000; got {text!r}") from None
+        raise ValueError(f"{option}: a case reads '<N_d>:<omega rad/s>', e.g. 9:13000; got {text!r}") from None
 
 
 def forced_model_choice(tolerance: float, gnl: bool):
@@ -122,7 +124,7 @@ def parse_args(argv=None, description: str | None = None):
     (ValueError naming the option) and completed: with ``--tolerance`` the model options are the speed-accuracy
     study's choice (``args.choice``) and a GNL reference runs only where asked, on the study's GNL load (``--patch
     3``); without it the defaults (MODEL_DEFAULTS, GNL reference of 0:4000)."""
-    parser = argparse.ArgumentParser(description=description)
+    parser = ArgumentParser(description=description)
     parser.add_argument("--preset", default="ci", choices=["ci", "coarse", "paper"])
     parser.add_argument("--cases", nargs="+", default=["0:4000", "0:13000", "0:17000", "9:4000", "9:13000",
                                                        "9:17000"], help="N_d:omega pairs")
@@ -161,8 +163,11 @@ def parse_args(argv=None, description: str | None = None):
     if args.gnl_reference is None:
         args.gnl_reference = [] if args.tolerance is not None else ["0:4000"]
     cases = [parse_case(c) for c in args.cases]
-    gnl_cases = {parse_case(c) for c in args.gnl_reference}
+    gnl_cases = {parse_case(c, "--gnl-reference") for c in args.gnl_reference}
+    if not re.fullmatch(r"[\w.-]*", args.name):
+        raise ValueError(f"--name must be letters, digits, '_', '-' or '.' (a file name's suffix), got {args.name!r}")
     if args.tolerance is not None:
+        real_number("--tolerance", args.tolerance, 0, 1, open_low=True, open_high=True)
         given = [opt for opt, dest in MODEL_OPTIONS.items() if getattr(args, dest) is not None]
         if given:
             raise ValueError(f"--tolerance chooses {', '.join(given)}: give one or the other")
@@ -184,18 +189,25 @@ def parse_args(argv=None, description: str | None = None):
         if getattr(args, dest) is None:
             setattr(args, dest, value)
     for nd, omega in cases:
-        repeat_count(36, nd)
-        if not 100.0 <= omega <= 1e5:
-            raise ValueError(f"omega must be in [100, 1e5] rad/s, got {omega}")
+        try:
+            repeat_count(36, nd)
+        except ValueError as exc:
+            raise ValueError(f"--cases: {exc}") from None
+        real_number("--cases: omega", omega, 100.0, 1e5, unit=" rad/s")
     bad = [c for c in args.criteria if c not in CRITERIA]
     if bad:
-        raise ValueError(f"criteria must be among {CRITERIA}, got {bad}")
-    if args.face_shapes < 0:
-        raise ValueError(f"face-shapes must be >= 0, got {args.face_shapes}")
-    if min(args.r_md) < 0 or args.r_c < 1:
-        raise ValueError(f"r-md must be >= 0 and r-c >= 1, got r-md {args.r_md}, r-c {args.r_c}")
-    if not (args.periods > 0 and args.steps_per_period >= 20 and 0 <= args.ramp < args.periods):
-        raise ValueError("periods must be > 0, steps-per-period >= 20 and ramp in [0, periods)")
-    if not 0 <= args.patch <= 20:
-        raise ValueError(f"patch must be in [0, 20] mm, got {args.patch:g}")
+        raise ValueError(f"--criteria must be among {CRITERIA}, got {bad}")
+    whole_number("--face-shapes", args.face_shapes, 0)
+    for r_md in args.r_md:
+        whole_number("--r-md", r_md, 0)
+    whole_number("--r-c", args.r_c, 1)
+    whole_number("--r-cyclic", args.r_cyclic, 1)
+    real_number("--periods", args.periods, 0, 1000, open_low=True)        # 1,000 periods: 100,000 steps and more
+    whole_number("--steps-per-period", args.steps_per_period, 20, 10000)
+    real_number("--ramp", args.ramp, 0, args.periods, open_high=True, unit=" periods (below --periods)")
+    real_number("--patch", args.patch, 0, 20, unit=" mm")
+    # a reduced run keeps its state at every step: r = 36 (r_b + r_c + r_md) + r_cyclic, r_b = 3 (node LE)
+    steps, r = args.periods * args.steps_per_period, 36 * (3 + args.r_c + max(args.r_md)) + args.r_cyclic
+    fits_in_memory("--periods", 8.0 * (steps + 1) * r, f"{steps:.0f} steps x r = {r}",
+                   hint="fewer --periods or --steps-per-period")
     return args

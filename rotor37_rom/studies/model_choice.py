@@ -15,14 +15,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Callable
 
-import numpy as np
 
 from rotor37_rom.studies.speed_accuracy.study_file import SCHEMA, config_options, read_study
 
-__all__ = ["STUDY_FILE", "SCHEMA", "ModelChoice", "load_study", "pareto_front", "scene_floor", "expected_error",
+__all__ = ["STUDY_FILE", "SCHEMA", "ModelChoice", "load_study", "scene_floor", "expected_error",
            "choose_model", "reference_model", "scenes"]
 
 STUDY_FILE = Path(__file__).resolve().parents[1] / "data" / "speed_accuracy.json"
@@ -30,10 +30,10 @@ STUDY_FILE = Path(__file__).resolve().parents[1] / "data" / "speed_accuracy.json
 
 @dataclasses.dataclass(frozen=True)
 class ModelChoice:
-    """One candidate of a scene: its options (the field names of the configuration the scene measured,
-    ``study_file.SCENE_CONFIG``: e.g. ``ContactMapConfig.frequency_cap``), its expected error (relative), the error on
-    the study's cases and on held-out cases (None: not run there), its cost, and the scene's floor (0: the scene
-    states none)."""
+    """One candidate of a scene: its options (the option names of the configuration the scene measured,
+    ``study_file.SCENE_CONFIG``: e.g. ``frequency_cap``, held at ``ContactMapConfig.scheme.frequency_cap``), its
+    expected error (relative), the error on the study's cases and on held-out cases (None: not run there), its cost,
+    and the scene's floor (0: the scene states none)."""
 
     scene: str
     name: str
@@ -70,18 +70,6 @@ def scenes(study: dict | None = None) -> list[str]:
     return sorted((study or load_study())["scenes"])
 
 
-def pareto_front(costs: Sequence[float], errors: Sequence[float]) -> np.ndarray:
-    """Mask of the Pareto-optimal points: no other point is at most as costly and at most as wrong, and strictly
-    better in one of the two. NaN or infinite errors (a run that diverged) are never optimal."""
-    c, e = np.asarray(costs, float), np.asarray(errors, float)
-    ok = np.isfinite(c) & np.isfinite(e)
-    front = np.zeros(c.size, bool)
-    for i in np.flatnonzero(ok):
-        dominated = ok & (c <= c[i]) & (e <= e[i]) & ((c < c[i]) | (e < e[i]))
-        front[i] = not dominated.any()
-    return front
-
-
 def scene_floor(scene: dict) -> float:
     """The error below which ``scene`` (a scene of the study file) cannot tell models apart, 0 if it states none:
     its ``floor`` record, e.g. what the reference's own frequency cap is worth (its model at a lower cap, measured
@@ -109,7 +97,7 @@ def choose_model(scene: str, tolerance: float, study: dict | None = None, fallba
     study = study if study is not None else load_study()
     if scene not in study["scenes"]:
         raise ValueError(f"scene must be one of {', '.join(scenes(study))}, got {scene!r}")
-    if not (isinstance(tolerance, (int, float)) and 0 < tolerance < 1):
+    if not (isinstance(tolerance, numbers.Real) and not isinstance(tolerance, bool) and 0 < tolerance < 1):
         raise ValueError(f"tolerance must be in (0, 1) (a relative error, 0.05 = 5 %), got {tolerance!r}")
     data = study["scenes"][scene]
     candidates = [c for c in data["candidates"] if where is None or where(c)]

@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rotor37_rom.checks import before_work, flagged, readable_file
+from rotor37_rom.dynamics.casing import Casing, check_hand
 from rotor37_rom.geometry.mesh_import import MESH_SUFFIXES, UNITS
 
 __all__ = ["OwnBladeConfig", "load_blade", "run_own_blade"]
@@ -23,7 +25,12 @@ __all__ = ["OwnBladeConfig", "load_blade", "run_own_blade"]
 
 @dataclasses.dataclass(frozen=True)
 class OwnBladeConfig:
-    """What to run. mesh None: the project's ci blade written as a millimetre Abaqus deck (the example input)."""
+    """What to run. mesh None: the project's ci blade written as a millimetre Abaqus deck (the example input).
+
+    The frame is the user's, stated and printed with the results: the blade turns about +z in ``rotation_sense``
+    (-1: towards -theta, rotor 37's) and touches the casing along ``direction`` ('x': the blade frame's e_x, the
+    paper's; 'radial'; 'cone'); a sense that turns the blade with its trailing edge ahead (a mirrored blade) is
+    refused (``dynamics.casing.check_hand``)."""
 
     mesh: str | None = None
     clamp: str = "CLAMP"
@@ -35,13 +42,18 @@ class OwnBladeConfig:
     speed: float = 1400.0
     revolutions: float = 2.0
     mu: float = 0.0
+    direction: str = "x"
+    rotation_sense: int = -1
     out: str = "results/own_blade"
 
     def __post_init__(self):
-        if self.mesh is not None and not Path(self.mesh).is_file():
-            raise ValueError(f"--mesh {self.mesh} does not exist")
+        if self.mesh is not None:
+            readable_file("--mesh", self.mesh)
         if self.mesh is not None and Path(self.mesh).suffix.lower() not in MESH_SUFFIXES:
             raise ValueError(f"--mesh must be one of {', '.join(MESH_SUFFIXES)}, got {Path(self.mesh).name}")
+        for option, name in (("--clamp", self.clamp), ("--tip", self.tip)):
+            if not (isinstance(name, str) and name.strip()):
+                raise ValueError(f"{option} must name a group of the mesh, got {name!r}")
         if self.units not in UNITS:
             raise ValueError(f"--units must be one of {', '.join(UNITS)}, got {self.units!r}")
         if not 2 <= self.contact <= 40:
@@ -56,6 +68,14 @@ class OwnBladeConfig:
             raise ValueError(f"--revolutions must be in (0, 50], got {self.revolutions}")
         if not 0.0 <= self.mu < 1.0:
             raise ValueError(f"--mu must be in [0, 1), got {self.mu}")
+        flagged("--direction", lambda: Casing(direction=self.direction))
+        flagged("--rotation-sense", lambda: Casing(rotation_sense=self.rotation_sense))
+
+    @property
+    def casing(self) -> Casing:
+        """The casing of the run in the user's frame: rotation about +z in ``rotation_sense``, the normal
+        ``direction``, friction ``mu``."""
+        return Casing(mu=self.mu, direction=self.direction, rotation_sense=self.rotation_sense)
 
 
 def load_blade(config: OwnBladeConfig):
@@ -68,27 +88,35 @@ def load_blade(config: OwnBladeConfig):
         path = fem.write_sector_mesh(fem.create_blade_sector(preset="ci"), Path(config.out) / "example_blade_mm.inp",
                                      units="mm")
         print(f"no --mesh: the ci blade written as {path} (C3D4, mm, node sets CLAMP and TIP)")
-    return fem.create_sector_from_file(path, clamp=config.clamp, tip=config.tip, units=config.units,
-                                       contact=config.contact, preset="ci")
+    try:
+        return fem.create_sector_from_file(path, clamp=config.clamp, tip=config.tip, units=config.units,
+                                           contact=config.contact, preset="ci")
+    except ValueError as exc:
+        raise ValueError(f"--mesh: {exc}") from None
 
 
 def run_own_blade(config: OwnBladeConfig) -> dict:
     """The whole scene; returns the summary written to results/own_blade/summary.json."""
     from rotor37_rom import fem
     from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
-    from rotor37_rom.dynamics.casing import Casing, contact_matrices
+    from rotor37_rom.dynamics.casing import contact_matrices
     from rotor37_rom.dynamics.friction import sprag_slip_friction
     from rotor37_rom.dynamics.explicit import CentralDifference, simulate
 
+    before_work({"--out": config.out})
     t0 = time.perf_counter()
     blade = load_blade(config)
+    stagger = check_hand(blade.tip_nodes, config.rotation_sense)          # ValueError naming --rotation-sense
+    towards = "-theta" if config.rotation_sense < 0 else "+theta"
+    print(f"frame: rotation about +z, sense {config.rotation_sense:+d} (towards {towards}), contact normal "
+          f"{config.direction}; the tip's trailing edge {abs(np.degrees(stagger)):.1f} deg behind its leading edge")
     modes = fem.compute_clamped_modes(blade, config.modes)
     print("clamped modes (Hz):", np.round(modes.omega / (2 * np.pi), 1).tolist())
     print("contact nodes (LE -> TE), mm:", np.round(1e3 * blade.tip_nodes, 2).tolist())
     model, _ = build_reduced_model(blade, ReductionConfig(r_c=config.r_c, r_md=0, global_md_modes=3,
                                                           forces="intrusive", keep_basis=True))
     print(f"reduced model: r = {model.r} {model.sizes}")
-    casing = Casing(mu=config.mu)
+    casing = config.casing
     N, S, _, _ = contact_matrices(model.nodes, model.r, casing)
     per_node = [sprag_slip_friction(model.K, N, S, [k]) for k in range(N.shape[0])]
     le_half = sprag_slip_friction(model.K, N, S, list(range(max(1, N.shape[0] // 2))))
@@ -104,6 +132,8 @@ def run_own_blade(config: OwnBladeConfig) -> dict:
         "r": model.r, "sizes": list(model.sizes), "mu_star_per_node": [m if np.isfinite(m) else None for m in per_node],
         "mu_star_le_half": le_half if np.isfinite(le_half) else None, "speed": config.speed, "mu": config.mu,
         "revolutions": config.revolutions, "diverged": diverged,
+        "frame": {"axis": "+z", "rotation_sense": config.rotation_sense, "contact_normal": config.direction,
+                  "tip_stagger_deg": float(np.degrees(stagger))},
         "le_max_radial_mm": None if diverged else 1e3 * float(np.max(run.u_r[0][le])),
         "wall_s": time.perf_counter() - t0,
     }

@@ -146,11 +146,11 @@ def plot_speed_accuracy(rows: list, path: str | Path, title: str = "", cost_labe
                         tolerances: tuple = (), floor: float | None = None,
                         reference: tuple | None = None) -> Path:
     """Error against cost on log-log axes: rows of (label, cost, error (relative)); the Pareto-optimal models
-    (``studies.model_choice.pareto_front``) are joined and labelled, the others drawn grey; ``tolerances`` as dotted
+    (``pareto.pareto_front``) are joined and labelled, the others drawn grey; ``tolerances`` as dotted
     lines; the scene's ``floor`` (the error below which it cannot tell models apart) shaded below a dashed line;
     ``reference`` = (label, cost): the reference's cost as a vertical line (a full-order reference, whose error is 0 by
     construction). A run that diverged (error inf) is drawn on the top edge with a cross."""
-    from rotor37_rom.studies.model_choice import pareto_front
+    from rotor37_rom.pareto import pareto_front
 
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7.2, 4.8))

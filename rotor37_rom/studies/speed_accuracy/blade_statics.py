@@ -16,7 +16,7 @@ def scene_modes() -> dict:
     """The clamped frequencies of modes 1-6 on the ci, coarse and paper presets (mesh, assembly and the modes
     timed); error: modes 1-3 against the paper preset, held out: modes 4-6."""
     from rotor37_rom import fem
-    from rotor37_rom.post.modes import classify_blade_modes
+    from rotor37_rom.model.modes import classify_blade_modes
 
     fem.create_blade_sector(preset="ci")                     # warm-up: imports and form compilation off the clock
     rows = {}

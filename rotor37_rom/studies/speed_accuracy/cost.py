@@ -72,7 +72,7 @@ def scene_paper_speedup(ctx: StudyContext, study: dict, tolerance: float = 0.05)
     options = dict(cand["options"])
     r_c = options.pop("r_c", 15)
     tag = f"gnl_{choice.name}_{int(MAP['speeds'][0])}_{int(MAP['speeds'][1])}_{int(MAP['speeds'][2])}"
-    config = cm.ContactMapConfig(**{**MAP, "model": model_file(ctx, r_c), "gnl": "on",
+    config = cm.ContactMapConfig.from_options(**{**MAP, "model": model_file(ctx, r_c), "gnl": "on",
                                     "out": ctx.work / tag.replace(" ", "_"), **options, "h": cand["h"]})
     scheme = cm.time_scheme(config, load_reduced_model(model_file(ctx, r_c)), True, None)
     P = int(MAP["speeds"][2])

@@ -78,7 +78,7 @@ def forced_reference(ctx: StudyContext, case: tuple, gnl: bool) -> dict:
 def forced_model(ctx: StudyContext, options: dict, gnl: bool):
     """The §3.3 disk model of ``options`` (node LE kept, r_b = 3; r_md by MI 2b; GNL: the patch's static correction
     and exact tensors with eq. 61's force or ``face_shapes``), built once (cached under results/speed_accuracy)."""
-    from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model
+    from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model
 
     sector, ops, *_ = _forced_sector()
     config = DiskReductionConfig(tip_nodes="LE", r_c=options["r_c"], r_md=options["r_md"], criterion="MI2b",

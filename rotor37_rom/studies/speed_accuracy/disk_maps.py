@@ -70,7 +70,7 @@ def disk_model_file(ctx: StudyContext, options: dict, perturbation: float = 0.0,
 @functools.lru_cache(maxsize=None)
 def _disk_model_file(ctx: StudyContext, r_c: int, r_md: int, r_cyclic: int, perturbation: float, gnl: bool) -> Path:
     from rotor37_rom.reduction.builder import mesh_signature
-    from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model
+    from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model
     from rotor37_rom.model.reduced import load_reduced_model, perturbed_model, save_reduced_model
 
     sector, ops = disk_sector()

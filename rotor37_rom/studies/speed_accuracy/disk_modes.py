@@ -30,7 +30,7 @@ def scene_disk_modes(ctx: StudyContext) -> dict:
     from rotor37_rom.reduction.builder import mesh_signature
     from rotor37_rom.dynamics.casing import Casing
     from rotor37_rom.disk.harmonics import harmonic_frequencies
-    from rotor37_rom.disk.builder import DiskReductionConfig, build_disk_model
+    from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model
     from rotor37_rom.dynamics.explicit import CentralDifference, simulate
     from rotor37_rom.npz import load_npz, save_npz
 

@@ -20,7 +20,7 @@ def render_markdown(study: dict, img: Path) -> str:
     """The generated part of docs/choosing-a-model.md: per scene, the candidates (cost, error, held-out error,
     Pareto-optimal or not) and the models chosen at each tolerance, every number from the study file; a scene's
     chart is linked where ``img`` holds it."""
-    from rotor37_rom.studies.model_choice import pareto_front
+    from rotor37_rom.pareto import pareto_front
 
     runs = study.get("runs", [])
     full = [i for i, r in enumerate(runs) if r["from_scratch"]]

@@ -44,7 +44,7 @@ def model_file(ctx: StudyContext, r_c: int) -> Path:
     path = ctx.work / "models" / f"rom_rc{r_c}.npz"
     # built through the builder's cache (keyed by the reduction's parameters): a file saved by an earlier builder is
     # replaced, and run_map then sees its maps ran another model
-    model = cm.build_model(cm.ContactMapConfig(**{**MAP, "r_c": r_c, "out": ctx.work / "models"}))
+    model = cm.build_model(cm.ContactMapConfig.from_options(**{**MAP, "r_c": r_c, "out": ctx.work / "models"}))
     if not path.is_file() or load_reduced_model(path).key != model.key:
         save_reduced_model(model, path)
     return path
@@ -80,8 +80,8 @@ def run_map(ctx: StudyContext, name: str, gnl: bool, options: dict, speeds=MAP["
     tag = tag.replace(" ", "_")
     out = ctx.work / tag
     done = out / ("study_run.json" if base is None else f"study_run_retries{opts['retry_diverged']}.json")
-    config = cm.ContactMapConfig(**{**setup, "speeds": speeds, "model": model_path, "gnl": "on" if gnl else "off",
-                                    "out": out, **opts})
+    config = cm.ContactMapConfig.from_options(**{**setup, "speeds": speeds, "model": model_path,
+                                                 "gnl": "on" if gnl else "off", "out": out, **opts})
     setting = json.dumps([str(model_path), opts] + ([] if setup == MAP else [setup]), sort_keys=True, default=str)
     key = saved_model_key(model_path)
     info = json.loads(done.read_text()) if done.is_file() else {}
@@ -124,7 +124,7 @@ def run_map(ctx: StudyContext, name: str, gnl: bool, options: dict, speeds=MAP["
     from rotor37_rom.studies.sweep import interaction_map
 
     imap = interaction_map(records, config.node)
-    steps = sum(config.revolutions * 2 * np.pi / float(r["omega"]) / h for r, h in zip(records, record_h))
+    steps = sum(config.sweep.revolutions * 2 * np.pi / float(r["omega"]) / h for r, h in zip(records, record_h))
     print(f"map {tag}: h = {info['h']:.3g} s, sweep {info['sweep_wall']:.1f} s "
           f"({1e6 * info['sweep_wall'] / steps:.1f} us/sim-step), diverged {int(imap.diverged.sum())}")
     return MapRun(imap.nfrc, imap.speeds, imap.diverged, records, info["wall"], info["sweep_wall"], steps, info["h"],
@@ -136,7 +136,7 @@ def study_training_speeds(setup: dict = MAP) -> tuple[float, ...]:
     from rotor37_rom.dynamics.explicit import training_speeds
     from rotor37_rom.studies.contact_config import ContactMapConfig
 
-    return tuple(training_speeds(ContactMapConfig(**setup).speed_grid).tolist())
+    return tuple(training_speeds(ContactMapConfig.from_options(**setup).speed_grid).tolist())
 
 
 def held_out_options(options: dict, setup: dict = MAP) -> dict:

@@ -1,7 +1,7 @@
 """The study file's schema, and the one module that reads and writes it (``rotor37_rom/data/speed_accuracy.json``).
 
 The file is JSON: per scene a ``SceneRecord`` whose candidates (``CandidateRecord``) carry their ``options``, keyed on
-the field names of the library's configuration the scene measured (``SCENE_CONFIG``): ``ContactMapConfig`` for the
+the option names of the library's configuration the scene measured (``SCENE_CONFIG``): ``ContactMapConfig`` for the
 maps and stresses (``r_c``, ``frequency_cap``, ``safety``, ``cubature``, ``precision``, ``retry_diverged``, a disk's
 ``r_md``, ``r_cyclic``), ``ReducedBladeConfig`` for the clearance (``r_c``, ``r_md``, ``criterion``, ``global_md``),
 ``DiskReductionConfig`` for the disk's frequencies and forced response (``r_c``, ``r_md``, ``r_cyclic``,
@@ -22,6 +22,7 @@ from rotor37_rom.npz import save_json
 
 __all__ = ["SCHEMA", "CandidateRecord", "FloorRecord", "ChoiceRecord", "SceneRecord", "RunRecord", "StudyRecord",
            "SCENE_CONFIG", "RENAMED", "new_study", "read_study", "load_or_new", "write_study", "config_options",
+           "option_names",
            "finite_or_none"]
 
 SCHEMA = 1
@@ -98,7 +99,7 @@ class StudyRecord(TypedDict, total=False):
 
 # the configuration whose field names a scene's options are (module, class): checked by tests/test_model_choice.py
 _MAP_CONFIG = ("rotor37_rom.studies.contact_config", "ContactMapConfig")
-_DISK_CONFIG = ("rotor37_rom.disk.builder", "DiskReductionConfig")
+_DISK_CONFIG = ("rotor37_rom.reduction.disk_builder", "DiskReductionConfig")
 SCENE_CONFIG = {
     "modes": _MAP_CONFIG, "clearance": ("rotor37_rom.studies.clearance_consumption", "ReducedBladeConfig"),
     **{f"{kind}-{gnl}": _MAP_CONFIG for kind in ("map", "history", "stress", "disk-map", "disk-stress")
@@ -143,11 +144,18 @@ def write_study(path: str | Path, study: StudyRecord) -> Path:
     return save_json(path, study, indent=1, default=finite_or_none)
 
 
+def option_names(config_type: type) -> set[str]:
+    """The options a configuration takes: its ``OPTIONS`` where it maps flat options onto the objects it composes
+    (``ContactMapConfig.from_options``), else its dataclass fields."""
+    flat = getattr(config_type, "OPTIONS", None)
+    return set(flat) if flat is not None else {f.name for f in dataclasses.fields(config_type)}
+
+
 def config_options(options: dict[str, Any], config_type: type) -> dict[str, Any]:
-    """A candidate's ``options`` as keyword arguments of the dataclass ``config_type`` (``RENAMED`` where it names
-    an option otherwise); ValueError naming the options that are none of its fields (e.g. the full-order linear
-    candidate's ``model``)."""
-    fields = {f.name for f in dataclasses.fields(config_type)}
+    """A candidate's ``options`` as keyword arguments of the dataclass ``config_type`` (of its ``from_options`` where
+    it composes others; ``RENAMED`` where it names an option otherwise); ValueError naming the options that are none
+    of its options (e.g. the full-order linear candidate's ``model``)."""
+    fields = option_names(config_type)
     out = {RENAMED.get((config_type.__name__, k), k): v for k, v in options.items()}
     unknown = sorted(k for k in out if k not in fields)
     if unknown:

@@ -16,8 +16,9 @@ from pathlib import Path
 import numpy as np
 
 from rotor37_rom import __version__, fem
-from rotor37_rom.reduction.builder import (Laps, _m_normalise, boundary_node_map, cached_model,
-    compute_modal_derivatives, mesh_signature)
+from rotor37_rom.reduction.config import DiskReductionConfig
+from rotor37_rom.reduction.builder import (_m_normalise, begin_build, boundary_node_map, compute_modal_derivatives,
+    mesh_signature)
 from rotor37_rom.disk.symmetry import rotation_z
 from rotor37_rom.disk.assembly import (SectorMatrices, assemble_disk_matrices, disk_node_map, face_shapes,
     interface_modes)
@@ -33,69 +34,6 @@ from rotor37_rom.dynamics.newmark import simulate_linear_newmark
 __all__ = ["DiskReductionConfig", "build_disk_model"]
 
 LOG = logging.getLogger(__name__)
-
-
-@dataclasses.dataclass(frozen=True)
-class DiskReductionConfig:
-    """Parameters of the disk's reduced model (SI units).
-
-    Attributes:
-        tip_nodes: the sector's tip nodes kept physical in q ('all': the 8 contact nodes, r_b = 24; 'LE': node LE
-            only, r_b = 3, the paper's §3.3 models).
-        r_c: fixed-interface modes per sector (>= 1).
-        r_md: modal derivatives per sector, selected by ``criterion`` on the training response.
-        criterion: 'MMI', 'MI2a', 'MI2b', 'SMVW' or 'random' (§3.1.2).
-        r_cyclic: interface modes of the whole disk (eq. 51; the paper: 144).
-        interface: 'closest' (eq. 51: the interface modes closest in frequency to the sector's fixed-interface
-            modes) or 'per_k' (the lowest modes of every harmonic in equal shares).
-        forces: 'intrusive' (exact tensors), 'quadrature' (exact, tensor-free) or 'none' (linear).
-        training_force, training_omega: the training load (§3.3.1: 400 N along e_z at node LE of every sector,
-            4000 rad/s, one period, a 0-diameter load: the training runs on the sector with its faces tied for k = 0).
-        mistuning: None (tuned) or one stiffness factor per sector (e.g. 1 + scatter), each > 0.
-        seed: of the 'random' criterion.
-        load_patch: 0 (the paper's point load at node LE), or a radius (m): the training force spread as a traction
-            over the boundary facets within it of node LE (``fem.patch_load``), and that load's static response with
-            the boundary fixed added to every sector's basis after the fixed-interface modes (the static load
-            correction of component mode synthesis: a load off the boundary set has a local field that neither the
-            constraint modes nor the lowest fixed-interface modes carry), its modal derivatives among the candidates.
-        face_shapes: 0 (eq. 61: each sector's nonlinear force acts on its q^n only, the paper's linear coupling), or
-            n_f >= 1: the force acts on the sector's whole field with each face on n_f shapes
-            (``disk.assembly.face_shapes``), r_s + 2 n_f force coordinates per sector. The faces' constraint modes carry
-            part of the blade's motion: eq. 61 caps the GNL forced response's accuracy (docs/results.md).
-    """
-
-    tip_nodes: str = "all"
-    r_c: int = 10
-    r_md: int = 10
-    criterion: str = "MI2b"
-    r_cyclic: int = 144
-    interface: str = "closest"
-    forces: str = "intrusive"
-    training_force: float = 400.0
-    training_omega: float = 4000.0
-    mistuning: tuple | None = None
-    seed: int = 0
-    load_patch: float = 0.0
-    face_shapes: int = 0
-
-    def __post_init__(self):
-        if self.tip_nodes not in ("all", "LE"):
-            raise ValueError(f"tip_nodes must be 'all' or 'LE', got {self.tip_nodes!r}")
-        if self.r_c < 1 or self.r_md < 0 or self.r_cyclic < 1:
-            raise ValueError(f"r_c >= 1, r_md >= 0 and r_cyclic >= 1 are required, got {self.r_c}, {self.r_md}, "
-                             f"{self.r_cyclic}")
-        if self.criterion not in CRITERIA:
-            raise ValueError(f"criterion must be one of {CRITERIA}, got {self.criterion!r}")
-        if self.interface not in ("closest", "per_k"):
-            raise ValueError(f"interface must be 'closest' or 'per_k', got {self.interface!r}")
-        if self.forces not in ("intrusive", "quadrature", "none"):
-            raise ValueError(f"forces must be 'intrusive', 'quadrature' or 'none', got {self.forces!r}")
-        if self.mistuning is not None and (len(self.mistuning) == 0 or min(self.mistuning) <= 0):
-            raise ValueError("mistuning: one stiffness factor > 0 per sector")
-        if self.face_shapes < 0:
-            raise ValueError(f"face_shapes must be >= 0 (0: eq. 61's force of q^n only), got {self.face_shapes}")
-        if not (np.isfinite(self.load_patch) and 0 <= self.load_patch <= 0.02):
-            raise ValueError(f"load_patch must be in [0, 0.02] m, got {self.load_patch}")
 
 
 def _static_load_correction(M_f, boundary: np.ndarray, f: np.ndarray, Theta: np.ndarray, solve_ii) -> np.ndarray:
@@ -205,12 +143,10 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     tip_rows = [sector.tip_names.index("LE")] if config.tip_nodes == "LE" else list(range(len(sector.tip_names)))
     tip_dofs = np.asarray(sector.tip_dofs)[tip_rows].ravel()
     metadata = _disk_metadata(sector, config)
-    cache, cached = cached_model(metadata, cache_dir, "disk")
+    cache, cached, report, lap, operators = begin_build(sector, ops, metadata, cache_dir, "disk")
     if cached is not None:
-        return cached, {"cached": True}
-    report: dict = {"cached": False}
-    lap = Laps(report)
-    K_f, M_f, free = fem.assemble_free_operators(sector, ops)
+        return cached, report
+    K_f, M_f, free = operators
     n_full = sector.n_dofs
     left, right = pairs.left.ravel(), pairs.right.ravel()
     boundary = np.concatenate([tip_dofs, left, right])
