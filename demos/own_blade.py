@@ -47,13 +47,21 @@ def build_parser() -> ArgumentParser:
     p.add_argument("--rotation-sense", type=int, default=-1, choices=[-1, 1],
                    help="the rotor turns about +z towards -theta (-1, rotor 37's) or +theta (+1); a sense that turns "
                         "the blade with its trailing edge ahead (a mirrored blade) is refused (default -1)")
+    p.add_argument("--material", type=float, nargs=3, metavar=("E", "NU", "RHO"),
+                   help="the blade's material in SI (Pa, -, kg/m^3); default: the deck's own (*MATERIAL), else the "
+                        "paper's maraging steel (180e9 0.3 8000); printed either way")
+    p.add_argument("--mass-check", choices=["on", "off"], default="on",
+                   help="refuse a blade outside 1 g - 100 kg, naming the units it is likely in (off: the mass is "
+                        "right)")
     p.add_argument("--out", default="results/own_blade")
     return p
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    config = OwnBladeConfig(**{k: v for k, v in vars(args).items()})
+    options = vars(args) | {"mass_check": args.mass_check == "on",
+                            "material": None if args.material is None else tuple(args.material)}
+    config = OwnBladeConfig(**options)
     run_own_blade(config)
     return 0
 

@@ -101,6 +101,7 @@ class BladeModel:
         preset: the mesh preset used.
         n_nodes: mesh nodes (order-1 mesh).
         summary: one line on what was read or meshed (imported files), with the bounding box.
+        n_sectors: N for a cyclic sector read from a file (its 'left' and 'right' faces paired by ``fem``), else 0.
     """
 
     source: str
@@ -109,6 +110,7 @@ class BladeModel:
     preset: MeshPreset
     n_nodes: int
     summary: str = ""
+    n_sectors: int = 0
 
 
 _SESSION_DEPTH = [0]
@@ -429,7 +431,7 @@ def _scale_for(scale: float, units: str | None) -> float:
 
 def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], tip: str | Sequence[float] | None = None,
                        preset: str | MeshPreset = "coarse", scale: float = 1.0, units: str | None = None,
-                       contact=None) -> BladeModel:
+                       contact=None, cyclic=None) -> BladeModel:
     """Load a user's blade into the current gmsh model: a CAD file (STEP, BREP: meshed with the preset) or a mesh
     from another FE code (gmsh .msh, Abaqus/CalculiX .inp, NASTRAN .bdf/.nas, VTK .vtk/.vtu; wedges, hexahedra and
     pyramids are split into conforming tetrahedra, see geometry.mesh_import).
@@ -440,6 +442,8 @@ def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], ti
             (xmin, ymin, zmin, xmax, ymax, zmax) in metres (after scaling) enclosing the clamped faces (CAD: only a
             box; formats without groups, such as .bdf or .vtu as meshio reads them: a box).
         tip: the tip, given the same way (optional).
+        cyclic: (left, right, N) of a cyclic sector in a mesh file: its two cyclic faces given the same way (groups
+            'left' and 'right' of the model) and the number of sectors; None: not cyclic.
         preset: mesh preset for CAD files.
         scale: factor from file units to metres (e.g. 1e-3 for mm), applied to every kind of input.
         units: 'm', 'mm', 'cm' or 'in' instead of scale.
@@ -464,14 +468,25 @@ def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], ti
         contact = N_TIP_NODES
     if contact is not None and tip is None and isinstance(contact, (int, np.integer)):
         raise ValueError("contact: a number of nodes along the tip camber line needs the tip (tip=...)")
+    if cyclic is not None:
+        if not (isinstance(cyclic, (tuple, list)) and len(cyclic) == 3 and isinstance(cyclic[2], (int, np.integer))
+                and not isinstance(cyclic[2], bool) and 2 <= cyclic[2] <= 360):
+            raise ValueError(f"cyclic: give (left face, right face, N sectors in 2..360), got {cyclic!r}")
+        if suffix not in mesh_import.MESH_SUFFIXES:
+            raise ValueError("cyclic: a CAD file is meshed here without matching faces; give a mesh file whose left "
+                             "and right faces match under the rotation by 2 pi / N")
     gmsh.model.add("user_blade")
     if suffix in mesh_import.MESH_SUFFIXES:
         mesh = mesh_import.read_mesh(path, scale)
         facets = mesh_import.boundary_facets(mesh.tets)
-        groups = {}
-        for tag, what, name in ((BladeGroup.CLAMP, "clamp", clamp), (BladeGroup.TIP, "tip", tip)):
+        groups, named = {}, {}
+        faces = ((BladeGroup.CLAMP, "clamp", clamp), (BladeGroup.TIP, "tip", tip))
+        if cyclic is not None:
+            faces += ((BladeGroup.LEFT, "left", cyclic[0]), (BladeGroup.RIGHT, "right", cyclic[1]))
+        for tag, what, name in faces:
             if name is None:
                 continue
+            named[what] = name
             nodes = mesh.nodes_of(name, what)
             inside = np.isin(facets[:, :3], nodes).all(axis=1)
             if not inside.any():
@@ -486,8 +501,11 @@ def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], ti
             nodes, _ = mesh_import.select_contact_nodes(mesh.points, tip_group, contact)
             tip_nodes = mesh.points[nodes]
         mesh_import.add_to_gmsh(mesh, groups, int(BladeGroup.BLADE))
+        caught = "; ".join(mesh_import.group_report(mesh.points, f, what, named[what])
+                           for (_, what), f in groups.items())
         return BladeModel(source=f"file:{path}", volume=float("nan"),        # assembled on the mesh (fem)
-                          tip_nodes=tip_nodes, preset=preset, n_nodes=len(mesh.points), summary=mesh.summary())
+                          tip_nodes=tip_nodes, preset=preset, n_nodes=len(mesh.points),
+                          summary=f"{mesh.summary()}; {caught}", n_sectors=0 if cyclic is None else int(cyclic[2]))
     try:
         entities = gmsh.model.occ.importShapes(str(path))
     except Exception as exc:

@@ -26,16 +26,35 @@ import functools
 import io
 import itertools
 import os
+import tempfile
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
-__all__ = ["MESH_SUFFIXES", "UNITS", "ImportedMesh", "read_mesh", "split_to_tetrahedra", "boundary_facets",
-           "order_le_to_te", "select_contact_nodes", "add_to_gmsh"]
+from .abaqus import AbaqusDeck, read_deck
+
+__all__ = ["MESH_SUFFIXES", "UNITS", "BLADE_MASS", "check_blade_mass", "group_report", "ImportedMesh", "read_mesh",
+           "split_to_tetrahedra", "boundary_facets", "order_le_to_te", "select_contact_nodes", "add_to_gmsh"]
 
 MESH_SUFFIXES = (".msh", ".inp", ".bdf", ".nas", ".fem", ".vtk", ".vtu")
 UNITS = {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "in": 0.0254}
+BLADE_MASS = (1e-3, 100.0)                 # kg: a blade's mass lies between a gram and a hundred kilograms
+
+
+def check_blade_mass(mass: float, scale: float, what: str) -> None:
+    """ValueError naming ``what`` where a blade read with coordinates times ``scale`` (to metres) weighs outside
+    ``BLADE_MASS``, with the units it would weigh a plausible mass in (a millimetre file read as metres weighs 1e9
+    times too much): the message gives the mass, the likely unit and how to go on."""
+    low, high = BLADE_MASS
+    if low <= mass <= high:
+        return
+    masses = {u: mass * (f / scale) ** 3 for u, f in UNITS.items()}
+    fits = [u for u, m in masses.items() if low <= m <= high]
+    likely = min(fits, key=lambda u: abs(np.log(masses[u] / 0.3))) if fits else None
+    hint = f"; the file is likely in {likely} ({masses[likely]:.3g} kg with units {likely!r})" if likely else ""
+    raise ValueError(f"{what}: the blade's mass is {mass:.3g} kg, outside 1 g - 100 kg{hint}; give the file's units, "
+                     "or confirm the mass (mass_check=False, --mass-check off)")
 
 # reference cells in meshio's (VTK's) node order: corner coordinates, edges (mid-node order), faces
 _REF = {
@@ -146,10 +165,15 @@ def read_mesh(path: str | os.PathLike, scale: float = 1.0) -> ImportedMesh:
     if not (np.isfinite(scale) and scale > 0):
         raise ValueError(f"scale must be > 0 (file units to metres, e.g. 1e-3 for mm), got {scale}")
     said = io.StringIO()
+    deck = read_deck(path) if suffix == ".inp" else None     # its *INCLUDE files inlined, its *BOUNDARY nodes
     try:
-        with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
-            mesh = meshio.read(str(path), file_format={".bdf": "nastran", ".nas": "nastran", ".fem": "nastran",
-                                                       ".inp": "abaqus"}.get(suffix))
+        with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said), tempfile.TemporaryDirectory() as tmp:
+            source = path
+            if deck is not None:
+                source = Path(tmp) / path.name
+                source.write_text(deck.text)
+            mesh = meshio.read(str(source), file_format={".bdf": "nastran", ".nas": "nastran", ".fem": "nastran",
+                                                         ".inp": "abaqus"}.get(suffix))
     except (Exception, SystemExit) as exc:  # meshio raises ReadError, KeyError, ... or exits on a malformed file
         first = ([ln for ln in (str(exc) + "\n" + said.getvalue()).splitlines() if ln.strip()][:1]
                  or [type(exc).__name__])[0].strip()
@@ -175,6 +199,8 @@ def read_mesh(path: str | os.PathLike, scale: float = 1.0) -> ImportedMesh:
     blocks = [(b.type, np.asarray(b.data, dtype=np.int64)[:, :CELL_TYPES[b.type][2]]) for _, b in solids]
     points, tets, converted = split_to_tetrahedra(points, blocks)
     node_sets = _node_sets(mesh)
+    if deck is not None and (deck.boundary_labels or deck.boundary_sets):
+        node_sets["BOUNDARY"] = _boundary_nodes(deck, node_sets, len(mesh.points))
     used = np.unique(tets)                              # drop nodes no tetrahedron uses (surface-only, orphans)
     renumber = -np.ones(len(points), dtype=np.int64)
     renumber[used] = np.arange(used.size)
@@ -182,6 +208,37 @@ def read_mesh(path: str | os.PathLike, scale: float = 1.0) -> ImportedMesh:
     node_sets = {k: v[v >= 0] for k, v in node_sets.items() if np.any(v >= 0)}
     return ImportedMesh(points=points[used], tets=renumber[tets], node_sets=node_sets, converted=converted,
                         source=str(path))
+
+
+def group_report(points: np.ndarray, facets: np.ndarray, what: str, name) -> str:
+    """What a group caught, to be seen (an over-wide box takes more than the face meant): its boundary facets,
+    nodes, area (mm^2, of the facets' corner triangles) and bounding box (mm)."""
+    corners = points[facets[:, :3]]
+    area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1).sum()
+    nodes = np.unique(facets[:, :3])
+    low, high = 1e3 * points[nodes].min(axis=0), 1e3 * points[nodes].max(axis=0)
+    box = " x ".join(f"[{a:.4g}, {b:.4g}]" for a, b in zip(low, high))
+    label = name if isinstance(name, str) else "box"
+    return f"{what} {label!r}: {len(facets)} facets, {nodes.size} nodes, {1e6 * area:.4g} mm^2 in {box} mm"
+
+
+def _boundary_nodes(deck: AbaqusDeck, node_sets: dict, n_points: int) -> np.ndarray:
+    """The point indices a deck's *BOUNDARY blocks fix: its node labels (meshio numbers the nodes in the order they
+    come) and the nodes of the sets it names."""
+    if len(deck.node_labels) != n_points:
+        raise ValueError(f"{deck.source}: {len(deck.node_labels)} nodes in its *NODE blocks, {n_points} read: its "
+                         "*BOUNDARY nodes cannot be placed")
+    index = {label: k for k, label in enumerate(deck.node_labels)}
+    unknown = sorted(label for label in deck.boundary_labels if label not in index)
+    if unknown:
+        raise ValueError(f"{deck.source}: *BOUNDARY names node(s) {unknown[:5]} that no *NODE block defines")
+    nodes = [index[label] for label in deck.boundary_labels]
+    lower = {k.lower(): v for k, v in node_sets.items()}
+    for name in deck.boundary_sets:
+        if name.lower() not in lower:
+            raise ValueError(f"{deck.source}: *BOUNDARY names the set {name!r}, which the deck does not define")
+        nodes += lower[name.lower()].tolist()
+    return np.unique(np.asarray(nodes, dtype=np.int64))
 
 
 def _node_sets(mesh) -> dict:

@@ -226,3 +226,25 @@ def test_mistuning_bench_summarises_over_seeds(tmp_path):
     assert [(r["sigma"], r["seed"]) for r in kept] == [(0.05, 1), (0.05, 0)]
     assert earlier_rows(stored, settings | {"revolutions": 100.0}, []) == []
     assert earlier_rows(stored, settings | {"preset": "coarse"}, []) == []
+
+
+def test_the_form_compiler_says_nothing(tmp_path):
+    """A first run compiles the forms (dolfinx's JIT through cffi and distutils), which logged every gcc command on
+    the root logger (#71): with the adapter imported those records are dropped, a warning of one's own still shows.
+    The same compile without the adapter prints them (so the test sees them when they come back)."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("{}import dolfinx, ufl, logging\nfrom mpi4py import MPI\n"
+            "m = dolfinx.mesh.create_unit_cube(MPI.COMM_WORLD, 1, 1, 1)\n"
+            "V = dolfinx.fem.FunctionSpace(m, ('Lagrange', {}))\n"
+            "dolfinx.fem.form(ufl.inner(ufl.TrialFunction(V), ufl.TestFunction(V)) * ufl.dx)\n"
+            "logging.warning('mine')\n")
+    runs = [subprocess.run([sys.executable, "-c", code.format(first, degree)], capture_output=True, text=True,
+                           env=dict(os.environ, XDG_CACHE_HOME=str(tmp_path / f"cache{degree}")), timeout=300)
+            for first, degree in (("import rotor37_rom.fem\n", 3), ("", 4))]      # new forms: compiled here
+    quiet, loud = runs
+    assert quiet.returncode == 0 and loud.returncode == 0, quiet.stderr + loud.stderr
+    assert "gcc" not in quiet.stderr and "mine" in quiet.stderr, quiet.stderr
+    assert "gcc" in loud.stderr

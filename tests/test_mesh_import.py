@@ -2,6 +2,7 @@
 of one cantilever agree with each other and with beam theory; units, an Abaqus .inp round trip, group names,
 contact nodes ordered LE -> TE whatever the boundary DOFs' order, and one-line refusals."""
 import itertools
+import re
 
 import numpy as np
 import pytest
@@ -153,16 +154,23 @@ def test_curved_quadratic_hexahedra_keep_their_geometry(tmp_path):
 def test_millimetres_with_scale_equal_metres(tmp_path):
     """The same mesh written in mm and loaded with units='mm' (or scale=1e-3) is the metre mesh: coordinates
     equal to round-off, so the frequencies agree to the eigen-solver's tolerance; without the scale the mass is
-    1e9 times too large and a warning says so with the number."""
+    1e9 times too large: refused with the number and the likely unit, unless the mass is confirmed."""
     metres, _ = _omega(_bar(tmp_path / "m.msh", "wedge"))
     mm_path = _bar(tmp_path / "mm.msh", "wedge", unit=1000.0)
     mm, sector = _omega(mm_path, units="mm")
     np.testing.assert_allclose(mm, metres, rtol=1e-9)
+    # what the clamp caught is said (#71): the root face, 10 x 10 mm (flat: its facets' area is exact)
+    caught = re.search(r"clamp 'ROOT': \d+ facets, \d+ nodes, ([0-9.]+) mm\^2 in \[0, 0\] x \[0, 10\] x \[0, 10\] mm",
+                       sector.summary)
+    assert caught and abs(float(caught.group(1)) - 100.0) < 1e-9 * 100, sector.summary
     np.testing.assert_allclose(sector.volume, L * H * H, rtol=1e-12)
     scaled, _ = _omega(mm_path, scale=1e-3)
     np.testing.assert_allclose(scaled, metres, rtol=1e-9)
-    with pytest.warns(UserWarning, match=r"mass is 4e\+0?7 kg"):
+    with pytest.raises(ValueError, match=r"mass is 4e\+0?7 kg, outside 1 g - 100 kg; the file is likely in mm "
+                                         r"\(0\.04 kg with units 'mm'\)"):
         fem.create_sector_from_file(mm_path, clamp="ROOT", verbose=False)
+    confirmed = fem.create_sector_from_file(mm_path, clamp="ROOT", verbose=False, mass_check=False)
+    np.testing.assert_allclose(confirmed.volume, L * H * H * 1e9, rtol=1e-12)      # the mass confirmed: read as is
     with pytest.raises(ValueError) as e:
         fem.create_sector_from_file(mm_path, clamp="ROOT", scale=2.0, units="mm")
     _one_line(e, "scale", "units", "disagree")
@@ -339,6 +347,11 @@ def test_own_blade_demo(tmp_path):
         run_own_blade(OwnBladeConfig(rotation_sense=1, out=str(tmp_path / "other_sense")))
     with pytest.raises(ValueError, match=r"^--rotation-sense"):
         OwnBladeConfig(rotation_sense=0)
+    # the millimetre deck read as metres: refused with its mass and the likely unit (#71), unless confirmed
+    deck = str(tmp_path / "example_blade_mm.inp")
+    with pytest.raises(ValueError, match=r"^--mesh: .* the blade's mass is 6\.27e\+0?7 kg, outside 1 g - 100 kg; "
+                                         r"the file is likely in mm"):
+        run_own_blade(OwnBladeConfig(mesh=deck, units="m", out=str(tmp_path / "metres")))
 
 
 def _mirrored_deck(deck, path):
@@ -393,3 +406,92 @@ def test_a_mirrored_blade_turning_the_other_way_is_the_same_blade(ci_blade, tmp_
         assert scale > 1e-5                                       # in contact: the casing pushes the tip 0.1 mm
         np.testing.assert_allclose(runs[1].u_r[p], runs[0].u_r[p], rtol=0, atol=1e-8 * scale)
         np.testing.assert_allclose(runs[1].lam[p], runs[0].lam[p], rtol=0, atol=1e-8 * np.abs(runs[0].lam[p]).max())
+
+
+def _deck_with_include_and_boundary(deck, folder, material=None):
+    """The deck as another code writes it: its nodes and elements in an *INCLUDEd file, its clamp given by a
+    *BOUNDARY list of node labels (no named set), the TIP set after the include, a material in N-mm-t-s."""
+    lines = deck.read_text().splitlines()
+    starts = [k for k, line in enumerate(lines) if line.startswith("*NSET")]
+    mesh_part, sets = lines[:starts[0]], lines[starts[0]:]
+    (folder / "mesh.inp").write_text("\n".join(line for line in mesh_part if not line.startswith("*HEADING")) + "\n")
+    blocks, current = {}, None
+    for line in sets:
+        if line.startswith("*"):
+            current = line.split("=")[-1].strip()
+            blocks[current] = []
+        else:
+            blocks[current] += [int(v) for v in line.replace(",", " ").split()]
+    main = ["*HEADING", "a blade from another code", "*INCLUDE, INPUT=mesh.inp", "*NSET, NSET=TIP"]
+    main += [", ".join(str(v) for v in blocks["TIP"][k:k + 16]) for k in range(0, len(blocks["TIP"]), 16)]
+    main += ["*BOUNDARY"] + [f"{label}, 1, 3" for label in blocks["CLAMP"]]
+    if material is not None:
+        main += ["*MATERIAL, NAME=BLADE_STEEL", "*ELASTIC", f"{material[0]!r}, {material[1]!r}", "*DENSITY",
+                 f"{material[2]!r}"]
+    path = folder / "blade.inp"
+    path.write_text("\n".join(main) + "\n")
+    return path
+
+
+def test_a_deck_with_an_include_a_boundary_clamp_and_its_material(ci_blade, tmp_path, capsys):
+    """A deck as another code writes it (#71): the mesh in an *INCLUDEd file, the clamp a *BOUNDARY node list
+    (group 'BOUNDARY'), the material in N-mm-t-s (210 GPa, 9,000 kg/m^3): the same nodes and cells as the project's
+    deck with named sets, so the same frequencies with the same material to 1e-9 (round-off), and with the deck's
+    own material the project's scaled exactly by sqrt(E rho_0 / (E_0 rho)) (linear modes; same nu), the material
+    printed. Refused in one line naming the file and line: a missing include, a material in units with no
+    consistent system, a material whose SI values are no structural material's (a unit slip)."""
+    from rotor37_rom.forms import Material
+
+    deck = fem.write_sector_mesh(ci_blade, tmp_path / "named_mm.inp", units="mm")
+    named = fem.create_sector_from_file(deck, clamp="CLAMP", tip="TIP", units="mm", contact=8, verbose=False,
+                                        material=Material(E=210e9, rho=9000.0))
+    other = tmp_path / "other"
+    other.mkdir()
+    raw = _deck_with_include_and_boundary(deck, other, material=(210000.0, 0.3, 9e-9))
+    capsys.readouterr()
+    theirs = fem.create_sector_from_file(raw, clamp="boundary", tip="tip", units="mm", contact=8)
+    printed = capsys.readouterr().out
+    assert "material: E = 210 GPa, nu = 0.3, rho = 9000 kg/m^3 (the deck's)" in printed, printed
+    assert theirs.material == Material(E=210e9, nu=0.3, rho=9000.0)
+    w_named, w_theirs = (fem.compute_clamped_modes(s, 4).omega for s in (named, theirs))
+    np.testing.assert_allclose(w_theirs, w_named, rtol=1e-9)
+    w_project = fem.compute_clamped_modes(ci_blade, 4).omega
+    np.testing.assert_allclose(w_theirs, w_project * np.sqrt((210.0 / 180.0) * (8000.0 / 9000.0)), rtol=1e-9)
+    np.testing.assert_allclose(theirs.tip_nodes, ci_blade.tip_nodes, atol=1e-12)
+    given = fem.create_sector_from_file(raw, clamp="BOUNDARY", tip="TIP", units="mm", contact=8,
+                                        material=Material())                  # the argument wins, and says so
+    assert given.material == Material() and "the deck states E = 210 GPa" in capsys.readouterr().out
+    (other / "mesh.inp").rename(other / "moved.inp")
+    with pytest.raises(ValueError) as e:
+        fem.create_sector_from_file(raw, clamp="BOUNDARY", units="mm")
+    _one_line(e, "blade.inp, line 3", "*INCLUDE, INPUT=mesh.inp", "does not exist")
+    (other / "moved.inp").rename(other / "mesh.inp")
+    with pytest.raises(ValueError) as e:
+        fem.create_sector_from_file(raw, clamp="BOUNDARY", units="cm")
+    _one_line(e, "no consistent unit system", "give material=")
+    pascal = _deck_with_include_and_boundary(deck, other, material=(210e9, 0.3, 9000.0))   # SI values in a mm deck
+    with pytest.raises(ValueError) as e:
+        fem.create_sector_from_file(pascal, clamp="BOUNDARY", units="mm")
+    _one_line(e, "E = 2.1e+17 Pa", "are the units right")
+
+
+@pytest.mark.slow
+def test_a_users_cyclic_sector_from_a_deck(tmp_path):
+    """One entry for a user's sector (#71): the built-in ci bladed-disk sector written as a millimetre Abaqus deck
+    (node sets CLAMP, TIP, LEFT, RIGHT) and read back with ``cyclic=("left", "RIGHT", 36)`` (any case) is a cyclic
+    sector: its faces paired, its cyclic frequencies at k = 0, 1 and N/2 those of the built-in sector to 1e-8 (the
+    same nodes and cells: the eigen-solver's round-off, measured 2e-11); what each face caught is said. Refused in
+    one line: N outside 2..360, a face group the deck does not have."""
+    ref = fem.create_disk_sector(preset="ci")
+    deck = fem.write_sector_mesh(ref, tmp_path / "disk_mm.inp", units="mm")
+    sector = fem.create_sector_from_file(deck, clamp="clamp", tip="TIP", units="mm", contact=8, verbose=False,
+                                         cyclic=("left", "RIGHT", 36))
+    assert sector.cyclic is not None and {"left", "right", "clamp", "tip"} <= set(sector.groups)
+    assert re.search(r"left 'left': \d+ facets, \d+ nodes", sector.summary), sector.summary
+    for k in (0, 1, 18):
+        np.testing.assert_allclose(fem.solve_cyclic_modes(sector, k, 4).omega, fem.solve_cyclic_modes(ref, k, 4).omega,
+                                   rtol=1e-8)
+    for cyclic, words in (((("LEFT", "RIGHT", 1)), ("cyclic", "2..360")), (("LEFT", "SIDE", 36), ("right", "SIDE"))):
+        with pytest.raises(ValueError) as e:
+            fem.create_sector_from_file(deck, clamp="CLAMP", units="mm", verbose=False, cyclic=cyclic)
+        _one_line(e, *words)

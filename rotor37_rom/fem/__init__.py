@@ -16,6 +16,20 @@ mesh), ``cyclic`` (disk and plate sectors, face pairing, operators and modes per
 # 0 that alone initialised SLEPc waits for the others at exit forever)
 from slepc4py import SLEPc  # noqa: F401
 
+import logging as _logging
+
+
+class _QuietCompiler(_logging.Filter):
+    """dolfinx compiles its forms with cffi through distutils, which logs every compiler command at INFO on the root
+    logger (a first run printed pages of gcc lines): its records are dropped; every other record passes."""
+
+    def filter(self, record: _logging.LogRecord) -> bool:
+        return "distutils" not in record.pathname.replace("\\", "/")
+
+
+if not any(isinstance(f, _QuietCompiler) for f in _logging.getLogger().filters):
+    _logging.getLogger().addFilter(_QuietCompiler())
+
 from .cyclic import (CyclicModes, CyclicOperators, assemble_cyclic_operators, create_annular_sector, create_disk_sector,
                      sector_fields, solve_cyclic_modes)
 from .fields import (cell_midpoints, cell_vertices, cells_touching_points, displacement_function, root_junction,

@@ -7,7 +7,6 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +20,8 @@ from petsc4py import PETSc
 from rotor37_rom.disk.symmetry import CyclicPairs, rotation_z
 from rotor37_rom.forms import Material
 from rotor37_rom.geometry import blade as blade_geometry
+from rotor37_rom.geometry.abaqus import deck_material, read_deck
+from rotor37_rom.geometry.mesh_import import UNITS, check_blade_mass
 from rotor37_rom.geometry.tables import read_blade_table
 
 from .operators import assemble_scalar
@@ -207,24 +208,54 @@ def create_blade_sector(comm: MPI.Comm = MPI.COMM_WORLD, table: str | Path | Non
 def create_sector_from_file(path: str | Path, clamp, tip=None, comm: MPI.Comm = MPI.COMM_WORLD,
                             preset="coarse", material: Material | None = None, degree: int = 2,
                             scale: float = 1.0, units: str | None = None, contact=None,
-                            verbose: bool = True) -> Sector:
+                            verbose: bool = True, mass_check: bool = True, cyclic=None) -> Sector:
     """A user's blade from a CAD file (STEP/BREP) or a mesh from another FE code (.msh, .inp, .bdf/.nas, .vtk/.vtu);
     see geometry.blade.import_blade_model for clamp, tip, scale/units and contact (the contact nodes, ordered
-    LE -> TE). With ``verbose``, rank 0 prints what was read, the bounding box and the mass, so that a unit slip
-    shows; a mass outside 1 g - 100 kg (a blade) gives a warning with the number."""
+    LE -> TE). With ``verbose``, rank 0 prints what was read, the bounding box and the mass. A mass outside 1 g -
+    100 kg (a blade) is refused with the number and the units the file is likely in (a unit slip:
+    ``geometry.mesh_import.check_blade_mass``), unless ``mass_check`` is False (the mass confirmed). ``cyclic=(left,
+    right, N)``: a cyclic sector (a bladed disk's, or any structure of N identical sectors about e_z) whose faces
+    ``left`` (at the lower angle) and ``right`` (turned by 2 pi / N) are groups of the file or boxes; they are paired
+    node for node (``locate_cyclic_pairs``), and the sector takes every cyclic operator as the built-in disk's
+    does."""
+    material = file_material(path, material, units, scale, verbose and comm.rank == 0)
     sector = build_on_rank0(comm, lambda: blade_geometry.import_blade_model(path, clamp, tip, preset, scale, units,
-                                                                           contact),
-                            material or Material(), degree, str(preset), str(path))
+                                                                           contact, cyclic),
+                            material, degree, str(preset), str(path))
     if not np.isfinite(sector.volume):                 # a mesh file: its volume from the mesh (curved P2 cells too)
         sector = dataclasses.replace(sector, volume=assemble_scalar(1.0 * ufl.dx(domain=sector.mesh), sector.comm))
     mass = sector.volume * sector.material.rho
     if comm.rank == 0 and verbose:
         print(f"{sector.summary}; mass {mass:.4g} kg (rho = {sector.material.rho:g} kg/m^3); "
               f"{len(sector.tip_nodes)} contact nodes", flush=True)
-    if not 1e-3 <= mass <= 100.0:
-        warnings.warn(f"{path}: the blade's mass is {mass:.3g} kg, outside 1 g - 100 kg: are the units right "
-                      f"(scale / units=)?", stacklevel=2)
+    if mass_check:
+        check_blade_mass(mass, UNITS[units] if units is not None else scale, str(path))
     return sector
+
+
+def file_material(path, material: Material | None, units: str | None, scale: float, verbose: bool) -> Material:
+    """The material of a user's file: ``material`` where given, else the material of an Abaqus/CalculiX deck
+    (``*MATERIAL``/``*ELASTIC``/``*DENSITY``, in SI for a deck in metres, N-mm-t-s for one in millimetres:
+    ``geometry.abaqus.deck_material``), else the paper's maraging steel; printed with ``verbose``, and where the deck
+    states another material than the one given."""
+    deck = None
+    if Path(path).suffix.lower() == ".inp":
+        unit = units if units is not None else {1.0: "m", 1e-3: "mm"}.get(float(scale), f"scale {scale:g}")
+        found = deck_material(read_deck(path), unit)
+        if found is not None:
+            deck = Material(E=found[0], nu=found[1], rho=found[2])
+
+    def stated(m: Material) -> str:
+        return f"E = {m.E / 1e9:.4g} GPa, nu = {m.nu:g}, rho = {m.rho:.5g} kg/m^3"
+
+    chosen = material or deck or Material()
+    if verbose:
+        where = "given" if material is not None else "the deck's" if deck is not None else \
+            "the paper's maraging steel (the file states none: give material=)"
+        other = f"; the deck states {stated(deck)}" if material is not None and deck is not None and deck != material \
+            else ""
+        print(f"material: {stated(chosen)} ({where}){other}", flush=True)
+    return chosen
 
 
 def clamp_cell_group(sector: Sector, group: str) -> Sector:

@@ -18,6 +18,7 @@ import numpy as np
 
 from rotor37_rom.checks import before_work, flagged, readable_file
 from rotor37_rom.dynamics.casing import Casing, check_hand
+from rotor37_rom.forms import Material
 from rotor37_rom.geometry.mesh_import import MESH_SUFFIXES, UNITS
 
 __all__ = ["OwnBladeConfig", "load_blade", "run_own_blade"]
@@ -27,10 +28,13 @@ __all__ = ["OwnBladeConfig", "load_blade", "run_own_blade"]
 class OwnBladeConfig:
     """What to run. mesh None: the project's ci blade written as a millimetre Abaqus deck (the example input).
 
-    The frame is the user's, stated and printed with the results: the blade turns about +z in ``rotation_sense``
-    (-1: towards -theta, rotor 37's) and touches the casing along ``direction`` ('x': the blade frame's e_x, the
-    paper's; 'radial'; 'cone'); a sense that turns the blade with its trailing edge ahead (a mirrored blade) is
-    refused (``dynamics.casing.check_hand``)."""
+    The frame is the user's, stated and printed with the results: the blade turns about +z in ``rotation_sense`` (-1:
+    towards -theta, rotor 37's) and touches the casing along ``direction`` ('x': the blade frame's e_x, the paper's;
+    'radial'; 'cone'); a sense that turns the blade with its trailing edge ahead (a mirrored blade) is refused
+    (``dynamics.casing.check_hand``). ``material`` (E, nu, rho in SI) overrides the deck's own (an Abaqus deck's
+    *MATERIAL, read and printed), whose absence means the paper's maraging steel, said as well. A blade whose mass is
+    outside 1 g - 100 kg is refused with the units it is likely in (``geometry.mesh_import.check_blade_mass``) unless
+    ``mass_check`` is False."""
 
     mesh: str | None = None
     clamp: str = "CLAMP"
@@ -44,6 +48,8 @@ class OwnBladeConfig:
     mu: float = 0.0
     direction: str = "x"
     rotation_sense: int = -1
+    mass_check: bool = True
+    material: tuple[float, float, float] | None = None
     out: str = "results/own_blade"
 
     def __post_init__(self):
@@ -68,6 +74,11 @@ class OwnBladeConfig:
             raise ValueError(f"--revolutions must be in (0, 50], got {self.revolutions}")
         if not 0.0 <= self.mu < 1.0:
             raise ValueError(f"--mu must be in [0, 1), got {self.mu}")
+        if self.material is not None:
+            if not (isinstance(self.material, (tuple, list)) and len(self.material) == 3):
+                raise ValueError(f"--material takes E (Pa), nu and rho (kg/m^3), got {self.material!r}")
+            flagged("--material", lambda: Material(*self.material))
+            object.__setattr__(self, "material", tuple(float(v) for v in self.material))
         flagged("--direction", lambda: Casing(direction=self.direction))
         flagged("--rotation-sense", lambda: Casing(rotation_sense=self.rotation_sense))
 
@@ -90,7 +101,8 @@ def load_blade(config: OwnBladeConfig):
         print(f"no --mesh: the ci blade written as {path} (C3D4, mm, node sets CLAMP and TIP)")
     try:
         return fem.create_sector_from_file(path, clamp=config.clamp, tip=config.tip, units=config.units,
-                                           contact=config.contact, preset="ci")
+                                           contact=config.contact, preset="ci", mass_check=config.mass_check,
+                                           material=None if config.material is None else Material(*config.material))
     except ValueError as exc:
         raise ValueError(f"--mesh: {exc}") from None
 
