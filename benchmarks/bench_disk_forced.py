@@ -27,6 +27,9 @@ with the faces in the nonlinear force on N_F shapes (``DiskReductionConfig.face_
 ``--tolerance T`` takes the model from the speed-accuracy study (scenes ``disk-forced-linear`` and, for a GNL reference
 with ``--patch 3``, ``disk-forced-gnl``; docs/choosing-a-model.md) instead of the model options.
 
+Your own bladed-disk sector instead of rotor 37's: ``--mesh sector.inp --clamp G --left G --right G --n-sectors N --tip
+G --units mm`` (its node LE, the first contact node, carries the load); results under the tag ``own``.
+
 Results: results/disk_forced_<preset>.json; reference histories and models cached under results/disk_forced/<preset>/.
 """
 from __future__ import annotations
@@ -51,14 +54,15 @@ from rotor37_rom.studies.forced_response import parse_args, parse_case, reduced,
 def main(argv=None) -> int:
     """The study; a bad option raises ValueError naming it (one line and exit status 2 through ``run_main``)."""
     args = parse_args(argv, description=__doc__.splitlines()[0])
-    out = Path(args.out) / args.preset
+    tag = "own" if args.mesh is not None else args.preset          # a user's sector (--mesh): results under own/
+    out = Path(args.out) / tag
     before_work({"--out": out})
     cases = [parse_case(c) for c in args.cases]
     gnl_cases = {parse_case(c, "--gnl-reference") for c in args.gnl_reference}
     if args.choice is not None:
         print(args.choice.describe())
     t0 = time.perf_counter()
-    sector = fem.create_disk_sector(preset=args.preset)
+    sector = args.mesh.create() if args.mesh is not None else fem.create_disk_sector(preset=args.preset)
     system = RepeatingSectors(sector, 1)
     ops = system.ops
     K_s = fem.petsc_to_scipy(fem.assemble_stiffness(sector, ops, clamped=False))
@@ -75,11 +79,11 @@ def main(argv=None) -> int:
             print(f"reference N_d = {case[0]}, omega = {case[1]:g}, {'GNL' if nonlinear else 'linear'}: "
                   f"{float(refs[case, nonlinear]['wall']):.1f} s", flush=True)
     rows = []
-    name = f"disk_forced_{args.preset}{args.name}"
+    name = f"disk_forced_{tag}{args.name}"
 
     def save() -> str:                                 # after every row: a stopped run keeps what it measured
         peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-        return write_results(name, rows, preset=args.preset, dofs_per_sector=sector.n_dofs, periods=args.periods,
+        return write_results(name, rows, preset=tag, dofs_per_sector=sector.n_dofs, periods=args.periods,
                              steps_per_period=args.steps_per_period, setup_s=setup, peak_rss_mb=peak)
     corrections = [c == "on" for c in args.load_correction] if args.patch else [False]
     configs = [(c, r, i, lc) for lc in corrections for i in args.interface for c in args.criteria for r in args.r_md]

@@ -29,7 +29,7 @@ import sys
 from typing import Sequence
 
 from rotor37_rom.cli import run_main
-from rotor37_rom.studies.contact_map import (PAPER, ContactMapConfig, ContactMapResult, build_parser,
+from rotor37_rom.studies.contact_map import (PAPER, ContactMapConfig, ContactMapResult, parse_options,
     run_contact_map, world_comm)
 # -
 
@@ -53,7 +53,9 @@ from rotor37_rom.studies.contact_map import (PAPER, ContactMapConfig, ContactMap
 # ## The reduced model
 #
 # Loaded from `--model`, or built serially from the blade mesh (Craig-Bampton with r_c fixed-interface modes and
-# modal derivatives, exact cubic tensors) and saved as `<out>/rom.npz` for later runs and MPI runs.
+# modal derivatives, exact cubic tensors) and saved as `<out>/rom.npz` for later runs and MPI runs. `--mesh` builds
+# it on your own blade, or with `--left`, `--right` and `--n-sectors` on your own bladed-disk sector (its tip nodes
+# in contact, every sector's), through the same builders.
 #
 # ## Time step and GNL forces
 #
@@ -97,7 +99,7 @@ def print_report(result: ContactMapResult) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Parse the options, run the study, print the report; raises ValueError for a bad input."""
-    config = ContactMapConfig.from_options(**vars(build_parser().parse_args(argv)))
+    config = ContactMapConfig.from_options(**parse_options(argv))
     logging.basicConfig(level=logging.WARNING, force=True)
     logging.getLogger().handlers[0].setLevel(logging.WARNING)
     comm = world_comm()

@@ -24,19 +24,15 @@ import sys
 from typing import Sequence
 
 from rotor37_rom.cli import ArgumentParser, run_main
-from rotor37_rom.geometry.mesh_import import MESH_SUFFIXES, UNITS
 from rotor37_rom.studies.own_blade import OwnBladeConfig, run_own_blade
+from rotor37_rom.studies.sector_file import SectorFile, add_sector_options
 # -
 
 
 def build_parser() -> ArgumentParser:
     p = ArgumentParser(description="Your own blade mesh through the pipeline: modes, reduced model, sprag-slip "
                                    "onset, a contact run")
-    p.add_argument("--mesh", default=None, help=f"mesh file ({', '.join(MESH_SUFFIXES)}); default: an example deck")
-    p.add_argument("--clamp", default="CLAMP", help="name of the clamp group (node set, element set, physical group)")
-    p.add_argument("--tip", default="TIP", help="name of the tip group")
-    p.add_argument("--units", default="mm", help=f"units of the file: {', '.join(UNITS)}")
-    p.add_argument("--contact", type=int, default=8, help="contact nodes along the tip camber line")
+    add_sector_options(p, cyclic=False)
     p.add_argument("--modes", type=int, default=6)
     p.add_argument("--r-c", type=int, default=15, help="fixed-interface modes of the reduced model")
     p.add_argument("--speed", type=float, default=1400.0, help="rotation speed of the contact run (rad/s)")
@@ -47,21 +43,18 @@ def build_parser() -> ArgumentParser:
     p.add_argument("--rotation-sense", type=int, default=-1, choices=[-1, 1],
                    help="the rotor turns about +z towards -theta (-1, rotor 37's) or +theta (+1); a sense that turns "
                         "the blade with its trailing edge ahead (a mirrored blade) is refused (default -1)")
-    p.add_argument("--material", type=float, nargs=3, metavar=("E", "NU", "RHO"),
-                   help="the blade's material in SI (Pa, -, kg/m^3); default: the deck's own (*MATERIAL), else the "
-                        "paper's maraging steel (180e9 0.3 8000); printed either way")
-    p.add_argument("--mass-check", choices=["on", "off"], default="on",
-                   help="refuse a blade outside 1 g - 100 kg, naming the units it is likely in (off: the mass is "
-                        "right)")
     p.add_argument("--out", default="results/own_blade")
+    p.add_argument("--show-groups", action="store_true",
+                   help="draw the groups and the contact nodes on the mesh (OUT/groups.png), then stop")
     return p
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    options = vars(args) | {"mass_check": args.mass_check == "on",
-                            "material": None if args.material is None else tuple(args.material)}
-    config = OwnBladeConfig(**options)
+    p = build_parser()
+    args = p.parse_args(argv)
+    config = OwnBladeConfig(mesh=SectorFile.from_args(args, p), modes=args.modes, r_c=args.r_c, speed=args.speed,
+                            revolutions=args.revolutions, mu=args.mu, direction=args.direction,
+                            rotation_sense=args.rotation_sense, out=args.out, show_groups=args.show_groups)
     run_own_blade(config)
     return 0
 

@@ -13,7 +13,7 @@ import dataclasses
 import re
 from pathlib import Path
 
-__all__ = ["AbaqusDeck", "read_deck", "deck_material", "MATERIAL_UNITS"]
+__all__ = ["AbaqusDeck", "read_deck", "deck_material", "material_in_si", "MATERIAL_UNITS"]
 
 #: the deck's length unit -> (stress, density) factors to SI of the consistent unit system it implies
 MATERIAL_UNITS = {"m": (1.0, 1.0), "mm": (1e6, 1e12)}
@@ -143,13 +143,20 @@ def deck_material(deck: AbaqusDeck, units: str) -> tuple[float, float, float] | 
     if deck.elastic is None or deck.density is None:
         missing = "*ELASTIC" if deck.elastic is None else "*DENSITY"
         raise ValueError(f"{deck.source}: material {deck.material_name} has no {missing}: give material=")
+    return material_in_si(deck.elastic[0], deck.elastic[1], deck.density, units, deck.source,
+                          f"material {deck.material_name}")
+
+
+def material_in_si(E: float, nu: float, rho: float, units: str, source: str, what: str
+                   ) -> tuple[float, float, float]:
+    """A file's (E, nu, rho) as written, in SI for a file in ``units`` ('m': N, Pa, kg/m^3; 'mm': N, MPa, t/mm^3);
+    ValueError where the units have no consistent system here or the values in SI are no structural material's."""
     if units not in MATERIAL_UNITS:
-        raise ValueError(f"{deck.source}: a material written in {units!r} has no consistent unit system here (m: N, "
+        raise ValueError(f"{source}: a material written in {units!r} has no consistent unit system here (m: N, "
                          f"Pa, kg/m^3; mm: N, MPa, t/mm^3): give material=")
     stress, mass = MATERIAL_UNITS[units]
-    E, nu, rho = deck.elastic[0] * stress, deck.elastic[1], deck.density * mass
+    E, rho = E * stress, rho * mass
     if not (1e8 <= E <= 1e13 and 100.0 <= rho <= 3e4 and -1.0 < nu < 0.5):
-        raise ValueError(f"{deck.source}: material {deck.material_name} read in {units} units is E = {E:.3g} Pa, "
-                         f"nu = {nu:g}, rho = {rho:.3g} kg/m^3: no structural material; are the units right? "
-                         "(or give material=)")
+        raise ValueError(f"{source}: {what} read in {units} units is E = {E:.3g} Pa, nu = {nu:g}, rho = {rho:.3g} "
+                         "kg/m^3: no structural material; are the units right? (or give material=)")
     return E, nu, rho

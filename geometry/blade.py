@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import itertools
 import enum
 import os
 from pathlib import Path
@@ -431,7 +432,7 @@ def _scale_for(scale: float, units: str | None) -> float:
 
 def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], tip: str | Sequence[float] | None = None,
                        preset: str | MeshPreset = "coarse", scale: float = 1.0, units: str | None = None,
-                       contact=None, cyclic=None) -> BladeModel:
+                       contact=None, cyclic=None, blade: str | None = None) -> BladeModel:
     """Load a user's blade into the current gmsh model: a CAD file (STEP, BREP: meshed with the preset) or a mesh
     from another FE code (gmsh .msh, Abaqus/CalculiX .inp, NASTRAN .bdf/.nas, VTK .vtk/.vtu; wedges, hexahedra and
     pyramids are split into conforming tetrahedra, see geometry.mesh_import).
@@ -444,6 +445,9 @@ def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], ti
         tip: the tip, given the same way (optional).
         cyclic: (left, right, N) of a cyclic sector in a mesh file: its two cyclic faces given the same way (groups
             'left' and 'right' of the model) and the number of sectors; None: not cyclic.
+        blade: of a cyclic sector, the element set of its blade's solid cells: the model's volumes are then 'blade'
+            and 'disk' (the rest), as the built-in bladed-disk sector's (which the SAFE diagram's labels and the
+            blade clamped on the disk use); None: one volume 'blade'.
         preset: mesh preset for CAD files.
         scale: factor from file units to metres (e.g. 1e-3 for mm), applied to every kind of input.
         units: 'm', 'mm', 'cm' or 'in' instead of scale.
@@ -475,6 +479,9 @@ def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], ti
         if suffix not in mesh_import.MESH_SUFFIXES:
             raise ValueError("cyclic: a CAD file is meshed here without matching faces; give a mesh file whose left "
                              "and right faces match under the rotation by 2 pi / N")
+    if blade is not None and (cyclic is None or not (isinstance(blade, str) and blade.strip())):
+        raise ValueError(f"blade: the name of the element set of a cyclic sector's blade (with cyclic=...), got "
+                         f"{blade!r}" + ("" if cyclic is not None else " without cyclic"))
     gmsh.model.add("user_blade")
     if suffix in mesh_import.MESH_SUFFIXES:
         mesh = mesh_import.read_mesh(path, scale)
@@ -493,6 +500,12 @@ def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], ti
                 raise ValueError(f"{what}: {name!r} of {path} covers no boundary facet (all three corners of a "
                                  f"facet must be in it)")
             groups[(int(tag), what)] = facets[inside]
+        keys = {what: {tuple(sorted(f)) for f in facets[:, :3].tolist()} for (_, what), facets in groups.items()}
+        for a, b in itertools.combinations(keys, 2):
+            shared = len(keys[a] & keys[b])
+            if shared:
+                raise ValueError(f"{b}: {named[b]!r} shares {shared} boundary facets with the {a} {named[a]!r} of "
+                                 f"{path}: each facet belongs to one group (a clamped face cannot be a cyclic face)")
         tip_group = np.unique(groups[(int(BladeGroup.TIP), "tip")]) if tip is not None else np.zeros(0, np.int64)
         tip_nodes = np.zeros((0, 3))
         if contact is not None:
@@ -500,9 +513,20 @@ def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], ti
                 contact = mesh.group(contact, "contact")
             nodes, _ = mesh_import.select_contact_nodes(mesh.points, tip_group, contact)
             tip_nodes = mesh.points[nodes]
-        mesh_import.add_to_gmsh(mesh, groups, int(BladeGroup.BLADE))
+        parts = None
+        if blade is not None:
+            from .disk import DISK_GROUP
+
+            blade_tets = mesh.cell_set(blade, "blade")
+            if blade_tets.size == len(mesh.tets):
+                raise ValueError(f"blade: the element set {blade!r} of {path} holds every cell: no disk is left")
+            parts = {(int(BladeGroup.BLADE), "blade"): blade_tets,
+                     (DISK_GROUP, "disk"): np.setdiff1d(np.arange(len(mesh.tets)), blade_tets)}
+        mesh_import.add_to_gmsh(mesh, groups, int(BladeGroup.BLADE), parts=parts)
         caught = "; ".join(mesh_import.group_report(mesh.points, f, what, named[what])
                            for (_, what), f in groups.items())
+        if parts is not None:
+            caught += f"; blade {blade!r}: {blade_tets.size} of {len(mesh.tets)} tetrahedra"
         return BladeModel(source=f"file:{path}", volume=float("nan"),        # assembled on the mesh (fem)
                           tip_nodes=tip_nodes, preset=preset, n_nodes=len(mesh.points),
                           summary=f"{mesh.summary()}; {caught}", n_sectors=0 if cyclic is None else int(cyclic[2]))

@@ -33,6 +33,7 @@ from typing import Sequence
 import numpy as np
 
 from .abaqus import AbaqusDeck, read_deck
+from .nastran import without_materials
 
 __all__ = ["MESH_SUFFIXES", "UNITS", "BLADE_MASS", "check_blade_mass", "group_report", "ImportedMesh", "read_mesh",
            "split_to_tetrahedra", "boundary_facets", "order_le_to_te", "select_contact_nodes", "add_to_gmsh"]
@@ -99,6 +100,8 @@ class ImportedMesh:
         node_sets: group name -> sorted node indices (node sets, element sets and physical groups of the file).
         converted: input cell type -> (cells read, tetrahedra made).
         source: the file.
+        cell_sets: element-set name -> sorted indices of the tetrahedra made of its solid cells (e.g. the blade of
+            a bladed-disk sector).
     """
 
     points: np.ndarray
@@ -106,6 +109,7 @@ class ImportedMesh:
     node_sets: dict
     converted: dict
     source: str
+    cell_sets: dict = dataclasses.field(default_factory=dict)
 
     @property
     def quadratic(self) -> bool:
@@ -135,6 +139,15 @@ class ImportedMesh:
         if inside.size == 0:
             raise ValueError(f"{what}: no node of {self.source} lies inside the box {tuple(box)} m")
         return inside
+
+    def cell_set(self, name: str, what: str) -> np.ndarray:
+        """Tetrahedra of a named element set of solid cells: the exact name, else the unique case-insensitive
+        match."""
+        matches = [name] if name in self.cell_sets else [k for k in self.cell_sets if k.lower() == str(name).lower()]
+        if len(matches) != 1:
+            raise ValueError(f"{what}: {self.source} has no element set of solid cells named {name!r}; its element "
+                             f"sets: {', '.join(sorted(self.cell_sets)) or 'none'}")
+        return self.cell_sets[matches[0]]
 
     def group(self, name: str, what: str) -> np.ndarray:
         """Node indices of a named group: the exact name, else the unique case-insensitive match."""
@@ -172,6 +185,9 @@ def read_mesh(path: str | os.PathLike, scale: float = 1.0) -> ImportedMesh:
             if deck is not None:
                 source = Path(tmp) / path.name
                 source.write_text(deck.text)
+            elif suffix in (".bdf", ".nas", ".fem"):         # its material cards left out (geometry.nastran)
+                source = Path(tmp) / path.name
+                source.write_text(without_materials(path))
             mesh = meshio.read(str(source), file_format={".bdf": "nastran", ".nas": "nastran", ".fem": "nastran",
                                                          ".inp": "abaqus"}.get(suffix))
     except (Exception, SystemExit) as exc:  # meshio raises ReadError, KeyError, ... or exits on a malformed file
@@ -197,7 +213,8 @@ def read_mesh(path: str | os.PathLike, scale: float = 1.0) -> ImportedMesh:
     if len(orders) > 1:
         raise ValueError(f"mesh file {path} mixes linear and quadratic solid cells; give one order")
     blocks = [(b.type, np.asarray(b.data, dtype=np.int64)[:, :CELL_TYPES[b.type][2]]) for _, b in solids]
-    points, tets, converted = split_to_tetrahedra(points, blocks)
+    points, tets, converted, parent = split_to_tetrahedra(points, blocks)
+    cell_sets = _solid_cell_sets(mesh, [k for k, _ in solids], parent)
     node_sets = _node_sets(mesh)
     if deck is not None and (deck.boundary_labels or deck.boundary_sets):
         node_sets["BOUNDARY"] = _boundary_nodes(deck, node_sets, len(mesh.points))
@@ -207,7 +224,7 @@ def read_mesh(path: str | os.PathLike, scale: float = 1.0) -> ImportedMesh:
     node_sets = {k: np.unique(renumber[v[(v < len(renumber))]]) for k, v in node_sets.items()}
     node_sets = {k: v[v >= 0] for k, v in node_sets.items() if np.any(v >= 0)}
     return ImportedMesh(points=points[used], tets=renumber[tets], node_sets=node_sets, converted=converted,
-                        source=str(path))
+                        source=str(path), cell_sets=cell_sets)
 
 
 def group_report(points: np.ndarray, facets: np.ndarray, what: str, name) -> str:
@@ -239,6 +256,21 @@ def _boundary_nodes(deck: AbaqusDeck, node_sets: dict, n_points: int) -> np.ndar
             raise ValueError(f"{deck.source}: *BOUNDARY names the set {name!r}, which the deck does not define")
         nodes += lower[name.lower()].tolist()
     return np.unique(np.asarray(nodes, dtype=np.int64))
+
+
+def _solid_cell_sets(mesh, solid_blocks: list, parent: np.ndarray) -> dict:
+    """Every element set of the solid cells as the tetrahedra made of them (``parent``: each tetrahedron's solid
+    cell, numbered over ``solid_blocks`` in order); sets of surface cells only are left out."""
+    offsets = dict(zip(solid_blocks, np.cumsum([0] + [len(mesh.cells[k].data) for k in solid_blocks])[:-1]))
+    sets = {}
+    for name, per_block in mesh.cell_sets.items():
+        if str(name).startswith("gmsh:"):
+            continue
+        cells = [offsets[k] + np.asarray(idx, dtype=np.int64).ravel() for k, idx in enumerate(per_block)
+                 if k in offsets and idx is not None and len(idx)]
+        if cells:
+            sets[str(name)] = np.flatnonzero(np.isin(parent, np.concatenate(cells)))
+    return sets
 
 
 def _node_sets(mesh) -> dict:
@@ -362,9 +394,10 @@ def _filling(kind: str, pattern: tuple) -> tuple:
     raise AssertionError(f"no tetrahedral filling of a {kind} with face diagonals {pattern}")
 
 
-def split_to_tetrahedra(points: np.ndarray, blocks: list) -> tuple[np.ndarray, np.ndarray, dict]:
-    """(points, tets, converted): the cells of ``blocks`` [(meshio type, (m, k) nodes)] as conforming tetrahedra
-    (4 or 10 nodes, VTK order), new mid-nodes appended to points."""
+def split_to_tetrahedra(points: np.ndarray, blocks: list) -> tuple[np.ndarray, np.ndarray, dict, np.ndarray]:
+    """(points, tets, converted, parent): the cells of ``blocks`` [(meshio type, (m, k) nodes)] as conforming
+    tetrahedra (4 or 10 nodes, VTK order), new mid-nodes appended to points; ``parent``: each tetrahedron's cell,
+    numbered over the blocks in order."""
     points = [np.asarray(points, float)]
     n_points = len(points[0])
     new_nodes: dict = {}                                # key -> index of a node made here
@@ -377,7 +410,7 @@ def split_to_tetrahedra(points: np.ndarray, blocks: list) -> tuple[np.ndarray, n
             n_points += 1
         return new_nodes[key]
 
-    tets, converted = [], {}
+    tets, converted, parent, first = [], {}, [], 0
     x0 = points[0]
     for kind_name, cells in blocks:
         kind, n_corner, _, quadratic = CELL_TYPES[kind_name]
@@ -404,11 +437,13 @@ def split_to_tetrahedra(points: np.ndarray, blocks: list) -> tuple[np.ndarray, n
                         else:
                             row.append(_mid_node(kind, cell_index, cell, la, lb, edge_slot, x0, new_node))
                 tets.append(row)
+                parent.append(first + cell_index)
             made += len(filling)
+        first += len(cells)
         converted[kind_name] = (converted.get(kind_name, (0, 0))[0] + len(cells),
                                 converted.get(kind_name, (0, 0))[1] + made)
     tets = np.array(tets, dtype=np.int64)
-    return np.vstack(points), tets, converted
+    return np.vstack(points), tets, converted, np.asarray(parent, dtype=np.int64)
 
 
 def _mid_node(kind, cell_index, cell, la, lb, edge_slot, x0, new_node) -> int:
@@ -522,21 +557,31 @@ def select_contact_nodes(points: np.ndarray, tip: np.ndarray, contact) -> tuple[
     return nodes[order], how
 
 
-def add_to_gmsh(mesh: ImportedMesh, facet_groups: dict, volume_tag: int, volume_name: str = "blade") -> None:
-    """Write the tetrahedra into the current gmsh model as a discrete volume (physical group ``volume_tag``) and
-    each facet group {(tag, name): facets} as a discrete surface with its physical group."""
+def add_to_gmsh(mesh: ImportedMesh, facet_groups: dict, volume_tag: int, volume_name: str = "blade",
+                parts: dict | None = None) -> None:
+    """Write the tetrahedra into the current gmsh model as discrete volumes, and each facet group {(tag, name):
+    facets} as a discrete surface with its physical group. ``parts`` {(tag, name): tetrahedron indices} splits the
+    volume into physical groups (e.g. a bladed-disk sector's 'blade' and 'disk'; every tetrahedron in exactly one);
+    None: one physical volume ``volume_tag`` named ``volume_name``."""
     import gmsh
 
     quadratic = mesh.quadratic
-    vol = gmsh.model.addDiscreteEntity(3)
+    if parts is None:
+        parts = {(volume_tag, volume_name): np.arange(len(mesh.tets))}
     tags = np.arange(1, len(mesh.points) + 1)
-    gmsh.model.mesh.addNodes(3, vol, tags.tolist(), mesh.points.ravel().tolist())
     cells = mesh.tets[:, _GMSH_TET10] if quadratic else mesh.tets
-    gmsh.model.mesh.addElementsByType(vol, 11 if quadratic else 4, np.arange(1, len(cells) + 1).tolist(),
-                                      (cells + 1).ravel().tolist())
-    next_tag = len(cells) + 1
-    gmsh.model.addPhysicalGroup(3, [vol], volume_tag)
-    gmsh.model.setPhysicalName(3, volume_tag, volume_name)
+    next_tag = 1
+    for k, ((tag, name), tets) in enumerate(parts.items()):
+        vol = gmsh.model.addDiscreteEntity(3)
+        if k == 0:                                       # the nodes live on the first volume; the others share them
+            gmsh.model.mesh.addNodes(3, vol, tags.tolist(), mesh.points.ravel().tolist())
+        tets = np.asarray(tets, dtype=np.int64)
+        gmsh.model.mesh.addElementsByType(vol, 11 if quadratic else 4,
+                                          np.arange(next_tag, next_tag + tets.size).tolist(),
+                                          (cells[tets] + 1).ravel().tolist())
+        next_tag += tets.size
+        gmsh.model.addPhysicalGroup(3, [vol], tag)
+        gmsh.model.setPhysicalName(3, tag, name)
     for (tag, name), facets in facet_groups.items():
         surf = gmsh.model.addDiscreteEntity(2)
         gmsh.model.mesh.addElementsByType(surf, 9 if quadratic else 2,

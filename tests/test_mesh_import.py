@@ -6,6 +6,7 @@ import re
 
 import numpy as np
 import pytest
+import scipy.linalg
 
 from rotor37_rom import fem
 from rotor37_rom.geometry import blade as geo
@@ -322,19 +323,35 @@ def test_own_blade_demo(tmp_path):
     """demos/own_blade.py without --mesh (rotor37_rom.studies.own_blade): the ci blade as a mm deck through modes,
     the r = 45 model, the sprag-slip onsets and a 1-revolution rub; its summary holds the round-tripped blade (the ci
     mesh's mass to 1e-9, 8 contact nodes) and the onsets of the LE half and per node; a bad --units is one line, exit
-    2 (the script)."""
+    2 (the script). The script on the deck it wrote, with a material, a normal and a sense given."""
+    import json
     import os
     import subprocess
     import sys
     from pathlib import Path
 
     from rotor37_rom.studies.own_blade import OwnBladeConfig, run_own_blade
+    from rotor37_rom.studies.sector_file import SectorFile
 
     root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, MPLBACKEND="Agg")
     run = subprocess.run([sys.executable, "demos/own_blade.py", "--units", "furlong", "--out", str(tmp_path / "bad")],
-                         cwd=root, env=dict(os.environ, MPLBACKEND="Agg"), capture_output=True, text=True, timeout=120)
-    assert run.returncode == 2 and "--units must be one of" in run.stderr
+                         cwd=root, env=env, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 2 and "--units describes your own sector's file: give it with --mesh" in run.stderr
     summary = run_own_blade(OwnBladeConfig(revolutions=1.0, out=str(tmp_path)))
+    # the script on that deck with a material, a normal and a sense of the user's: the material given is used and
+    # said, the frame is in the summary, the modes scale as sqrt(E / rho) (the same mesh: 1e-8)
+    own = subprocess.run([sys.executable, "demos/own_blade.py", "--mesh", str(tmp_path / "example_blade_mm.inp"),
+                          "--material", "210e9", "0.3", "9000", "--direction", "radial", "--rotation-sense", "-1",
+                          "--r-c", "8", "--revolutions", "0.5", "--out", str(tmp_path / "own")],
+                         cwd=root, env=env, capture_output=True, text=True, timeout=600)
+    assert own.returncode == 0, own.stderr[-2000:]
+    assert "material: E = 210 GPa, nu = 0.3, rho = 9000 kg/m^3 (given)" in own.stdout
+    mine = json.loads((tmp_path / "own" / "summary.json").read_text())
+    assert mine["frame"]["contact_normal"] == "radial" and mine["frame"]["rotation_sense"] == -1
+    assert mine["input"]["material"] == [210e9, 0.3, 9000.0]
+    np.testing.assert_allclose(mine["modes_hz"], np.asarray(summary["modes_hz"]) * np.sqrt(210 / 180 * 8000 / 9000),
+                               rtol=1e-8)
     blade = fem.create_blade_sector(preset="ci")
     np.testing.assert_allclose(summary["mass_kg"], blade.total_mass(), rtol=1e-9)
     np.testing.assert_allclose(summary["contact_nodes_m"], blade.tip_nodes, atol=1e-12)
@@ -351,7 +368,7 @@ def test_own_blade_demo(tmp_path):
     deck = str(tmp_path / "example_blade_mm.inp")
     with pytest.raises(ValueError, match=r"^--mesh: .* the blade's mass is 6\.27e\+0?7 kg, outside 1 g - 100 kg; "
                                          r"the file is likely in mm"):
-        run_own_blade(OwnBladeConfig(mesh=deck, units="m", out=str(tmp_path / "metres")))
+        run_own_blade(OwnBladeConfig(mesh=SectorFile(deck, units="m"), out=str(tmp_path / "metres")))
 
 
 def _mirrored_deck(deck, path):
@@ -372,12 +389,14 @@ def test_a_mirrored_blade_turning_the_other_way_is_the_same_blade(ci_blade, tmp_
     """The frame and the hand are the user's (#71): the ci blade mirrored through y = 0 and turning the other way
     (sense +1) is the same physical blade: the same clamped frequencies, the same contact nodes mirrored, the same
     sprag-slip onset mu* at every contact node with either normal (x, radial) and the same 1-revolution map at two
-    speeds, to the round-off of the two solves (1e-8); the mirrored blade with rotor 37's sense (-1) is refused
-    (its trailing edge would lead). A sign error in the sliding direction or the normal gives other onsets."""
+    speeds from the map command (``--mesh``, ``--rotation-sense``), to the round-off of the two solves (1e-8); the
+    mirrored blade with rotor 37's sense (-1) is refused (its trailing edge would lead), by the map command too. A
+    sign error in the sliding direction or the normal gives other onsets."""
     from rotor37_rom.dynamics.casing import Casing, check_hand, contact_matrices
-    from rotor37_rom.dynamics.explicit import CentralDifference, simulate
     from rotor37_rom.dynamics.friction import sprag_slip_friction
     from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
+    from rotor37_rom.studies.contact_map import ContactMapConfig, run_contact_map
+    from rotor37_rom.studies.sector_file import SectorFile
 
     deck = fem.write_sector_mesh(ci_blade, tmp_path / "blade_mm.inp", units="mm")
     mirror = _mirrored_deck(deck, tmp_path / "mirror_mm.inp")
@@ -389,7 +408,8 @@ def test_a_mirrored_blade_turning_the_other_way_is_the_same_blade(ci_blade, tmp_
         check_hand(blades[1].tip_nodes, -1)
     config = ReductionConfig(r_c=8, r_md=0, forces="none", keep_basis=False)
     models = [build_reduced_model(b, config)[0] for b in blades]
-    omega = [np.sqrt(np.linalg.eigvalsh(np.linalg.solve(m.M, m.K))[:4].real) for m in models]
+    omega = [np.sqrt(scipy.linalg.eigh(m.K, m.M, eigvals_only=True)[:4]) for m in models]
+    assert np.all(omega[0] > 2 * np.pi * 100)                     # the ci blade's 1B is ~840 Hz
     np.testing.assert_allclose(omega[1], omega[0], rtol=1e-8)
     for direction in ("x", "radial"):
         onsets = []
@@ -399,13 +419,20 @@ def test_a_mirrored_blade_turning_the_other_way_is_the_same_blade(ci_blade, tmp_
         finite = np.isfinite(onsets[0])
         assert finite.any() and np.array_equal(finite, np.isfinite(onsets[1])), onsets
         np.testing.assert_allclose(np.array(onsets[1])[finite], np.array(onsets[0])[finite], rtol=1e-8)
-    runs = [simulate(CentralDifference(m, nonlinear=False, safety=0.5), [1350.0, 1450.0],
-                     Casing(mu=0.15, rotation_sense=sense), revolutions=1.0) for m, sense in zip(models, (-1, +1))]
-    for p in range(2):
-        scale = np.abs(runs[0].u_r[p]).max()
-        assert scale > 1e-5                                       # in contact: the casing pushes the tip 0.1 mm
-        np.testing.assert_allclose(runs[1].u_r[p], runs[0].u_r[p], rtol=0, atol=1e-8 * scale)
-        np.testing.assert_allclose(runs[1].lam[p], runs[0].lam[p], rtol=0, atol=1e-8 * np.abs(runs[0].lam[p]).max())
+    # the map command on each deck (--mesh, --rotation-sense): the same map, the frame in its summary
+    maps = []
+    for f, sense in ((deck, -1), (mirror, +1)):
+        config = ContactMapConfig.from_options(mesh=SectorFile(f), rotation_sense=sense, r_c=8, global_md=0,
+                                               speeds=(1350.0, 1450.0, 2), revolutions=1.0, gnl="off", mu=0.15,
+                                               quiet=True, out=tmp_path / f"map_{f.stem}")
+        maps.append(run_contact_map(config))
+    scale = np.abs(maps[0].runs["no GNL"].imap.nfrc).max()
+    assert scale > 1e-5                                           # in contact: the casing pushes the tip 0.1 mm
+    np.testing.assert_allclose(maps[1].runs["no GNL"].imap.nfrc, maps[0].runs["no GNL"].imap.nfrc, rtol=0,
+                               atol=1e-8 * scale)
+    assert maps[1].summary["frame"]["rotation_sense"] == 1 and maps[1].summary["input"]["path"] == str(mirror)
+    with pytest.raises(ValueError, match=r"^--rotation-sense -1 turns this blade with its trailing edge ahead"):
+        run_contact_map(config.with_options(rotation_sense=-1))
 
 
 def _deck_with_include_and_boundary(deck, folder, material=None):
@@ -476,22 +503,156 @@ def test_a_deck_with_an_include_a_boundary_clamp_and_its_material(ci_blade, tmp_
 
 
 @pytest.mark.slow
-def test_a_users_cyclic_sector_from_a_deck(tmp_path):
-    """One entry for a user's sector (#71): the built-in ci bladed-disk sector written as a millimetre Abaqus deck
-    (node sets CLAMP, TIP, LEFT, RIGHT) and read back with ``cyclic=("left", "RIGHT", 36)`` (any case) is a cyclic
-    sector: its faces paired, its cyclic frequencies at k = 0, 1 and N/2 those of the built-in sector to 1e-8 (the
-    same nodes and cells: the eigen-solver's round-off, measured 2e-11); what each face caught is said. Refused in
-    one line: N outside 2..360, a face group the deck does not have."""
-    ref = fem.create_disk_sector(preset="ci")
-    deck = fem.write_sector_mesh(ref, tmp_path / "disk_mm.inp", units="mm")
-    sector = fem.create_sector_from_file(deck, clamp="clamp", tip="TIP", units="mm", contact=8, verbose=False,
-                                         cyclic=("left", "RIGHT", 36))
-    assert sector.cyclic is not None and {"left", "right", "clamp", "tip"} <= set(sector.groups)
-    assert re.search(r"left 'left': \d+ facets, \d+ nodes", sector.summary), sector.summary
-    for k in (0, 1, 18):
-        np.testing.assert_allclose(fem.solve_cyclic_modes(sector, k, 4).omega, fem.solve_cyclic_modes(ref, k, 4).omega,
-                                   rtol=1e-8)
-    for cyclic, words in (((("LEFT", "RIGHT", 1)), ("cyclic", "2..360")), (("LEFT", "SIDE", 36), ("right", "SIDE"))):
+def test_a_users_bladed_disk_from_a_deck(ci_disk, tmp_path):
+    """One entry for a user's bladed-disk sector (#71): the built-in ci sector written as a millimetre Abaqus deck
+    (node sets CLAMP, TIP, LEFT, RIGHT; element sets BLADE, DISK) goes through ``demos/bladed_disk.py --mesh ...``
+    (group names in any case) as rotor 37's does: its cyclic frequencies at k = 0, 1 and N/2 are the built-in
+    sector's to 1e-8 (the same nodes and cells: the eigen-solver's round-off, measured 2e-11), its modes labelled the
+    same (the blade's share from the element set), the blade clamped on its disk the same, a 1B picture drawn;
+    ``--show-groups`` draws the four groups on the mesh and stops.
+    Refused in one line: N outside 2..360, a face group the deck does not have, faces given the other way round
+    (named as swapped), the wrong N (the right one suggested), an unknown blade element set."""
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from rotor37_rom.fem.safe import compute_safe_diagram
+
+    deck = fem.write_sector_mesh(ci_disk, tmp_path / "disk_mm.inp", units="mm")
+    run = subprocess.run([sys.executable, "demos/bladed_disk.py", "--mesh", str(deck), "--clamp", "clamp", "--tip",
+                          "TIP", "--left", "left", "--right", "RIGHT", "--n-sectors", "36", "--blade", "Blade",
+                          "--units", "mm", "--modes", "4", "--nodal-diameters", "0", "1", "18", "--pictures", "1",
+                          "--out", str(tmp_path / "out")],
+                         cwd=Path(__file__).resolve().parents[1], env=dict(os.environ, MPLBACKEND="Agg"),
+                         capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert re.search(r"left 'left': \d+ facets, \d+ nodes", run.stdout) and "blade 'Blade': " in run.stdout
+    summary = json.loads((tmp_path / "out" / "own" / "summary.json").read_text())
+    safe = summary["safe"]
+    assert summary["n_sectors"] == 36 and safe["k"] == [0, 1, 18]
+    ref = compute_safe_diagram(ci_disk, 4, ks=[0, 1, 18])
+    np.testing.assert_allclose(safe["omega"], ref.omega, rtol=1e-8)
+    assert safe["family"] == ref.family.tolist()
+    np.testing.assert_allclose(summary["clamped_on_disk"],
+                               fem.compute_clamped_modes(fem.clamp_cell_group(ci_disk, "disk"), 3).omega, rtol=1e-8)
+    assert (tmp_path / "out" / "own" / "mode_1B_k1.png").is_file()
+    # --show-groups: the groups drawn on the mesh, and nothing else run
+    shown = subprocess.run([sys.executable, "demos/bladed_disk.py", "--mesh", str(deck), "--left", "LEFT", "--right",
+                            "RIGHT", "--n-sectors", "36", "--show-groups", "--out", str(tmp_path / "shown")],
+                           cwd=Path(__file__).resolve().parents[1], env=dict(os.environ, MPLBACKEND="Agg"),
+                           capture_output=True, text=True, timeout=300)
+    assert shown.returncode == 0, shown.stderr[-3000:]
+    drawn = json.loads((tmp_path / "shown" / "own" / "groups.png.json").read_text())
+    assert drawn["scalar_range"] == [0.0, 4.0] and drawn["n_cells"] > 0          # clamp, left, right, tip
+    assert sorted(p.name for p in (tmp_path / "shown" / "own").iterdir()) == ["groups.png", "groups.png.json"]
+    for cyclic, words in (((("LEFT", "RIGHT", 1)), ("cyclic", "2..360")), (("LEFT", "SIDE", 36), ("right", "SIDE")),
+                          (("RIGHT", "LEFT", 36), ("faces are swapped", "exchange left and right")),
+                          (("LEFT", "RIGHT", 18), ("do not match", "360/36 degrees: N = 36?"))):
         with pytest.raises(ValueError) as e:
             fem.create_sector_from_file(deck, clamp="CLAMP", units="mm", verbose=False, cyclic=cyclic)
         _one_line(e, *words)
+    with pytest.raises(ValueError) as e:
+        fem.create_sector_from_file(deck, clamp="CLAMP", units="mm", verbose=False, cyclic=("LEFT", "RIGHT", 36),
+                                    blade="ROTOR")
+    _one_line(e, "blade", "no element set", "'ROTOR'", "BLADE", "DISK")
+
+
+def test_bad_inputs_to_a_users_mesh_are_one_line_each(tmp_path, capsys):
+    """Bad inputs to the user-mesh path (#71), from the options' checks (no meshing) to what only reading the file
+    shows: each is refused with one line naming the culprit (the option, the group, the face, the units)."""
+    from rotor37_rom.studies.contact_map import ContactMapConfig, MapModel
+    from rotor37_rom.studies.disk_modes import BladedDiskConfig
+    from rotor37_rom.studies.own_blade import OwnBladeConfig
+    from rotor37_rom.studies.sector_file import SectorFile
+
+    bar = _bar(tmp_path / "bar.msh", "tet", n=(4, 1))                  # 50 x 10 x 10 mm, groups ROOT, END, bar
+    (tmp_path / "notes.stl").write_text("solid\n")
+    (tmp_path / "empty.inp").write_text("*HEADING\nnothing\n")
+    ring = dict(left="ROOT", right="END", n_sectors=12)
+
+    def read(**kwargs):
+        return fem.create_sector_from_file(bar, **{"clamp": "ROOT", "verbose": False, **kwargs})
+
+    cases = [
+        ("a missing file", lambda: SectorFile(tmp_path / "missing.inp"), ("--mesh", "does not exist")),
+        ("a folder", lambda: SectorFile(tmp_path), ("--mesh", "is a folder")),
+        ("a file of another kind", lambda: SectorFile(tmp_path / "notes.stl"), ("--mesh must be one of", "notes.stl")),
+        ("an empty clamp name", lambda: SectorFile(bar, clamp=" "), ("--clamp",)),
+        ("a left face alone", lambda: SectorFile(bar, left="ROOT"), ("--left, --right and --n-sectors go together",)),
+        ("one sector", lambda: SectorFile(bar, **{**ring, "n_sectors": 1}), ("--n-sectors", "2..360")),
+        ("a blade set without faces", lambda: SectorFile(bar, blade="bar"), ("--blade", "--n-sectors")),
+        ("unknown units", lambda: SectorFile(bar, units="furlong"), ("--units", "furlong")),
+        ("one contact node", lambda: SectorFile(bar, contact=1), ("--contact", "2..40")),
+        ("a negative modulus", lambda: SectorFile(bar, material=(-1.0, 0.3, 8000.0)), ("--material",)),
+        ("nu = 0.5", lambda: SectorFile(bar, material=(2e11, 0.5, 8000.0)), ("--material",)),
+        ("a blade to the disk scene", lambda: BladedDiskConfig(mesh=SectorFile(bar)), ("--mesh", "--n-sectors")),
+        ("a disk to the blade scene", lambda: OwnBladeConfig(mesh=SectorFile(bar, **ring)), ("bladed_disk.py",)),
+        ("a picture past N/2", lambda: BladedDiskConfig(mesh=SectorFile(bar, **ring), pictures=(7,)),
+         ("--pictures", "[0, 6]")),
+        ("--disk with a blade", lambda: MapModel(mesh=SectorFile(bar), disk=True), ("--disk", "--n-sectors")),
+        ("--mesh with --model", lambda: MapModel(mesh=SectorFile(bar), path=tmp_path / "rom.npz"), ("--model",)),
+        ("--tolerance with --mesh", lambda: ContactMapConfig.from_options(mesh=SectorFile(bar), tolerance=0.1),
+         ("--tolerance", "--mesh")),
+        ("a clamp group the file lacks", lambda: read(clamp="HUB"), ("clamp", "'HUB'", "ROOT", "END")),
+        ("a clamp box with no node", lambda: read(clamp=(1, 1, 1, 2, 2, 2)), ("clamp", "no node")),
+        ("a reversed box", lambda: read(clamp=(1, 1, 1, 0, 0, 0)), ("clamp", "box")),
+        ("a contact group the file lacks", lambda: read(tip="END", contact="LE_NODES"), ("contact", "'LE_NODES'")),
+        ("metres read as millimetres", lambda: fem.create_sector_from_file(bar, clamp="ROOT", units="mm",
+                                                                          verbose=False),
+         ("mass", "outside 1 g - 100 kg", "likely in m")),
+        ("a negative scale", lambda: read(scale=-1.0), ("scale", "> 0")),
+        ("a clamped face as a cyclic face", lambda: read(cyclic=("END", "ROOT", 12)),
+         ("right: 'ROOT' shares", "with the clamp 'ROOT'")),
+        ("faces that are no cyclic pair", lambda: read(clamp=(0, 0, 0, 0.05, 0.01, 1e-4), cyclic=("END", "ROOT", 12)),
+         ("cyclic faces do not match under a rotation by 360/12 degrees",)),
+        ("a deck without nodes", lambda: fem.create_sector_from_file(tmp_path / "empty.inp", clamp="ROOT",
+                                                                     verbose=False), ("empty.inp", "no nodes")),
+    ]
+    outcomes = []
+    for what, call, words in cases:
+        with pytest.raises((ValueError, TypeError)) as e:
+            call()
+        _one_line(e, *words)
+        outcomes.append(f"{what}: {e.value}")
+    assert len(cases) >= 20
+    with capsys.disabled():
+        print("\n" + "\n".join(outcomes))
+
+
+def test_a_nastran_files_mat1_is_its_material(tmp_path, capsys):
+    """A NASTRAN bulk-data file's material (#71): the cantilever written as a .bdf (meshio: GRID/CTETRA, no named
+    sets: a box clamp) with a MAT1 card in free, small and large field (NASTRAN reals such as 2.1+5 included), in
+    N-mm-t-s: the material is read, printed and used - the frequencies are the default material's scaled by sqrt(E
+    rho_0 / (E_0 rho)) to 1e-9 (linear modes of the same mesh, same nu). A MAT1 without RHO is refused naming the
+    file and line."""
+    import meshio
+
+    from rotor37_rom.forms import Material
+
+    msh = _bar(tmp_path / "bar.msh", "tet", n=(4, 1), unit=1000.0)             # in mm
+    mesh = meshio.read(msh)
+    tets = [(b.type, b.data) for b in mesh.cells if b.type.startswith("tetra")]
+    bdf = tmp_path / "bar.bdf"
+    meshio.write(bdf, meshio.Mesh(mesh.points, tets), file_format="nastran")
+    root = (-1.0, -1.0, -1.0, 1e-3, 11.0, 11.0)                                   # x = 0, in mm
+    reference = fem.create_sector_from_file(bdf, clamp=root, units="mm", verbose=False, mass_check=False)
+    w0 = fem.compute_clamped_modes(reference, 2).omega
+    text = bdf.read_text().replace("ENDDATA", "{card}\nENDDATA")
+    cards = {"free": "MAT1,1,210000.,,0.3,9.-9",
+             "small": "MAT1    1       2.1+5           .3      9.-9",
+             "large": "MAT1*   1               2.1+5                                   .3              *\n"
+                      "*       9.-9"}
+    for form, card in cards.items():
+        bdf.write_text(text.format(card=card))
+        capsys.readouterr()
+        bar = fem.create_sector_from_file(bdf, clamp=root, units="mm", mass_check=False)
+        assert "material: E = 210 GPa, nu = 0.3, rho = 9000 kg/m^3 (the deck's)" in capsys.readouterr().out, form
+        assert bar.material == Material(E=210e9, nu=0.3, rho=9000.0), form
+        np.testing.assert_allclose(fem.compute_clamped_modes(bar, 2).omega,
+                                   w0 * np.sqrt((210.0 / 180.0) * (8000.0 / 9000.0)), rtol=1e-9)
+    bdf.write_text(text.format(card="MAT1,1,210000.,,0.3"))
+    with pytest.raises(ValueError) as e:
+        fem.create_sector_from_file(bdf, clamp=root, units="mm", mass_check=False)
+    _one_line(e, "bar.bdf, line", "(MAT1): no RHO")

@@ -19,9 +19,12 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def readme_commands() -> list[str]:
-    """Every command quoted in the README (a code span) that runs a demo or a benchmark, or a make target."""
+    """Every command quoted in the README (a code span or a line of a shell block) that runs a demo or a benchmark,
+    or a make target."""
     text = (ROOT / "README.md").read_text()
-    spans = re.findall(r"`([^`\n]+)`", text)
+    blocks = re.findall(r"```bash\n(.*?)```", text, re.S)               # fenced shell blocks, line by line
+    text = re.sub(r"```.*?```", "", text, flags=re.S)
+    spans = re.findall(r"`([^`\n]+)`", text) + [ln for b in blocks for ln in b.splitlines()]
     return sorted({s.strip() for s in spans if re.search(r"\bpython (demos|benchmarks)/\S+\.py", s)
                    or re.fullmatch(r"make [a-z-]+", s.strip())})
 
@@ -66,7 +69,7 @@ def test_readme_command(command, no_meshing, tmp_path):
     # placeholders of the user's own files: an (empty) file of the right kind; the dry run does not read it
     stand_in = tmp_path / "my_blade.inp"
     stand_in.write_text("")
-    options = [str(stand_in) if o in ("F", "my_blade.inp") else o for o in options]
+    options = [str(stand_in) if o in ("F", "my_blade.inp", "disk_mm.inp") else o for o in options]
     # a dry run where results would go: the output folders are checked where the README puts them
     run = subprocess.run([sys.executable, script, *options, "--check"], cwd=ROOT, env=no_meshing,
                          capture_output=True, text=True, timeout=120)

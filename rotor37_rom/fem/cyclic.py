@@ -301,6 +301,9 @@ class CyclicModes:
         and sin modes); a, b: lists of the sector's cos and sin fields (dolfinx Functions; b is None for k = 0 and
         N/2), normalised so that a^T M a + b^T M b = 1; x: the projected eigenvectors (PETSc), a start for a
         neighbouring k.
+
+    Expanded on the whole structure (``disk.symmetry.expand_sector_mode``: sector s carries cos(s k alpha) a -
+    sin(s k alpha) b), a mode's modal mass is N/2 for 0 < k < N/2 and N for k = 0 and N/2.
     """
 
     k: int

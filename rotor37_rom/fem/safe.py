@@ -44,7 +44,8 @@ class SafeDiagram:
     Attributes:
         n_sectors: N; k: (n_k,) harmonic indices (nodal diameters); omega: (n_k, n_modes) rad/s ascending per k;
         blade_share: (n_k, n_modes) share of each mode's strain energy in the blade cells; family: (n_k, n_modes)
-        labels, '1B', '1T', '2B', ... (blade-dominated, from the tip LE/TE motion) or 'disk'; seconds: (n_k,) wall
+        labels, '1B', '1T', '2B', ... (blade-dominated, from the tip LE/TE motion) or 'disk' ('mode j' for a sector
+        without a blade volume: unlabelled); seconds: (n_k,) wall
         time per k (assembly of the projected operators and the eigen-solve).
     """
 
@@ -76,16 +77,20 @@ def compute_safe_diagram(sector: Sector, n_modes: int = 6, ks=None, ops: SvkOper
 
     The blade share of a cos/sin pair is (a K_b a + b K_b b) / (a K a + b K b), K_b the stiffness of the blade cells;
     a blade-dominated mode (share >= 1/2) is named from the motion of the tip's LE and TE nodes (``modes.
-    classify_blade_modes``, on whichever of a and b moves the tip more), counted within its k."""
+    classify_blade_modes``, on whichever of a and b moves the tip more), counted within its k. A sector without a
+    separate blade volume (a user's sector read without its blade's element set) or without contact nodes is not
+    labelled: its shares are NaN, its modes 'mode 1', 'mode 2', ... in each k."""
     if sector.cyclic is None:
         raise ValueError(f"{sector.source} is not a cyclic sector (no paired left/right faces)")
     ks = harmonic_indices(sector.cyclic.n_sectors) if ks is None else np.asarray(ks, dtype=int)
     ops = ops or create_svk_operators(sector)
     K, M = assemble_stiffness(sector, ops), assemble_mass(sector, ops)
     cyclic = CyclicOperators(sector, K, M)
-    K_all = assemble_stiffness(sector, ops, clamped=False)
-    K_blade = group_stiffness(sector, blade_group)
-    x, y = K_all.createVecRight(), K_all.createVecLeft()
+    labelled = blade_group in sector.groups and len(sector.groups.keys() & {"disk"}) == 1 \
+        and len(sector.tip_nodes) >= 2
+    K_all = assemble_stiffness(sector, ops, clamped=False) if labelled else None
+    K_blade = group_stiffness(sector, blade_group) if labelled else None
+    x, y = K.createVecRight(), K.createVecLeft()
 
     def energy(A, f):                     # f^T A f over all ranks (the owned part of f; PETSc's dot is global)
         x.array[:] = f.x.array[:x.getLocalSize()]
@@ -101,6 +106,11 @@ def compute_safe_diagram(sector: Sector, n_modes: int = 6, ks=None, ops: SvkOper
         start[m] = modes.x
         seconds.append(time.perf_counter() - t0)
         w, idx = modes.distinct()
+        if not labelled:
+            omega.append(w[:n_modes])
+            share.append(np.full(min(n_modes, len(idx)), np.nan))
+            family.append(np.array([f"mode {j + 1}" for j in range(min(n_modes, len(idx)))]))
+            continue
         shares, tips = [], []
         for i in idx:
             parts = [f for f in (modes.a[i], modes.b[i]) if f is not None]
@@ -117,6 +127,7 @@ def compute_safe_diagram(sector: Sector, n_modes: int = 6, ks=None, ops: SvkOper
         family.append(labels[:n_modes].astype(str))
     cyclic.destroy()
     for A in (K, M, K_all, K_blade):
-        A.destroy()
+        if A is not None:
+            A.destroy()
     return SafeDiagram(sector.cyclic.n_sectors, np.asarray(ks), np.array(omega), np.array(share),
                        np.array(family), np.array(seconds))

@@ -21,6 +21,7 @@ from rotor37_rom.disk.symmetry import CyclicPairs, rotation_z
 from rotor37_rom.forms import Material
 from rotor37_rom.geometry import blade as blade_geometry
 from rotor37_rom.geometry.abaqus import deck_material, read_deck
+from rotor37_rom.geometry.nastran import bulk_material
 from rotor37_rom.geometry.mesh_import import UNITS, check_blade_mass
 from rotor37_rom.geometry.tables import read_blade_table
 
@@ -208,7 +209,8 @@ def create_blade_sector(comm: MPI.Comm = MPI.COMM_WORLD, table: str | Path | Non
 def create_sector_from_file(path: str | Path, clamp, tip=None, comm: MPI.Comm = MPI.COMM_WORLD,
                             preset="coarse", material: Material | None = None, degree: int = 2,
                             scale: float = 1.0, units: str | None = None, contact=None,
-                            verbose: bool = True, mass_check: bool = True, cyclic=None) -> Sector:
+                            verbose: bool = True, mass_check: bool = True, cyclic=None,
+                            blade: str | None = None) -> Sector:
     """A user's blade from a CAD file (STEP/BREP) or a mesh from another FE code (.msh, .inp, .bdf/.nas, .vtk/.vtu);
     see geometry.blade.import_blade_model for clamp, tip, scale/units and contact (the contact nodes, ordered
     LE -> TE). With ``verbose``, rank 0 prints what was read, the bounding box and the mass. A mass outside 1 g -
@@ -217,10 +219,15 @@ def create_sector_from_file(path: str | Path, clamp, tip=None, comm: MPI.Comm = 
     right, N)``: a cyclic sector (a bladed disk's, or any structure of N identical sectors about e_z) whose faces
     ``left`` (at the lower angle) and ``right`` (turned by 2 pi / N) are groups of the file or boxes; they are paired
     node for node (``locate_cyclic_pairs``), and the sector takes every cyclic operator as the built-in disk's
-    does."""
+    does. ``blade``: the element set of a cyclic sector's blade, which makes its volumes 'blade' and 'disk' as the
+    built-in sector's (the SAFE diagram's blade share, ``clamp_cell_group``).
+
+    Normalisation of the cyclic modes (``solve_cyclic_modes``, ``CyclicModes``): each cos/sin pair (a, b) is
+    normalised on the sector, a^T M a + b^T M b = 1; expanded on the whole structure (``expand``) its modal mass is
+    N/2 for 0 < k < N/2 and N for k = 0 and k = N/2 (one real shape), as in every cyclic-symmetry code."""
     material = file_material(path, material, units, scale, verbose and comm.rank == 0)
     sector = build_on_rank0(comm, lambda: blade_geometry.import_blade_model(path, clamp, tip, preset, scale, units,
-                                                                           contact, cyclic),
+                                                                           contact, cyclic, blade),
                             material, degree, str(preset), str(path))
     if not np.isfinite(sector.volume):                 # a mesh file: its volume from the mesh (curved P2 cells too)
         sector = dataclasses.replace(sector, volume=assemble_scalar(1.0 * ufl.dx(domain=sector.mesh), sector.comm))
@@ -236,12 +243,14 @@ def create_sector_from_file(path: str | Path, clamp, tip=None, comm: MPI.Comm = 
 def file_material(path, material: Material | None, units: str | None, scale: float, verbose: bool) -> Material:
     """The material of a user's file: ``material`` where given, else the material of an Abaqus/CalculiX deck
     (``*MATERIAL``/``*ELASTIC``/``*DENSITY``, in SI for a deck in metres, N-mm-t-s for one in millimetres:
-    ``geometry.abaqus.deck_material``), else the paper's maraging steel; printed with ``verbose``, and where the deck
+    ``geometry.abaqus.deck_material``) or of a NASTRAN file's first MAT1 (``geometry.nastran.bulk_material``), else
+    the paper's maraging steel; printed with ``verbose``, and where the deck
     states another material than the one given."""
     deck = None
-    if Path(path).suffix.lower() == ".inp":
+    suffix = Path(path).suffix.lower()
+    if suffix in (".inp", ".bdf", ".nas", ".fem"):
         unit = units if units is not None else {1.0: "m", 1e-3: "mm"}.get(float(scale), f"scale {scale:g}")
-        found = deck_material(read_deck(path), unit)
+        found = deck_material(read_deck(path), unit) if suffix == ".inp" else bulk_material(path, unit)
         if found is not None:
             deck = Material(E=found[0], nu=found[1], rho=found[2])
 
@@ -286,6 +295,24 @@ def _face_nodes(sector: Sector, name: str) -> tuple[np.ndarray, np.ndarray]:
     return g[order], x[order]
 
 
+def _face_hint(x_left: np.ndarray, x_right: np.ndarray, angle: float, tol: float) -> str:
+    """Why two cyclic faces do not match, where it can be told: given the other way round (left is the face at the
+    higher angle), or turned by another angle (another N)."""
+    back, _ = cKDTree(x_left).query(x_right @ rotation_z(angle).T)
+    if back.max() <= tol:
+        return ": the faces are swapped (the left face is the one at the higher angle): exchange left and right"
+    # the mean of e^{i theta} over a face turns with the face: the angle between the two faces' means is the turn
+    turn = np.angle(np.mean(x_right[:, 0] + 1j * x_right[:, 1]) / np.mean(x_left[:, 0] + 1j * x_left[:, 1]))
+    if abs(turn) > 1e-6 and abs(2 * np.pi / abs(turn) - round(2 * np.pi / abs(turn))) < 1e-3:
+        n = int(round(2 * np.pi / abs(turn)))
+        if 2 <= n <= 360 and abs(abs(turn) - angle) > 1e-9:
+            again, _ = cKDTree(x_left).query(x_right @ rotation_z(-turn).T)
+            if again.max() <= tol:
+                return (f": they match under a rotation by 360/{n} degrees" +
+                        (" (with left and right exchanged)" if turn < 0 else "") + f": N = {n}?")
+    return ""
+
+
 def locate_cyclic_pairs(sector: Sector, n_sectors: int, rel_tol: float = 1e-6) -> CyclicPairs:
     """Pair the DOF nodes of the sector's 'left' and 'right' faces under the rotation by 2 pi / N about e_z.
 
@@ -316,7 +343,8 @@ def locate_cyclic_pairs(sector: Sector, n_sectors: int, rel_tol: float = 1e-6) -
         p = x_right[worst]
         raise ValueError(f"cyclic faces do not match under a rotation by 360/{n_sectors} degrees: the right node at "
                          f"({p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g}) m is {dist[worst]:.3g} m from the nearest turned left "
-                         f"node (tolerance {rel_tol * scale:.3g} m)")
+                         f"node (tolerance {rel_tol * scale:.3g} m)" + _face_hint(x_left, x_right, angle,
+                                                                                   rel_tol * scale))
     if len(np.unique(match)) != match.size:
         raise ValueError("cyclic faces: two right nodes match the same left node (duplicate nodes on a face?)")
     left = left[match]
@@ -341,7 +369,8 @@ def locate_cyclic_pairs(sector: Sector, n_sectors: int, rel_tol: float = 1e-6) -
 def write_sector_mesh(sector: Sector, path: str | Path, units: str = "m") -> Path:
     """Write a sector's mesh as an Abaqus/CalculiX input deck (serial; meshio): coordinates in ``units``, its
     tetrahedra (C3D4 / C3D10), each named facet group as a node set of its facets' corners (upper-case name: CLAMP,
-    TIP, ...) and the contact nodes as the node set CONTACT.
+    TIP, ...), the contact nodes as the node set CONTACT and, where the sector has several volumes (a bladed-disk
+    sector's blade and disk), each as an element set (BLADE, DISK).
     ``create_sector_from_file(path, clamp='CLAMP', tip='TIP', units=units, contact='CONTACT')`` reads it back."""
     import meshio
     from dolfinx.cpp.io import perm_vtk
@@ -374,5 +403,11 @@ def write_sector_mesh(sector: Sector, path: str | Path, units: str = "m") -> Pat
     if len(sector.tip_nodes):
         point_sets["CONTACT"] = cKDTree(mesh.geometry.x).query(sector.tip_nodes)[1].astype(np.int64)
     kind = "tetra10" if nodes_per_cell == 10 else "tetra"
-    meshio.write(path, meshio.Mesh(x, [(kind, cells)], point_sets=point_sets))
+    cell_sets = {}
+    if sector.cell_tags is not None and len(sector.cell_tags.values) and len(set(sector.cell_tags.values)) > 1:
+        names = {tag: name for name, tag in sector.groups.items()}
+        for tag in np.unique(sector.cell_tags.values):
+            if int(tag) in names:
+                cell_sets[names[int(tag)].upper()] = [sector.cell_tags.find(tag).astype(np.int64)]
+    meshio.write(path, meshio.Mesh(x, [(kind, cells)], point_sets=point_sets, cell_sets=cell_sets))
     return path

@@ -25,9 +25,11 @@ from rotor37_rom.cli import ArgumentParser
 from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.model.reduced import ReducedModel
 from rotor37_rom.reduction.config import DiskReductionConfig, ReductionConfig
+from rotor37_rom.studies.sector_file import SECTOR_OPTIONS, SectorFile, add_sector_options
 from rotor37_rom.studies.sweep import SweepSpec
 
-__all__ = ["ContactMapConfig", "MapModel", "MapScheme", "MapContinuation", "OPTIONS", "build_parser", "map_model",
+__all__ = ["ContactMapConfig", "MapModel", "MapScheme", "MapContinuation", "OPTIONS", "build_parser", "parse_options",
+           "map_model",
            "continued_revolutions", "GNL_SETTINGS", "PRECISIONS", "N_SECTORS"]
 
 GNL_SETTINGS = {"off": (False,), "on": (True,), "both": (False, True)}
@@ -81,9 +83,9 @@ def _whole(option: str, value, *args) -> None:
 
 @dataclasses.dataclass(frozen=True)
 class MapModel:
-    """The reduced model a map runs on: built here (the clamped blade of ``preset``, or the 36-sector bladed disk),
-    or a saved one (``path``). What the builders share with it they check themselves (``ReductionConfig``,
-    ``DiskReductionConfig``); the errors name the command line's options.
+    """The reduced model a map runs on: built here (the clamped blade of ``preset``, the 36-sector bladed disk, or a
+    user's blade or bladed-disk sector ``mesh``), or a saved one (``path``). What the builders share with it they
+    check themselves (``ReductionConfig``, ``DiskReductionConfig``); the errors name the command line's options.
 
     Attributes:
         preset: mesh preset of the blade the model is built on (and the cubature trained on): ci, coarse, paper.
@@ -101,6 +103,8 @@ class MapModel:
         r_cyclic: the disk's interface modes (eq. 51, >= 1; the paper's 144).
         mistuning: the disk's blade-to-blade stiffness scatter, a standard deviation in [0, 1) (0: tuned).
         seed: of the mistuning's random factors.
+        mesh: a user's sector (``studies.sector_file.SectorFile``) to build the model on instead of rotor 37's: a
+            blade, or with its cyclic faces and count a bladed disk (``disk`` is then set); None: rotor 37.
     """
 
     preset: str = "ci"
@@ -113,8 +117,18 @@ class MapModel:
     r_cyclic: int = 144
     mistuning: float = 0.0
     seed: int = 0
+    mesh: SectorFile | None = None
 
     def __post_init__(self):
+        if self.mesh is not None:
+            if not isinstance(self.mesh, SectorFile):
+                raise TypeError(f"mesh must be a SectorFile (the file and its groups) or None, got {self.mesh!r}")
+            if self.path is not None:
+                raise ValueError("--mesh builds a model on your sector: not with --model (a saved one)")
+            if self.disk and self.mesh.cyclic is None:
+                raise ValueError("--disk is rotor 37's bladed disk; your own disk: give --mesh with --left, --right "
+                                 "and --n-sectors")
+            object.__setattr__(self, "disk", self.mesh.cyclic is not None)
         if self.preset not in MESH_PRESETS:
             raise ValueError(f"--preset must be one of {', '.join(MESH_PRESETS)}, got {self.preset!r}")
         for option, field, value, config in (("r_c", "r_c", self.r_c, ReductionConfig),
@@ -135,6 +149,23 @@ class MapModel:
             object.__setattr__(self, name, float(getattr(self, name)))
         if self.path is not None:
             object.__setattr__(self, "path", Path(self.path))
+
+    @property
+    def n_sectors(self) -> int:
+        """The sectors of the disk built (a user's N, rotor 37's 36), or of a saved model that may be a disk (36 at
+        most checked before it is read); 1 for a blade."""
+        if self.mesh is not None and self.mesh.cyclic is not None:
+            return self.mesh.n_sectors
+        return N_SECTORS if self.disk or self.path is not None else 1
+
+    def create_sector(self, comm):
+        """The sector the model is built on (serially on ``comm``): the user's, or rotor 37's blade or disk sector
+        of ``preset``."""
+        from rotor37_rom import fem
+
+        if self.mesh is not None:
+            return self.mesh.create(comm)
+        return (fem.create_disk_sector if self.disk else fem.create_blade_sector)(comm, preset=self.preset)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -264,11 +295,11 @@ class MapContinuation:
 OPTIONS = {
     **{name: ("rom", name) for name in ("preset", "disk", "r_c", "r_md", "global_md", "contact_patch", "r_cyclic",
                                         "mistuning", "seed")},
-    "model": ("rom", "path"),
+    "model": ("rom", "path"), "mesh": ("rom", "mesh"),
     **{f.name: ("scheme", f.name) for f in dataclasses.fields(MapScheme)},
     "revolutions": ("sweep", "revolutions"), "batch": ("sweep", "batch_size"),
     "mu": ("sweep.casing", "mu"), "c0": ("sweep.casing", "c0"), "hb": ("sweep.casing", "h_b"),
-    "direction": ("sweep.casing", "direction"),
+    "direction": ("sweep.casing", "direction"), "rotation_sense": ("sweep.casing", "rotation_sense"),
     "continuation": ("continuation", "step"), "continuation_range": ("continuation", "range"),
     "steady_window": ("continuation", "steady_window"), "unsteady_step": ("continuation", "unsteady_step"),
     **{name: ("", name) for name in ("speeds", "gnl", "sector", "stress", "tolerance", "out", "cache", "quiet")},
@@ -378,13 +409,13 @@ class ContactMapConfig:
             raise ValueError(f"--gnl must be one of {', '.join(GNL_SETTINGS)}, got {self.gnl!r}")
         # what a batch holds: every record_dt, per run the monitored nodes' normal displacements and the contact
         # forces (a blade: 8 + 8; a disk, or a model file that may be one: 37 + 288), at the slowest speed
-        rows = 8 + 8 if not (self.rom.disk or self.rom.path is not None) else 37 + 8 * N_SECTORS
+        rows = 8 + 8 if not (self.rom.disk or self.rom.path is not None) else 37 + 8 * self.rom.n_sectors
         records = self.sweep.revolutions * 2 * np.pi / speeds[0] / self.sweep.record_dt + 1
         batch = min(self.sweep.batch_size, int(speeds[2]))
         fits_in_memory("--revolutions", 8.0 * rows * records * batch,
                        f"{batch} runs x {records:.3g} records x {rows} values, at {speeds[0]:g} rad/s",
                        hint="fewer revolutions or a smaller --batch")
-        limit = N_SECTORS - 1 if self.rom.disk or self.rom.path is not None else 0
+        limit = self.rom.n_sectors - 1
         if not (isinstance(self.sector, numbers.Integral) and 0 <= self.sector <= limit):
             raise ValueError(f"--sector must be in [0, {limit}] ({'the disk' if limit else 'a single blade'}'s "
                              f"sectors), got {self.sector}")
@@ -405,6 +436,9 @@ class ContactMapConfig:
                              "unscaled)")
         if not (isinstance(self.tolerance, numbers.Real) and 0 < self.tolerance < 1):
             raise ValueError(f"--tolerance must be in (0, 1) (a relative error: 0.05 = 5 %), got {self.tolerance}")
+        if self.rom.mesh is not None:
+            raise ValueError("--tolerance with --mesh: the speed-accuracy study measured rotor 37's models; give the "
+                             "options for your sector")
         if self.rom.disk and self.rom.mistuning > 0:
             raise ValueError("--tolerance with --mistuning: the speed-accuracy study measured the tuned disk; "
                              "give the options")
@@ -589,6 +623,9 @@ def build_parser() -> ArgumentParser:
     parser.add_argument("--hb", type=float, help="height of the casing's bumps (m, default 0.625e-3)")
     parser.add_argument("--direction", choices=["x", "radial", "cone"],
                         help="contact normal: x (the paper's e_x, default), radial, cone (the casing cone's normal)")
+    parser.add_argument("--rotation-sense", type=int, choices=[-1, 1],
+                        help="the rotor turns about +z towards -theta (-1, rotor 37's, the default) or +theta (+1); a "
+                             "sense that turns the blade with its trailing edge ahead (a mirrored blade) is refused")
     parser.add_argument("--batch", type=int, help="speeds integrated together (default 16)")
     parser.add_argument("--continuation", type=float,
                         help="speed step (rad/s) of a continuation up and down over the map's range (0: none, the "
@@ -610,5 +647,16 @@ def build_parser() -> ArgumentParser:
     parser.add_argument("--cache", type=Path, help="folder of the model, cubature and probe caches (default "
                                                    "OUT/cache; another map's to share its cubature)")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    add_sector_options(parser)
     return parser
+
+
+def parse_options(argv=None) -> dict:
+    """The flat options (``OPTIONS``) of a command line (``build_parser``): those given, a user's sector's options
+    gathered into ``mesh`` (a ``SectorFile``)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    mesh = SectorFile.from_args(args, parser)
+    options = {k: v for k, v in vars(args).items() if k not in SECTOR_OPTIONS}
+    return options | ({"mesh": mesh} if mesh is not None else {})
 

@@ -25,13 +25,13 @@ import scipy.linalg
 from rotor37_rom.checks import before_work
 from rotor37_rom.disk.assembly import mistuning_factors
 from rotor37_rom.disk.harmonics import sector_harmonics
-from rotor37_rom.dynamics.casing import Casing, contact_matrices
+from rotor37_rom.dynamics.casing import Casing, check_hand, contact_matrices
 from rotor37_rom.dynamics.explicit import CentralDifference, simulate
 from rotor37_rom.dynamics.friction import sprag_slip_friction
 from rotor37_rom.model.reduced import ReducedModel, load_reduced_model, save_reduced_model, saved_model_key
 from rotor37_rom.npz import save_json
 from rotor37_rom.studies.contact_config import (GNL_SETTINGS, N_SECTORS, PRECISIONS, ContactMapConfig, MapContinuation,
-    MapModel, MapScheme, build_parser, continued_revolutions, map_model)
+    MapModel, MapScheme, build_parser, continued_revolutions, map_model, parse_options)
 from rotor37_rom.studies.contact_scheme import (capped_gnl_step, capped_probe, capped_probe_states, cubature_model,
     print_step_outliers, setting_names, time_scheme)
 from rotor37_rom.studies.sweep import (ContinuationPoint, InteractionMap, compute_seconds, continuation,
@@ -45,7 +45,7 @@ if TYPE_CHECKING:
 __all__ = ["run_contact_map", "ContactMapResult", "MapResult", "Branch", "reduced_model", "build_model",
            "eigenfrequencies", "eo4_frequency", "sprag_slip_onsets", "carry_on", "carry_on_record", "stress_mesh",
            "disk_stress_of", "disk_peak_stress", "merge_earlier_runs", "write_summary", "world_comm", "PAPER",
-           "ContactMapConfig", "MapModel", "MapScheme", "MapContinuation", "build_parser", "map_model",
+           "ContactMapConfig", "MapModel", "MapScheme", "MapContinuation", "build_parser", "parse_options", "map_model",
            "continued_revolutions", "GNL_SETTINGS", "PRECISIONS", "N_SECTORS", "time_scheme", "setting_names",
            "cubature_model", "capped_probe", "capped_gnl_step", "capped_probe_states", "print_step_outliers"]
 
@@ -161,33 +161,32 @@ def reduced_model(config: ContactMapConfig, comm: MPI.Comm | None) -> tuple[Redu
 
 
 def build_model(config: ContactMapConfig) -> ReducedModel:
-    """Build the reduced model of the ``config.rom.preset`` blade, or of the bladed disk (cached in
-    ``config.cache_dir``), in this process alone."""
+    """Build the reduced model of the ``config.rom.preset`` blade, of the bladed disk, or of the user's sector
+    ``config.rom.mesh`` (cached in ``config.cache_dir``), in this process alone."""
     from mpi4py import MPI
-
-    from rotor37_rom import fem
 
     r_c, r_md = config.modes
     t0 = time.perf_counter()
+    sector = config.rom.create_sector(MPI.COMM_SELF)
     if config.rom.disk:
         from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model
 
-        sector = fem.create_disk_sector(MPI.COMM_SELF, preset=config.rom.preset)
-        factors = None if config.rom.mistuning == 0 else tuple(mistuning_factors(N_SECTORS, config.rom.mistuning,
+        n = sector.cyclic.n_sectors
+        factors = None if config.rom.mistuning == 0 else tuple(mistuning_factors(n, config.rom.mistuning,
                                                                               config.rom.seed).tolist())
         # without GNL no sector force is evaluated: the exact tensors (most of a build) are not built
         reduction = DiskReductionConfig(tip_nodes="all", r_c=r_c, r_md=r_md, criterion="MI2b",
-                                        r_cyclic=config.interface_modes, mistuning=factors,
-                                        forces="none" if config.gnl == "off" else "intrusive")
+                                        r_cyclic=min(config.interface_modes, n * sector.cyclic.left.size),
+                                        mistuning=factors, forces="none" if config.gnl == "off" else "intrusive")
         model, _ = build_disk_model(sector, reduction, cache_dir=config.cache_dir)
     else:
         from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
 
-        sector = fem.create_blade_sector(MPI.COMM_SELF, preset=config.rom.preset)
         reduction = ReductionConfig(r_c=r_c, r_md=r_md, global_md_modes=config.rom.global_md, forces="intrusive",
                                     contact_patch=config.rom.contact_patch)
         model, _ = build_reduced_model(sector, reduction, cache_dir=config.cache_dir)
-    print(f"reduced model: {config.rom.preset} preset ({sector.n_dofs} DOF) -> r = {model.r} {model.sizes} "
+    what = f"{config.rom.mesh.path.name}" if config.rom.mesh is not None else f"{config.rom.preset} preset"
+    print(f"reduced model: {what} ({sector.n_dofs} DOF) -> r = {model.r} {model.sizes} "
           f"in {time.perf_counter() - t0:.1f} s")
     return model
 
@@ -227,6 +226,7 @@ def model_summary(config: ContactMapConfig, model: ReducedModel, omega: np.ndarr
     """The summary.json entries of the model and the set-up (its 'runs' still empty)."""
     return {"r": model.r, "sizes": model.sizes, "omega_1_3": omega.tolist(),
             "linear_resonance": eo4_frequency(model) / 4, "node": config.node, "disk": model.sectors is not None,
+            "input": None if config.rom.mesh is None else config.rom.mesh.as_dict(),
             "mistuning": model.metadata.get("config", {}).get("mistuning"),
             "speeds": list(config.speeds), "revolutions": config.sweep.revolutions, "casing": vars(config.sweep.casing),
             "runs": {}, "sprag_slip": {k: ([_finite(x) for x in v] if isinstance(v, list) else _finite(v))
@@ -366,14 +366,14 @@ def stress_mesh(config: ContactMapConfig, model: ReducedModel):
     """The disk sector's mesh the model was built on (for ``--stress``; made once per call of the study)."""
     from mpi4py import MPI
 
-    from rotor37_rom import fem
     from rotor37_rom.reduction.builder import mesh_signature
 
     if model.sectors is None:
         raise ValueError("--stress needs a disk model (this one is a single blade's: demos/report.py draws its stress)")
-    sector = fem.create_disk_sector(MPI.COMM_SELF, preset=config.rom.preset)     # rank 0's own copy under mpirun
+    sector = config.rom.create_sector(MPI.COMM_SELF)                       # rank 0's own copy under mpirun
     if mesh_signature(sector) != model.metadata.get("mesh"):
-        raise ValueError(f"--preset: the model was not built on the {config.rom.preset} disk sector's mesh")
+        where = "--mesh" if config.rom.mesh is not None else "--preset"
+        raise ValueError(f"{where}: the model was not built on {sector.source}'s mesh")
     return sector
 
 
@@ -489,9 +489,18 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
         # imported none before the stress, and rank 0 waited there forever)
         importlib.import_module("rotor37_rom.fem")
     model, files = reduced_model(config, comm)
+    casing = config.sweep.casing
+    first = model.nodes.coordinates[model.nodes.sector == 0]
+    stagger = check_hand(first, casing.rotation_sense)              # a mirrored blade: refused, naming the option
     omega = eigenfrequencies(model)
     onset = sprag_slip_onsets(model, config.sweep.casing, config.sector)
     summary = model_summary(config, model, omega, onset)
+    summary["frame"] = {"axis": "+z", "rotation_sense": casing.rotation_sense, "contact_normal": casing.direction,
+                        "tip_stagger_deg": float(np.degrees(stagger))}
+    if rank == 0 and not config.quiet:
+        print(f"frame: rotation about +z, sense {casing.rotation_sense:+d} (towards "
+              f"{'-' if casing.rotation_sense < 0 else '+'}theta), contact normal {casing.direction}; the tip's "
+              f"trailing edge {abs(np.degrees(stagger)):.1f} deg behind its leading edge")
     if rank == 0 and not config.quiet:
         print(f"sustained sliding diverges (sprag-slip) from mu = {onset['weakest_node']:.3f} on one contact node, "
               f"{onset['all_nodes']:.3f} on all of them; this run: mu = {config.sweep.casing.mu:g} (growth can start "

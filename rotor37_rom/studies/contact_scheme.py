@@ -89,7 +89,6 @@ def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: Centr
     tolerance) and save it with the step states to ``cache``."""
     from mpi4py import MPI
 
-    from rotor37_rom import fem
     from rotor37_rom.reduction.builder import hyper_reduce
     from rotor37_rom.dynamics.explicit import contact_training_states
 
@@ -103,8 +102,7 @@ def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: Centr
         Q_train, step_states = contact_training_states(scheme, train, casing, revolutions, checkpoint=checkpoint)
         save_npz(runs_cache, train=Q_train, step=step_states)
         checkpoint.unlink(missing_ok=True)
-    create = fem.create_disk_sector if model.sectors is not None else fem.create_blade_sector
-    sector = create(MPI.COMM_SELF, preset=config.rom.preset)
+    sector = config.rom.create_sector(MPI.COMM_SELF)
     reduced, rep = hyper_reduce(sector, model, Q_train, tol=config.scheme.cubature, level="point",
                                 label=f"contact runs {train.tolist()} x {revolutions:g} rev, mu = {casing.mu:g}")
     print(f"cubature: {rep['points']} of {rep['exact'].w.size} quadrature points (training error "

@@ -23,6 +23,7 @@ from rotor37_rom.dynamics.newmark import simulate_newmark
 from rotor37_rom.fem.periodic import sector_harmonic_load, solve_repeating_newmark
 from rotor37_rom.npz import save_npz
 from rotor37_rom.reduction.craig_bampton import CRITERIA
+from rotor37_rom.studies.sector_file import SectorFile, add_sector_options
 
 AMPLITUDE = 400.0
 
@@ -158,7 +159,12 @@ def parse_args(argv=None, description: str | None = None):
                              "disk-forced-linear")
     parser.add_argument("--out", default="results/disk_forced")
     parser.add_argument("--name", default="", help="results file suffix: results/disk_forced_<preset><name>.json")
+    add_sector_options(parser)
     args = parser.parse_args(argv)
+    args.mesh = SectorFile.from_args(args, parser)
+    n_sectors = 36 if args.mesh is None else args.mesh.n_sectors
+    if args.mesh is not None and n_sectors is None:
+        raise ValueError("--mesh: the forced response is a bladed disk's: give --left, --right and --n-sectors")
     args.choice = None
     if args.gnl_reference is None:
         args.gnl_reference = [] if args.tolerance is not None else ["0:4000"]
@@ -171,6 +177,9 @@ def parse_args(argv=None, description: str | None = None):
         given = [opt for opt, dest in MODEL_OPTIONS.items() if getattr(args, dest) is not None]
         if given:
             raise ValueError(f"--tolerance chooses {', '.join(given)}: give one or the other")
+        if args.mesh is not None:
+            raise ValueError("--tolerance with --mesh: the speed-accuracy study measured rotor 37's disk; give the "
+                             "options for your sector")
         if args.preset != "ci":
             raise ValueError(f"--tolerance with --preset {args.preset}: the speed-accuracy study measured the ci "
                              "preset")
@@ -190,7 +199,7 @@ def parse_args(argv=None, description: str | None = None):
             setattr(args, dest, value)
     for nd, omega in cases:
         try:
-            repeat_count(36, nd)
+            repeat_count(n_sectors, nd)
         except ValueError as exc:
             raise ValueError(f"--cases: {exc}") from None
         real_number("--cases: omega", omega, 100.0, 1e5, unit=" rad/s")

@@ -16,31 +16,25 @@ from pathlib import Path
 
 import numpy as np
 
-from rotor37_rom.checks import before_work, flagged, readable_file
+from rotor37_rom.checks import before_work, flagged
 from rotor37_rom.dynamics.casing import Casing, check_hand
-from rotor37_rom.forms import Material
-from rotor37_rom.geometry.mesh_import import MESH_SUFFIXES, UNITS
+from rotor37_rom.studies.sector_file import SectorFile
 
-__all__ = ["OwnBladeConfig", "load_blade", "run_own_blade"]
+__all__ = ["OwnBladeConfig", "load_blade", "run_own_blade", "show_groups"]
 
 
 @dataclasses.dataclass(frozen=True)
 class OwnBladeConfig:
-    """What to run. mesh None: the project's ci blade written as a millimetre Abaqus deck (the example input).
+    """What to run. mesh: the user's blade (``SectorFile``: the file, its clamp and tip groups, units, contact nodes,
+    material, mass check); None: the project's ci blade written as a millimetre Abaqus deck (the example input).
 
     The frame is the user's, stated and printed with the results: the blade turns about +z in ``rotation_sense`` (-1:
     towards -theta, rotor 37's) and touches the casing along ``direction`` ('x': the blade frame's e_x, the paper's;
     'radial'; 'cone'); a sense that turns the blade with its trailing edge ahead (a mirrored blade) is refused
-    (``dynamics.casing.check_hand``). ``material`` (E, nu, rho in SI) overrides the deck's own (an Abaqus deck's
-    *MATERIAL, read and printed), whose absence means the paper's maraging steel, said as well. A blade whose mass is
-    outside 1 g - 100 kg is refused with the units it is likely in (``geometry.mesh_import.check_blade_mass``) unless
-    ``mass_check`` is False."""
+    (``dynamics.casing.check_hand``). ``show_groups``: draw the groups on the mesh (``<out>/groups.png``) and
+    stop."""
 
-    mesh: str | None = None
-    clamp: str = "CLAMP"
-    tip: str = "TIP"
-    units: str = "mm"
-    contact: int = 8
+    mesh: SectorFile | None = None
     modes: int = 6
     r_c: int = 15
     speed: float = 1400.0
@@ -48,22 +42,15 @@ class OwnBladeConfig:
     mu: float = 0.0
     direction: str = "x"
     rotation_sense: int = -1
-    mass_check: bool = True
-    material: tuple[float, float, float] | None = None
     out: str = "results/own_blade"
+    show_groups: bool = False
 
     def __post_init__(self):
-        if self.mesh is not None:
-            readable_file("--mesh", self.mesh)
-        if self.mesh is not None and Path(self.mesh).suffix.lower() not in MESH_SUFFIXES:
-            raise ValueError(f"--mesh must be one of {', '.join(MESH_SUFFIXES)}, got {Path(self.mesh).name}")
-        for option, name in (("--clamp", self.clamp), ("--tip", self.tip)):
-            if not (isinstance(name, str) and name.strip()):
-                raise ValueError(f"{option} must name a group of the mesh, got {name!r}")
-        if self.units not in UNITS:
-            raise ValueError(f"--units must be one of {', '.join(UNITS)}, got {self.units!r}")
-        if not 2 <= self.contact <= 40:
-            raise ValueError(f"--contact must be in [2, 40] nodes along the tip camber line, got {self.contact}")
+        if self.mesh is not None and not isinstance(self.mesh, SectorFile):
+            raise TypeError(f"mesh must be a SectorFile (the file and its groups) or None, got {self.mesh!r}")
+        if self.mesh is not None and self.mesh.cyclic is not None:
+            raise ValueError("--left/--right/--n-sectors make a bladed-disk sector: demos/bladed_disk.py --mesh takes "
+                             "it")
         if not 1 <= self.modes <= 50:
             raise ValueError(f"--modes must be in [1, 50], got {self.modes}")
         if not 1 <= self.r_c <= 100:
@@ -74,11 +61,6 @@ class OwnBladeConfig:
             raise ValueError(f"--revolutions must be in (0, 50], got {self.revolutions}")
         if not 0.0 <= self.mu < 1.0:
             raise ValueError(f"--mu must be in [0, 1), got {self.mu}")
-        if self.material is not None:
-            if not (isinstance(self.material, (tuple, list)) and len(self.material) == 3):
-                raise ValueError(f"--material takes E (Pa), nu and rho (kg/m^3), got {self.material!r}")
-            flagged("--material", lambda: Material(*self.material))
-            object.__setattr__(self, "material", tuple(float(v) for v in self.material))
         flagged("--direction", lambda: Casing(direction=self.direction))
         flagged("--rotation-sense", lambda: Casing(rotation_sense=self.rotation_sense))
 
@@ -90,21 +72,26 @@ class OwnBladeConfig:
 
 
 def load_blade(config: OwnBladeConfig):
-    """The user's sector (or the example deck, written first)."""
+    """The user's blade (or the example deck, written first)."""
     from rotor37_rom import fem
 
-    path = config.mesh
-    if path is None:
+    mesh = config.mesh
+    if mesh is None:
         Path(config.out).mkdir(parents=True, exist_ok=True)
         path = fem.write_sector_mesh(fem.create_blade_sector(preset="ci"), Path(config.out) / "example_blade_mm.inp",
                                      units="mm")
         print(f"no --mesh: the ci blade written as {path} (C3D4, mm, node sets CLAMP and TIP)")
-    try:
-        return fem.create_sector_from_file(path, clamp=config.clamp, tip=config.tip, units=config.units,
-                                           contact=config.contact, preset="ci", mass_check=config.mass_check,
-                                           material=None if config.material is None else Material(*config.material))
-    except ValueError as exc:
-        raise ValueError(f"--mesh: {exc}") from None
+        mesh = SectorFile(path)
+    return mesh.create()
+
+
+def show_groups(sector, out) -> Path:
+    """The groups of a user's sector drawn on its mesh (``viz.plotting.render_groups``) as ``<out>/groups.png``."""
+    from rotor37_rom.viz.plotting import render_groups
+
+    path = render_groups(sector, Path(out) / "groups.png", Path(sector.source.removeprefix("file:")).name)
+    print(f"the groups drawn on the mesh (contact nodes in red): {path}; run again without --show-groups")
+    return path
 
 
 def run_own_blade(config: OwnBladeConfig) -> dict:
@@ -118,6 +105,8 @@ def run_own_blade(config: OwnBladeConfig) -> dict:
     before_work({"--out": config.out})
     t0 = time.perf_counter()
     blade = load_blade(config)
+    if config.show_groups:
+        return {"groups_png": str(show_groups(blade, config.out))}
     stagger = check_hand(blade.tip_nodes, config.rotation_sense)          # ValueError naming --rotation-sense
     towards = "-theta" if config.rotation_sense < 0 else "+theta"
     print(f"frame: rotation about +z, sense {config.rotation_sense:+d} (towards {towards}), contact normal "
@@ -139,7 +128,8 @@ def run_own_blade(config: OwnBladeConfig) -> dict:
     diverged = bool(run.diverged_step[0] >= 0)
     le = run.row("0:LE")
     summary = {
-        "mesh": blade.summary, "mass_kg": blade.volume * blade.material.rho, "dofs": blade.n_dofs,
+        "mesh": blade.summary, "input": None if config.mesh is None else config.mesh.as_dict(),
+        "mass_kg": blade.volume * blade.material.rho, "dofs": blade.n_dofs,
         "modes_hz": (modes.omega / (2 * np.pi)).tolist(), "contact_nodes_m": blade.tip_nodes.tolist(),
         "r": model.r, "sizes": list(model.sizes), "mu_star_per_node": [m if np.isfinite(m) else None for m in per_node],
         "mu_star_le_half": le_half if np.isfinite(le_half) else None, "speed": config.speed, "mu": config.mu,

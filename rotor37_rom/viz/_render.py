@@ -5,7 +5,8 @@ process: both define the same weak libstdc++ template instantiations with differ
 the grid to an .npz and runs ``python -m rotor37_rom.viz._render scene.npz``.
 
 Scene file keys: topology, cell_types, points, displacement (n, 3) per frame as 'u_<k>', scalars as 's_<k>',
-'title_<k>', 'path_<k>', 'scalar_name', 'amplitude', 'clim' (optional).
+'title_<k>', 'path_<k>', 'scalar_name', 'amplitude', 'clim' (optional), 'markers' (optional (m, 3) points drawn as
+red dots).
 """
 from __future__ import annotations
 
@@ -41,6 +42,9 @@ def render_scene(scene_path: str) -> None:
         clim = scene["clim"] if "clim" in scene.files else None
         plotter.add_mesh(warped, scalars=scalar_name, cmap=cmap, clim=clim,
                          scalar_bar_args={"title": scalar_name, "color": "black", "fmt": "%.3g"})
+        if "markers" in scene.files and len(scene["markers"]):        # points to mark (e.g. the contact nodes)
+            plotter.add_points(np.asarray(scene["markers"]), color="red", point_size=12,
+                               render_points_as_spheres=True)
         plotter.add_text(str(scene[f"title_{k}"]), font_size=11, color="black")
         view = scene["view"] if "view" in scene.files else (0.35, -0.5, 0.8)
         up = scene["viewup"] if "viewup" in scene.files else (1.0, 0.0, 0.0)

@@ -265,7 +265,7 @@ def plot_safe_diagram(safe, path: str | Path, references: dict | None = None, ti
     colors = {"1B": "C0", "1T": "C1", "2B": "C2"}
     fig, ax = plt.subplots(figsize=(8, 5))
     drawn = set()
-    for label in ["1B", "1T", "2B"]:
+    for label in [f for f in ("1B", "1T", "2B") if (family == f).any()]:
         curve = np.array([omega[i][np.flatnonzero(family[i] == label)[0]] if (family[i] == label).any() else np.nan
                           for i in range(len(k))])
         ax.plot(k, curve, "-o", color=colors[label], ms=4, label=f"{label} family")
@@ -274,8 +274,10 @@ def plot_safe_diagram(safe, path: str | Path, references: dict | None = None, ti
         for w, fam in zip(omega[i], family[i]):
             if fam in drawn:
                 continue
-            color, name = ("C3", "disk-dominated") if fam == "disk" else ("C7", "other blade modes")
-            ax.plot(kk, w, "s" if fam == "disk" else "^", color=color, ms=5,
+            color, name, marker = (("C3", "disk-dominated", "s") if fam == "disk" else
+                                   ("C4", "modes (not labelled: no blade volume)", "o")
+                                   if str(fam).startswith("mode") else ("C7", "other blade modes", "^"))
+            ax.plot(kk, w, marker, color=color, ms=5,
                     label=name if name not in ax.get_legend_handles_labels()[1] else None)
     for label, w in (references or {}).items():
         ax.axhline(w, color=colors.get(label.split()[-1], "k"), ls="--", lw=0.8, label=label)

@@ -199,3 +199,33 @@ def write_cyclic_xdmf(sector, a, b, k: int, path: str | Path) -> Path:
             xdmf.write_function(out, float(s))
     return path
 
+
+
+def render_groups(sector, path: str | Path, title: str = "") -> Path:
+    """PNG of the sector's boundary coloured by its named facet groups (clamp, tip, left, right, ...; 0: no group)
+    with the contact nodes as red dots, so that what a group caught is seen (an over-wide box takes more than the
+    face it was meant for). Writes ``path`` and ``path.json`` (what was drawn). Serial only."""
+    from dolfinx.cpp.mesh import entities_to_geometry
+    from dolfinx.mesh import exterior_facet_indices
+
+    _check_serial(sector)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    mesh = sector.mesh
+    fdim = mesh.topology.dim - 1
+    mesh.topology.create_connectivity(fdim, mesh.topology.dim)
+    facets = exterior_facet_indices(mesh.topology)
+    corners = entities_to_geometry(getattr(mesh, "_mesh", mesh), fdim, facets, False)[:, :3]
+    value = np.zeros(facets.size)
+    names = sorted((tag, name) for name, tag in sector.groups.items() if sector.facet_tags.find(tag).size)
+    for k, (tag, _) in enumerate(names, start=1):
+        value[np.isin(facets, sector.facet_tags.find(tag))] = k
+    topology = np.column_stack([np.full(len(corners), 3), corners]).ravel()
+    legend = ", ".join(f"{k} {name}" for k, (_, name) in enumerate(names, start=1))
+    scene = {"topology": topology, "cell_types": np.full(len(corners), 5, dtype=np.uint8),
+             "points": mesh.geometry.x, "n_frames": 1, "scalar_name": "group", "cell_scalars": True,
+             "u_0": np.zeros_like(mesh.geometry.x), "s_0": value, "factor_0": 0.0, "cmap": "tab10",
+             "clim": np.array([-0.5, 9.5]), "title_0": (title + "\n" if title else "") + f"groups: 0 none, {legend}",
+             "path_0": str(path), "no_ghost": True, "markers": np.asarray(sector.tip_nodes, float).reshape(-1, 3)}
+    run_render(scene, path.with_suffix(".scene.npz"))
+    return path
