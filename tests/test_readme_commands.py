@@ -4,8 +4,8 @@ dry run (``--check``: the options, files and folders checked, nothing meshed or 
 without a dry run must at least know every option the README gives it (its --help); a `make` target must exist.
 
 An option renamed or removed, a range tightened or a combination that a configuration refuses fails here. The dry
-runs are made with gmsh unusable (a stand-in module first on the path), so a command that meshes before it is checked
-fails too."""
+runs are made with gmsh unusable (a stand-in module first on the path and in the driver), so a command that meshes
+before it is checked fails too. The commands of one script run in one Python process (as the fuzz test's cases)."""
 import os
 import re
 import shlex
@@ -59,26 +59,56 @@ def no_meshing(tmp_path_factory):
     return dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=path, OPENBLAS_NUM_THREADS="1")
 
 
+@pytest.fixture(scope="module")
+def dry_runs(no_meshing, tmp_path_factory) -> dict:
+    """command -> (its dry run's result, its script's --help result or None): the commands of one script run in one
+    Python process, each as the shell would run it (``runpy`` as ``__main__``, ``--check`` added, gmsh unusable: the
+    fuzz test's driver), a script without a dry run asked for its --help."""
+    import json
+
+    from test_fuzz_entry_points import DRIVER
+
+    folder = tmp_path_factory.mktemp("readme")
+    # placeholders of the user's own files: an (empty) file of the right kind; the dry run does not read it
+    stand_in = folder / "my_blade.inp"
+    stand_in.write_text("")
+    by_script = {}
+    for command in readme_commands():
+        if not command.startswith("make "):
+            script, options = script_and_options(command)
+            options = [str(stand_in) if o in ("F", "my_blade.inp", "disk_mm.inp") else o for o in options]
+            by_script.setdefault(script, []).append((command, options))
+
+    def drive(script, cases):
+        # a dry run where results would go: the output folders are checked where the README puts them
+        run = subprocess.run([sys.executable, "-c", DRIVER, str(ROOT / script)], input=json.dumps(cases), cwd=ROOT,
+                             env=no_meshing, capture_output=True, text=True, timeout=600)
+        assert run.returncode == 0, run.stderr[-3000:]
+        return json.loads(run.stdout.splitlines()[-1])
+
+    results = {}
+    for script, commands in by_script.items():
+        runs = drive(script, [options for _, options in commands])
+        helps = None
+        if any("unrecognized arguments: --check" in r["err"] for r in runs):
+            (helps,) = drive(script, [["--help"]])
+        for (command, options), run in zip(commands, runs):
+            results[command] = (options, run, helps)
+    return results
+
+
 @pytest.mark.parametrize("command", readme_commands())
-def test_readme_command(command, no_meshing, tmp_path):
+def test_readme_command(command, dry_runs):
     if command.startswith("make "):
         target = command.split()[1]
         assert re.search(rf"^{re.escape(target)}:", (ROOT / "Makefile").read_text(), re.M), command
         return
-    script, options = script_and_options(command)
-    # placeholders of the user's own files: an (empty) file of the right kind; the dry run does not read it
-    stand_in = tmp_path / "my_blade.inp"
-    stand_in.write_text("")
-    options = [str(stand_in) if o in ("F", "my_blade.inp", "disk_mm.inp") else o for o in options]
-    # a dry run where results would go: the output folders are checked where the README puts them
-    run = subprocess.run([sys.executable, script, *options, "--check"], cwd=ROOT, env=no_meshing,
-                         capture_output=True, text=True, timeout=120)
-    if "unrecognized arguments: --check" not in run.stderr:             # a command with a dry run
-        assert run.returncode == 0 and "nothing was run" in run.stdout, (command, run.stderr[-1500:])
+    options, run, helps = dry_runs[command]
+    assert not run["trace"], (command, run["trace"][-1500:])
+    if "unrecognized arguments: --check" not in run["err"]:            # a command with a dry run
+        assert run["code"] == 0 and "nothing was run" in run["out"], (command, run["err"][-1500:])
     else:                                                                # without one: its --help knows the options
-        helps = subprocess.run([sys.executable, script, "--help"], cwd=ROOT, env=no_meshing, capture_output=True,
-                               text=True, timeout=120)
-        assert helps.returncode == 0, helps.stderr[-1500:]
+        assert helps["code"] == 0, helps["err"][-1500:]
         given = {o.split("=")[0] for o in options if o.startswith("--")}
-        unknown = sorted(o for o in given if not re.search(rf"(^|[\s,\[]){re.escape(o)}\b", helps.stdout))
-        assert not unknown, f"{command}: {script} has no option {unknown}"
+        unknown = sorted(o for o in given if not re.search(rf"(^|[\s,\[]){re.escape(o)}\b", helps["out"]))
+        assert not unknown, f"{command}: {script_and_options(command)[0]} has no option {unknown}"
