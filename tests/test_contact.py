@@ -139,7 +139,7 @@ def test_discrete_energy_nonlinear_bounded(ci_rom):
 
     Stress stiffening moves the highest tangent frequency: along +-q0 its first-order change is odd in q, so the
     larger of the two is above the linear omega_max, and the step is 0.98 of the tangent limit at +-q0. The scheme
-    is symplectic, so its energy error stays bounded (no secular drift over 1e5 steps: a drift would make the error
+    is symplectic, so its energy error stays bounded (no secular drift over 5e4 steps: a drift would make the error
     of the last tenth ~10x that of the first, bounded oscillation keeps the ratio ~1; 1.5 separates the two) and is
     an O(h^2) defect of the cubic forces (halving h divides it by 4; 3-5 allows the next-order term). At +0.5 mm
     the tangent frequency exceeds the linear one by more than 1/0.98, so 0.98 of the linear limit is beyond the
@@ -149,7 +149,7 @@ def test_discrete_energy_nonlinear_bounded(ci_rom):
     lin_limit = CentralDifference(ci_rom, nonlinear=False).h_crit
     assert w_t * lin_limit / 2 > 1.0
     scheme = CentralDifference(ci_rom, nonlinear=True, damping=False, h=0.98 * 2 / w_t)
-    res = simulate(scheme, 1.0, n_steps=100_000, initial=(q0, q0), record_every=50, energy=True)
+    res = simulate(scheme, 1.0, n_steps=50_000, initial=(q0, q0), record_every=50, energy=True)
     E = res.energy[0][1:]
     err = np.abs(E - E[0]) / E[0]
     tenth = len(err) // 10

@@ -109,14 +109,14 @@ def test_contact_map_command_line_is_the_config(tmp_path):
     """The options parse into the config a Python caller writes (numbers as floats: the same cache keys)."""
     argv = ["--model", str(tmp_path / "rom.npz"), "--speeds", "1400", "1450", "2", "--revolutions", "0.3", "--gnl",
             "off", "--mu", "0", "--quiet", "--out", str(tmp_path)]
-    parsed = contact_map.ContactMapConfig.from_options(**vars(contact_map.build_parser().parse_args(argv)))
+    parsed = contact_map.ContactMapConfig.from_options(**contact_map.parse_options(argv))
     assert parsed == contact_map.ContactMapConfig.from_options(model=tmp_path / "rom.npz", speeds=(1400, 1450, 2),
                                                                revolutions=0.3, gnl="off", mu=0, quiet=True,
                                                                out=tmp_path)
-    assert contact_map.ContactMapConfig.from_options(**vars(contact_map.build_parser().parse_args([]))) \
+    assert contact_map.ContactMapConfig.from_options(**contact_map.parse_options([])) \
         == contact_map.ContactMapConfig()
     argv = ["--cubature", "1e-4", "--cubature-speeds", "1500", "1300"]
-    assert contact_map.ContactMapConfig.from_options(**vars(contact_map.build_parser().parse_args(argv))) \
+    assert contact_map.ContactMapConfig.from_options(**contact_map.parse_options(argv)) \
         == contact_map.ContactMapConfig.from_options(cubature=1e-4, cubature_speeds=(1300, 1500, 1300))
 
 

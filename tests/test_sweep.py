@@ -183,12 +183,14 @@ def test_mpi_sweep_equals_serial(ci_rom, tmp_path):
     speeds = np.linspace(1300.0, 1600.0, 4)
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg")
+    # capped at 60 kHz (12x the unscaled step): the split of the speeds and branches is what is checked
     cmd = ["mpirun", "-n", "2", sys.executable, str(ROOT / "demos" / "contact_map.py"), "--model", str(model_path),
            "--speeds", "1300", "1600", "4", "--revolutions", "0.3", "--gnl", "off", "--safety", "0.9",
-           "--out", str(tmp_path / "mpi"), "--quiet", "--continuation", "150", "--continuation-range", "1300", "1450"]
+           "--frequency-cap", "60", "--out", str(tmp_path / "mpi"), "--quiet", "--continuation", "150",
+           "--continuation-range", "1300", "1450"]
     run = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-2000:]
-    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9, frequency_cap=2 * np.pi * 60e3)
     serial = run_sweep(scheme, speeds, SweepSpec(revolutions=0.3, casing=Casing()), tmp_path / "serial",
                        progress=False)
     mpi_folder = tmp_path / "mpi" / "sweeps" / serial.name
@@ -201,7 +203,7 @@ def test_mpi_sweep_equals_serial(ci_rom, tmp_path):
         assert np.abs(a["u_r"] - b["u_r"]).max() <= 1e-8 * scale
     ma, mb = interaction_map(got), interaction_map(ref)
     np.testing.assert_allclose(ma.nfrc, mb.nfrc, rtol=1e-8)
-    run_mpi = json.loads((tmp_path / "mpi" / "summary.json").read_text())["runs"]["no GNL"]
+    run_mpi = json.loads((tmp_path / "mpi" / "summary.json").read_text())["runs"]["no GNL, cap 60 kHz"]
     down = continuation(scheme, 1450.0, 1300.0, 150.0, Casing(), first_revolutions=0.3, revolutions=5.0)
     got_down = np.array(run_mpi["continuation_down"], float)
     ups = [p[0] for p in run_mpi["continuation_up"]]
@@ -624,13 +626,14 @@ def test_contact_map_cubature_flag(ci_rom, tmp_path):
     dev_single = np.abs(np.asarray(single["nfrc"]) - got["nfrc"]) / exact.max()
     print(f"float32 cubature: NFRC {single['nfrc']}, {dev_single.max():.1e} of the peak from float64")
     assert dev_single.max() <= 1e-4 and dev_single.max() <= 0.1 * dev.max()
-    # under MPI rank 0 trains the same cubature (deterministic selection) and the two ranks split the speeds: the
-    # serial map to the batching round-off (1e-8 over 1e4 steps, amplified ~10x by the contacts)
+    # under MPI the two ranks split the speeds, on the serial run's cubature (its cache shared): the serial map to
+    # the batching round-off (1e-8 over 1e4 steps, amplified ~10x by the contacts)
     mpi_env = dict(env, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                    OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1")
     mpi = subprocess.run(["mpirun", "-n", "2"] + base[:-1] + [str(tmp_path / "cub_mpi"), "--speeds", "1400", "1450",
                                                               "2", "--revolutions", "0.5", "--gnl", "on", "--mu", "0",
-                                                              "--cubature", "1e-3"],
+                                                              "--cubature", "1e-3", "--cache",
+                                                              str(tmp_path / "cub" / "cache")],
                          env=mpi_env, capture_output=True, text=True, timeout=900)
     assert mpi.returncode == 0, mpi.stderr[-2000:]
     got_mpi = json.loads((tmp_path / "cub_mpi" / "summary.json").read_text())["runs"]["GNL, cubature 0.001"]
@@ -640,7 +643,7 @@ def test_contact_map_cubature_flag(ci_rom, tmp_path):
     from rotor37_rom.studies.contact_map import ContactMapConfig
 
     for options, message in ((dict(cubature=0.0), "--cubature must be in (0, 1), got 0.0"),
-                             (dict(continuation=5.0, continuation_range=(1450.0, 1400.0)),
+                             (dict(continuation=5.0, continuation_range=[1450.0, 1400.0]),
                               "--continuation-range: need 0 < LOW < HIGH <= 100000 rad/s, got [1450.0, 1400.0]"),
                              (dict(continuation=5.0, steady_window=3),
                               "--steady-window must be in 1..2 revolutions (half of a continued run), got 3"),

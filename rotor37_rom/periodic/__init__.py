@@ -1,0 +1,8 @@
+"""Periodic orbits and their stability (#72): harmonic balance with alternating frequency-time, Hill's method, and
+arc-length continuation (``harmonic_balance``). Pure NumPy/SciPy, on any second-order system whose nonlinear force
+evaluates a batch of states with its Jacobian, as the reduced models' forces do."""
+from .harmonic_balance import (Branch, Harmonics, HarmonicBalance, PeriodicSolution, continue_branch, model_force,
+    solve_periodic, time_state)
+
+__all__ = ["Branch", "Harmonics", "HarmonicBalance", "PeriodicSolution", "continue_branch", "solve_periodic",
+           "model_force", "time_state"]

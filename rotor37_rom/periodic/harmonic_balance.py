@@ -1,0 +1,291 @@
+"""Harmonic balance on a second-order system M q'' + C q' + K q + g(q) = f(t): periodic orbits, their stability by
+Hill's method, and their continuation in the excitation frequency along arc length through turning points.
+
+The unknowns are the real Fourier coefficients of q over one period T = 2 pi / omega (``Harmonics``: q(tau) = a_0 +
+sum_h a_h cos(h tau) + b_h sin(h tau), tau = omega t), one block of n per coefficient, the constant first. The linear
+terms are exact per harmonic; the nonlinear force goes through alternating frequency-time (AFT: the coefficients to
+``n_time`` samples of the period, g at every sample - a batch, as the reduced models' forces evaluate it - and back by
+the discrete Fourier transform), with its exact Jacobian from the same samples. With ``n_time`` > (p + 1) H samples a
+polynomial force of degree p is balanced without aliasing (the cubic SVK force of the reduced models: ``n_time`` > 4
+H), so harmonic balance with H harmonics is exact for that truncation.
+
+Stability (Hill's method, as NLvib and pyHarm do it): a perturbation e^(lambda t) p(t) of the orbit with p
+T-periodic satisfies the quadratic eigenproblem (J + lambda Delta_1 + lambda^2 Delta_2) p = 0 in the same
+coefficients, J the harmonic balance Jacobian, Delta_1 = C (x) I + 2 omega M (x) D and Delta_2 = M (x) I (D: d/dtau
+on the coefficients); of its 2 n (2 H + 1) eigenvalues the 2 n whose imaginary parts are smallest in magnitude are
+the Floquet exponents (the others are the same ones shifted by multiples of i omega, and the least accurate), the
+multipliers exp(lambda T). An orbit is stable when every exponent has a negative real part (within ``tol``).
+
+Continuation (``continue_branch``): pseudo-arc length in (X, omega) - a tangent predictor, a Newton corrector on
+the residual bordered by the arc-length condition, the step halved where the corrector fails and grown where it
+converges fast - which passes turning points (folds) where a continuation in omega stops. Folds are where the
+tangent's omega component changes sign; every point carries its stability. Pure NumPy/SciPy.
+"""
+from __future__ import annotations
+
+import dataclasses
+from typing import Callable
+
+import numpy as np
+import scipy.linalg
+
+__all__ = ["Harmonics", "HarmonicBalance", "PeriodicSolution", "Branch", "continue_branch", "solve_periodic",
+           "model_force", "time_state"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Harmonics:
+    """The real Fourier basis of H harmonics on ``n_time`` uniform samples of the period (tau_j = 2 pi j / n_time).
+
+    Attributes:
+        H: harmonics (>= 0); n_time: samples per period (> 2 H; > (p + 1) H balances a degree-p polynomial force
+            without aliasing).
+    """
+
+    H: int
+    n_time: int
+
+    def __post_init__(self):
+        if not (isinstance(self.H, (int, np.integer)) and not isinstance(self.H, bool) and self.H >= 0):
+            raise ValueError(f"H (harmonics) must be an integer >= 0, got {self.H!r}")
+        if not (isinstance(self.n_time, (int, np.integer)) and self.n_time > 2 * self.H):
+            raise ValueError(f"n_time must be an integer > 2 H = {2 * self.H} (samples per period), got "
+                             f"{self.n_time!r}")
+
+    @property
+    def size(self) -> int:
+        """2 H + 1 coefficients per degree of freedom."""
+        return 2 * self.H + 1
+
+    @property
+    def tau(self) -> np.ndarray:
+        return 2 * np.pi * np.arange(self.n_time) / self.n_time
+
+    @property
+    def synthesis(self) -> np.ndarray:
+        """E (n_time, 2 H + 1): samples = E @ coefficients; columns 1, cos tau, sin tau, cos 2 tau, ..."""
+        tau, cols = self.tau, [np.ones(self.n_time)]
+        for h in range(1, self.H + 1):
+            cols += [np.cos(h * tau), np.sin(h * tau)]
+        return np.column_stack(cols)
+
+    @property
+    def analysis(self) -> np.ndarray:
+        """P (2 H + 1, n_time): coefficients = P @ samples (the discrete Fourier transform; P E = I)."""
+        E = self.synthesis
+        scale = np.full(self.size, 2.0 / self.n_time)
+        scale[0] = 1.0 / self.n_time
+        return scale[:, None] * E.T
+
+    @property
+    def derivative(self) -> np.ndarray:
+        """D (2 H + 1, 2 H + 1): the coefficients of d/dtau: (a_h, b_h) -> (h b_h, -h a_h)."""
+        D = np.zeros((self.size, self.size))
+        for h in range(1, self.H + 1):
+            c, s = 2 * h - 1, 2 * h
+            D[c, s], D[s, c] = h, -h
+        return D
+
+
+def model_force(forces) -> Callable:
+    """The harmonic balance's ``force`` of a reduced model's nonlinear force (``forces.protocol.NonlinearForce``:
+    ``evaluate`` on a batch of states, ``jacobian`` at one): Q (r, m) -> (G (r, m), J (m, r, r))."""
+    def force(Q):
+        return forces.evaluate(Q), np.stack([forces.jacobian(q) for q in Q.T])
+
+    return force
+
+
+def time_state(X: np.ndarray, omega: float, tau: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """(q, q') at phase ``tau`` = omega t of the orbit with coefficients X (2 H + 1, n)."""
+    H = (len(X) - 1) // 2
+    h = np.arange(1, H + 1)[:, None]
+    a, b = X[1::2], X[2::2]
+    q = X[0] + (a * np.cos(h * tau) + b * np.sin(h * tau)).sum(axis=0)
+    v = omega * (h * (b * np.cos(h * tau) - a * np.sin(h * tau))).sum(axis=0)
+    return q, v
+
+
+@dataclasses.dataclass
+class PeriodicSolution:
+    """A periodic orbit: its frequency omega (rad/s), coefficients X (2 H + 1, n), Floquet exponents (2 n,) and
+    multipliers, stability, the residual norm reached, Newton iterations."""
+
+    omega: float
+    X: np.ndarray
+    exponents: np.ndarray | None = None
+    stable: bool | None = None
+    residual: float = np.nan
+    iterations: int = 0
+
+    @property
+    def multipliers(self) -> np.ndarray | None:
+        return None if self.exponents is None else np.exp(self.exponents * 2 * np.pi / self.omega)
+
+    def amplitude(self, dof: int, basis: Harmonics, n_samples: int = 512) -> float:
+        """max |q_dof(t)| over the period, sampled on ``n_samples`` points."""
+        tau = 2 * np.pi * np.arange(n_samples) / n_samples
+        cols = [np.ones(n_samples)]
+        for h in range(1, basis.H + 1):
+            cols += [np.cos(h * tau), np.sin(h * tau)]
+        return float(np.abs(np.column_stack(cols) @ self.X[:, dof]).max())
+
+
+class HarmonicBalance:
+    """The harmonic balance equations of M q'' + C q' + K q + g(q) = f(tau) for one ``Harmonics`` basis.
+
+    Args:
+        M, C, K: (n, n) matrices.
+        force: g and its Jacobian at a batch of states: ``force(Q)`` with Q (n, m) returns (G (n, m), J (m, n, n)),
+            or None (linear).
+        excitation: F (2 H + 1, n): the coefficients of f per unit amplitude (its cos tau row: a force f0 cos(omega
+            t) is F[1] = f0).
+        basis: the Harmonics.
+    """
+
+    def __init__(self, M, C, K, force: Callable | None, excitation: np.ndarray, basis: Harmonics):
+        self.M, self.C, self.K = (np.asarray(A, float) for A in (M, C, K))
+        self.n = self.K.shape[0]
+        self.force, self.basis = force, basis
+        self.F = np.asarray(excitation, float).reshape(basis.size, self.n)
+        self._E, self._P, self._D = basis.synthesis, basis.analysis, basis.derivative
+        I = np.eye(basis.size)
+        self._lin = [np.kron(I, self.K), np.kron(self._D, self.C), np.kron(self._D @ self._D, self.M)]
+
+    @property
+    def size(self) -> int:
+        return self.basis.size * self.n
+
+    def linear_matrix(self, omega: float) -> np.ndarray:
+        """The linear part's matrix on x = X.ravel() (coefficient-major: kron(A, B) x = (A X B^T).ravel()):
+        kron(I, K) + omega kron(D, C) + omega^2 kron(D^2, M)."""
+        return self._lin[0] + omega * self._lin[1] + omega ** 2 * self._lin[2]
+
+    def residual(self, x: np.ndarray, omega: float, jacobian: bool = True):
+        """R(x, omega), and with ``jacobian`` dR/dx and dR/domega."""
+        X = x.reshape(self.basis.size, self.n)
+        R = self.linear_matrix(omega) @ x - self.F.ravel()
+        J = self.linear_matrix(omega) if jacobian else None
+        if self.force is not None:
+            Q = (self._E @ X).T                                     # (n, n_time): the states over the period
+            G, dG = self.force(Q)
+            R = R + (self._P @ G.T).ravel()
+            if jacobian:
+                # d(P g(E X))/dX: sum over samples t of P[:, t] (x) J_t (x) E[t, :]
+                J = J + np.einsum("at,tij,tb->aibj", self._P, dG, self._E).reshape(self.size, self.size)
+        if not jacobian:
+            return R
+        dR_domega = (self._lin[1] + 2 * omega * self._lin[2]) @ x
+        return R, J, dR_domega
+
+    def floquet_exponents(self, x: np.ndarray, omega: float, J: np.ndarray | None = None) -> np.ndarray:
+        """The 2 n Floquet exponents of the orbit (Hill's method; see the module docstring), by increasing real
+        part."""
+        if J is None:
+            J = self.residual(x, omega)[1]
+        I = np.eye(self.basis.size)
+        D1 = np.kron(I, self.C) + 2 * omega * np.kron(self._D, self.M)
+        D2 = np.kron(I, self.M)
+        N = self.size
+        A = np.block([[np.zeros((N, N)), np.eye(N)], [-J, -D1]])
+        B = np.block([[np.eye(N), np.zeros((N, N))], [np.zeros((N, N)), D2]])
+        lam = scipy.linalg.eigvals(A, B)
+        lam = lam[np.isfinite(lam)]
+        central = lam[np.argsort(np.abs(lam.imag), kind="stable")[:2 * self.n]]
+        return central[np.argsort(central.real, kind="stable")]
+
+
+def solve_periodic(hb: HarmonicBalance, x0: np.ndarray, omega: float, tol: float = 1e-10, max_iter: int = 30,
+                   stability: bool = True) -> PeriodicSolution:
+    """Newton on R(x, omega) = 0 at fixed omega from x0 (relative tolerance ``tol`` on the update); ValueError
+    where it does not converge."""
+    x = np.asarray(x0, float).ravel().copy()
+    for it in range(1, max_iter + 1):
+        R, J, _ = hb.residual(x, omega)
+        dx = np.linalg.solve(J, -R)
+        x += dx
+        if np.linalg.norm(dx) <= tol * max(np.linalg.norm(x), 1e-300):
+            R, J, _ = hb.residual(x, omega)
+            exps = hb.floquet_exponents(x, omega, J) if stability else None
+            return PeriodicSolution(omega, x.reshape(hb.basis.size, hb.n), exps,
+                                    None if exps is None else bool(np.all(exps.real < 1e-9 * omega)),
+                                    float(np.linalg.norm(R)), it)
+    raise ValueError(f"harmonic balance: Newton did not converge in {max_iter} iterations at omega = {omega:g}")
+
+
+@dataclasses.dataclass
+class Branch:
+    """A continued branch: its solutions in arc-length order, the indices where a fold lies between two points
+    (the tangent's omega component changes sign), and why it ended."""
+
+    points: list
+    folds: list
+    ended: str
+
+    @property
+    def omega(self) -> np.ndarray:
+        return np.array([p.omega for p in self.points])
+
+
+def _tangent(J: np.ndarray, dR_domega: np.ndarray, previous: np.ndarray | None) -> np.ndarray:
+    """The unit tangent of R(x, omega) = 0: the null vector of [J, dR/domega], oriented along ``previous``."""
+    N = J.shape[0]
+    A = np.hstack([J, dR_domega[:, None]])
+    # the null vector: solve the bordered system with the previous tangent (or e_omega) as the last row
+    border = previous if previous is not None else np.r_[np.zeros(N), 1.0]
+    t = np.linalg.solve(np.vstack([A, border[None]]), np.r_[np.zeros(N), 1.0])
+    t /= np.linalg.norm(t)
+    if previous is not None and t @ previous < 0:
+        t = -t
+    return t
+
+
+def continue_branch(hb: HarmonicBalance, start: PeriodicSolution, omega_end: float, step: float,
+                    step_min: float | None = None, step_max: float | None = None, max_points: int = 2000,
+                    tol: float = 1e-10, max_iter: int = 12, stability: bool = True) -> Branch:
+    """Pseudo-arc-length continuation from ``start`` towards ``omega_end`` (the branch ends past it, or where the
+    step falls below ``step_min``: the end is said in ``Branch.ended``). Arc length is measured in (x / s_x, omega /
+    s_omega) with s_x the start's norm and s_omega its frequency, so that ``step`` is relative."""
+    if not step > 0:
+        raise ValueError(f"step must be > 0 (the relative arc length of a continuation step), got {step}")
+    step_min = step / 64 if step_min is None else step_min
+    step_max = 8 * step if step_max is None else step_max
+    sx = max(np.linalg.norm(start.X), 1e-300)
+    sw = start.omega
+    scale = np.r_[np.full(hb.size, sx), sw]
+    y = np.r_[start.X.ravel(), start.omega] / scale
+    direction = np.sign(omega_end - start.omega) or 1.0
+    _, J, dRw = hb.residual(y[:-1] * sx, y[-1] * sw)
+    t = _tangent(J * sx, dRw * sw, np.r_[np.zeros(hb.size), direction])
+    points, folds, h = [start], [], step
+    while len(points) < max_points:
+        pred = y + h * t
+        z, ok = pred.copy(), False
+        for _ in range(max_iter):
+            R, J, dRw = hb.residual(z[:-1] * sx, z[-1] * sw)
+            A = np.vstack([np.hstack([J * sx, dRw[:, None] * sw]), t[None]])
+            rhs = -np.r_[R, t @ (z - y) - h]
+            dz = np.linalg.solve(A, rhs)
+            z += dz
+            if np.linalg.norm(dz) <= tol * max(np.linalg.norm(z), 1.0):
+                ok = True
+                break
+        if not ok:
+            h /= 2
+            if h < step_min:
+                return Branch(points, folds, f"the corrector failed at omega = {y[-1] * sw:g} with the step at its "
+                                             f"minimum {step_min:g}")
+            continue
+        R, J, dRw = hb.residual(z[:-1] * sx, z[-1] * sw)
+        t_new = _tangent(J * sx, dRw * sw, t)
+        if t_new[-1] * t[-1] < 0:
+            folds.append(len(points))                          # a turning point between the last point and this one
+        exps = hb.floquet_exponents(z[:-1] * sx, z[-1] * sw, J) if stability else None
+        points.append(PeriodicSolution(z[-1] * sw, (z[:-1] * sx).reshape(hb.basis.size, hb.n), exps,
+                                       None if exps is None else bool(np.all(exps.real < 1e-9 * z[-1] * sw)),
+                                       float(np.linalg.norm(R))))
+        y, t = z, t_new
+        if (y[-1] * sw - omega_end) * direction >= 0:
+            return Branch(points, folds, f"reached omega = {omega_end:g}")
+        h = min(step_max, 1.5 * h)
+    return Branch(points, folds, f"stopped after {max_points} points")
