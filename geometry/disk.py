@@ -2,9 +2,9 @@
 plate sector (a verification case with a closed-form reference).
 
 A sector is the part of a structure of N identical sectors between two cyclic faces, the right face being the left
-one turned by 2 pi / N about e_z. Both faces are built as one surface and its turned copy, and meshed with gmsh's
-``setPeriodic`` (the right mesh is the left mesh turned), so every node of the right face has a partner on the left
-face, to round-off.
+one turned by 2 pi / N about e_z. The disk sector's faces are built as one surface and its turned copy, and meshed
+with gmsh's ``setPeriodic`` (the right mesh is the left mesh turned), so every node of the right face has a partner on
+the left face, to round-off; the plate sector is a structured grid whose right face is its left face turned.
 
 The rotor 37 disk is not public; the disk sector here (``DiskProfile``) follows the notes in
 ``../shared/docs/rotor37-notes.md``: the rim's outer surface is the hub line of Table V (the cone on which the blade
@@ -305,40 +305,60 @@ def create_disk_sector_model(table: BladeTable | None = None, preset: str | Mesh
 def create_annular_sector_model(inner: float, outer: float, thickness: float, n_sectors: int,
                                 size: float, layers: int = 2) -> SectorModel:
     """A sector of a flat annular plate (inner radius clamped, outer edge free; mid-plane z = 0) with radial cyclic
-    faces at theta = 0 and 2 pi / N, meshed with about ``size`` (m) in the plane and ``layers`` elements through the
-    thickness. Groups: volume 'disk', faces 'clamp' (inner edge), 'left', 'right'. For verification against the
-    Kirchhoff plate (``tests/test_disk.py``)."""
-    import gmsh
+    faces at theta = 0 and 2 pi / N, meshed as a structured grid of about ``size`` (m) in r and along the mid-radius
+    arc and exactly ``layers`` elements through the thickness: each (r, theta, z) cell split into the 6 tetrahedra of its
+    main diagonal (Kuhn's subdivision: the same in every cell, so the mesh is conforming and the right face's
+    triangles are the left face's turned). Groups: volume 'disk', faces 'clamp' (inner edge), 'left', 'right'. For
+    verification against the Kirchhoff plate (``tests/test_disk.py``)."""
+    import itertools
+
+    from .mesh_import import ImportedMesh, add_to_gmsh, boundary_facets
 
     if not (0.0 < inner < outer) or not (0.0 < thickness < outer - inner):
         raise ValueError("annular sector: need 0 < inner < outer and 0 < thickness < outer - inner")
     if not (2 <= int(n_sectors) <= 360):
         raise ValueError(f"n_sectors must be in [2, 360], got {n_sectors}")
-    occ = gmsh.model.occ
+    if not (isinstance(layers, (int, np.integer)) and not isinstance(layers, bool) and 1 <= layers <= 50):
+        raise ValueError(f"layers must be an integer in 1..50 (elements through the thickness), got {layers!r}")
+    if not 0.0 < size <= outer - inner:
+        raise ValueError(f"size must be in (0, outer - inner], got {size}")
     angle = 2 * np.pi / int(n_sectors)
+    nr = max(1, int(np.ceil((outer - inner) / size - 1e-9)))
+    nt = max(1, int(np.ceil(angle * 0.5 * (inner + outer) / size - 1e-9)))     # about size at the mid radius
+    r = inner + (outer - inner) * np.arange(nr + 1) / nr
+    theta = angle * np.arange(nt + 1) / nt
+    theta[-1] = angle                                  # the right face: the left one's nodes turned, exactly
+    z = thickness * (np.arange(layers + 1) / layers - 0.5)
+    R, TH, Z = np.meshgrid(r, theta, z, indexing="ij")
+    points = np.column_stack([(R * np.cos(TH)).ravel(), (R * np.sin(TH)).ravel(), Z.ravel()])
+    index = np.arange(len(points)).reshape(nr + 1, nt + 1, layers + 1)
+
+    def corner(d):                                     # the node at offset d of every cell
+        return index[d[0]:nr + d[0], d[1]:nt + d[1], d[2]:layers + d[2]].ravel()
+
+    tets = []
+    for order in itertools.permutations(range(3)):     # 000 -> ... -> 111 along the axes in this order
+        path = [np.zeros(3, dtype=int)]
+        for axis in order:
+            path.append(path[-1] + np.eye(3, dtype=int)[axis])
+        tets.append(np.column_stack([corner(p) for p in path]))
+    tets = np.vstack(tets)
+    a, b, c, d = (points[tets[:, k]] for k in range(4))
+    signed = np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a)
+    tets[signed < 0] = tets[signed < 0][:, [0, 2, 1, 3]]
+    facets = boundary_facets(tets)
+    groups = {}
+    for tag, name, nodes in ((BladeGroup.CLAMP, "clamp", index[0]), (BladeGroup.LEFT, "left", index[:, 0]),
+                             (BladeGroup.RIGHT, "right", index[:, -1])):
+        groups[(int(tag), name)] = facets[np.isin(facets, nodes.ravel()).all(axis=1)]
+    mesh = ImportedMesh(points=points, tets=tets, node_sets={}, converted={"tetra": (len(tets), len(tets))},
+                        source="annular plate sector")
+    import gmsh
+
     gmsh.model.add("annular_sector")
-    outline = np.array([[-thickness / 2, inner], [thickness / 2, inner], [thickness / 2, outer],
-                        [-thickness / 2, outer]])[::-1]
-    volume = _revolved_block(outline, 0.0, angle)
-    occ.synchronize()
-    faces = [t for d, t in gmsh.model.getBoundary([(3, volume)], oriented=False) if d == 2]
-    pts = {f: _point_on_face(f) for f in faces}
-    theta = {f: np.arctan2(p[1], p[0]) for f, p in pts.items()}
-    left = [f for f in faces if abs(theta[f]) < 1e-9 and abs(np.hypot(*pts[f][:2]) - inner) > 1e-9]
-    right = [f for f in faces if abs(theta[f] - angle) < 1e-9 and abs(np.hypot(*pts[f][:2]) - inner) > 1e-9]
-    clamp = [f for f in faces if abs(np.hypot(*pts[f][:2]) - inner) < 1e-9 and abs(pts[f][2]) < thickness / 2]
-    _add_group(3, [volume], DISK_GROUP, "disk")
-    _add_group(2, clamp, BladeGroup.CLAMP, "clamp")
-    _add_group(2, left, BladeGroup.LEFT, "left")
-    _add_group(2, right, BladeGroup.RIGHT, "right")
-    gmsh.model.mesh.setPeriodic(2, right, left, _rotation_affine(angle))
-    gmsh.option.setNumber("Mesh.MeshSizeMax", size)
-    gmsh.option.setNumber("Mesh.MeshSizeMin", min(size, thickness / layers))
-    gmsh.option.setNumber("Mesh.Algorithm", 6)
-    gmsh.option.setNumber("Mesh.Algorithm3D", 1)
-    gmsh.option.setNumber("Mesh.ElementOrder", 1)
-    gmsh.model.mesh.generate(3)
-    return SectorModel(source=f"annular(a={outer:g}, b={inner:g}, h={thickness:g}, N={int(n_sectors)})",
-                       volume=occ.getMass(3, volume), tip_nodes=np.zeros((0, 3)),
+    add_to_gmsh(mesh, groups, DISK_GROUP, "disk")
+    return SectorModel(source=f"annular(a={outer:g}, b={inner:g}, h={thickness:g}, N={int(n_sectors)}, "
+                              f"{nr} x {nt} x {layers} cells)",
+                       volume=float(np.abs(signed).sum() / 6), tip_nodes=np.zeros((0, 3)),
                        preset=MeshPreset("plate", size, 0, min(size, thickness / layers)),
-                       n_nodes=len(gmsh.model.mesh.getNodes()[0]), n_sectors=int(n_sectors))
+                       n_nodes=len(points), n_sectors=int(n_sectors))

@@ -47,7 +47,8 @@ def kirchhoff_annular_plate(n: int, inner: float, outer: float, nu: float = 0.3,
 
 @pytest.fixture(scope="module")
 def plate():
-    return fem.create_annular_sector(PLATE["inner"], PLATE["outer"], PLATE["thickness"], n_sectors=8, size=0.012)
+    return fem.create_annular_sector(PLATE["inner"], PLATE["outer"], PLATE["thickness"], n_sectors=8, size=0.012,
+                                     layers=1)
 
 
 def test_plate_cyclic_modes_equal_the_assembled_plate(plate):
@@ -71,7 +72,20 @@ def test_plate_cyclic_modes_equal_the_assembled_plate(plate):
     full = np.sqrt(np.sort(lam))[:union.size]
     print("cyclic", union[:12], "full", full[:12])
     np.testing.assert_allclose(union, full, rtol=1e-8)
-    assert 0.0 < plate.cyclic.worst_distance < 1e-9 * PLATE["outer"] * 1e3          # setPeriodic: round-off
+    assert plate.cyclic.worst_distance <= 1e-12 * PLATE["outer"]         # the right face is the left one turned
+
+
+def test_plate_layers_are_honoured():
+    """create_annular_sector(layers=3) (#71): every vertex on one of the 3 + 1 planes through the thickness, every
+    plane with the same vertices (a structured grid), the right face paired with the left."""
+    sector = fem.create_annular_sector(PLATE["inner"], PLATE["outer"], PLATE["thickness"], n_sectors=8, size=0.05,
+                                       layers=3)
+    z = sector.mesh.geometry.x[:, 2] / PLATE["thickness"]
+    planes, counts = np.unique(np.round(z, 12), return_counts=True)
+    np.testing.assert_allclose(planes, [-0.5, -1 / 6, 1 / 6, 0.5], atol=1e-12)
+    assert len(set(counts)) == 1 and sector.cyclic is not None
+    with pytest.raises(ValueError, match="layers must be an integer in 1..50"):
+        fem.create_annular_sector(PLATE["inner"], PLATE["outer"], PLATE["thickness"], 8, 0.05, layers=0)
 
 
 @pytest.mark.slow                     # builds a plate twice as fine (16 s): in make test, not in test-fast
@@ -88,7 +102,7 @@ def test_plate_against_kirchhoff_theory(plate, tmp_path):
     mat = Material()
     E, nu, rho, h = mat.E, mat.nu, mat.rho, PLATE["thickness"]
     D = E * h ** 3 / (12 * (1 - nu ** 2))
-    built = fem.create_annular_sector(PLATE["inner"], PLATE["outer"], h, n_sectors=8, size=0.006)
+    built = fem.create_annular_sector(PLATE["inner"], PLATE["outer"], h, n_sectors=8, size=0.006, layers=1)
     deck = fem.write_sector_mesh(built, tmp_path / "plate_mm.inp", units="mm")
     fine = fem.create_sector_from_file(deck, clamp="CLAMP", units="mm", verbose=False, cyclic=("LEFT", "RIGHT", 8))
     kappa = np.pi ** 2 / 12
@@ -158,7 +172,7 @@ def test_cyclic_frequencies_serial_and_mpi_agree(serial_and_mpi):
         import sys, numpy as np
         from mpi4py import MPI
         from rotor37_rom import fem
-        s = fem.create_annular_sector({PLATE['inner']}, {PLATE['outer']}, {PLATE['thickness']}, 8, 0.012)
+        s = fem.create_annular_sector({PLATE['inner']}, {PLATE['outer']}, {PLATE['thickness']}, 8, 0.012, 1)
         w = np.concatenate([fem.solve_cyclic_modes(s, k, 3).omega for k in range(5)])
         if MPI.COMM_WORLD.rank == 0:
             np.save(sys.argv[1], w)

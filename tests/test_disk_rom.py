@@ -50,7 +50,7 @@ def _newmark_sparse(M, K, f, dt, n):
 
 def _plate():
     """An annular plate sector (N = 8) and the e_z DOF of its outer node nearest the sector's middle."""
-    plate = fem.create_annular_sector(0.05, 0.2, 0.01, n_sectors=8, size=0.02)
+    plate = fem.create_annular_sector(0.05, 0.2, 0.01, n_sectors=8, size=0.02, layers=1)
     coords = plate.V.tabulate_dof_coordinates()[: plate.n_dofs // 3]
     theta = np.arctan2(coords[:, 1], coords[:, 0])
     node = int(np.argmax(np.hypot(coords[:, 0], coords[:, 1]) - 0.01 * np.abs(theta - np.pi / 8)))

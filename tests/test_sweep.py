@@ -20,6 +20,9 @@ from rotor37_rom.studies.sweep import (SweepSpec, interaction_map, is_steady, lo
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEEDS = np.array([1300.0, 1600.0])
+# spectral mass scaling at 60 kHz (12x the unscaled step): for the continuation's bookkeeping, which does not depend on
+# the modes above the cap (bench_contact_convergence: the capped response within 3 % of the unscaled)
+CAP = 2 * np.pi * 60e3
 
 
 class _Killed(Exception):
@@ -108,7 +111,7 @@ def test_killed_training_runs_resume(ci_rom, tmp_path, monkeypatch):
     resumed; a run that records its states refuses a state saved without them."""
     from rotor37_rom.dynamics import explicit as integrator
 
-    scheme = CentralDifference(ci_rom, nonlinear=True, safety=0.5)
+    scheme = CentralDifference(ci_rom, nonlinear=True, safety=0.25, frequency_cap=CAP)     # capped: 20x the step
     casing = Casing(c0=2e-4)                                       # in contact within the quarter revolution
     steps = np.ceil(0.25 * 2 * np.pi / SPEEDS / scheme.h).astype(int)
     kill_at = (steps.min() + steps.max()) // 2
@@ -151,7 +154,7 @@ def test_killed_training_runs_resume(ci_rom, tmp_path, monkeypatch):
     with pytest.raises(ValueError, match="record_q=True cannot resume"):
         real(scheme, SPEEDS, casing, revolutions=0.25, record_q=True, state=state)
     run(scheme, SPEEDS[:1])                                       # other speeds
-    other_step = CentralDifference(ci_rom, nonlinear=True, safety=0.45)
+    other_step = CentralDifference(ci_rom, nonlinear=True, safety=0.2, frequency_cap=CAP)
     run(other_step, SPEEDS)                                       # another step
     assert resumed_from[1:] == [None, None]
 
@@ -177,6 +180,7 @@ def test_sweep_folder_absorbs_the_steps_round_off(ci_rom, tmp_path):
 def test_mpi_sweep_equals_serial(ci_rom, tmp_path):
     """The demo under mpirun -n 2 gives the serial map, and its continuation branches (up on rank 0, down on rank 1,
     gathered on rank 0) equal serial ones."""
+    from rotor37_rom.studies.contact_map import ContactMapConfig
     from rotor37_rom.studies.sweep import continuation
 
     model_path = save_reduced_model(ci_rom, tmp_path / "rom.npz")
@@ -190,7 +194,8 @@ def test_mpi_sweep_equals_serial(ci_rom, tmp_path):
            "--continuation-range", "1300", "1450"]
     run = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-2000:]
-    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9, frequency_cap=2 * np.pi * 60e3)
+    cap = ContactMapConfig.from_options(frequency_cap=60.0).scheme.frequency_cap_rad_s     # the command's, bit for bit
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9, frequency_cap=cap)
     serial = run_sweep(scheme, speeds, SweepSpec(revolutions=0.3, casing=Casing()), tmp_path / "serial",
                        progress=False)
     mpi_folder = tmp_path / "mpi" / "sweeps" / serial.name
@@ -398,10 +403,10 @@ def test_continuation_carries_state_and_casing_angle(ci_rom):
 def test_batched_halvings_accept_the_one_by_one_points(ci_rom, monkeypatch):
     """The halved candidates run as one batch accept the speeds, halvings and steadiness of the paper's one-by-one
     procedure, with amplitudes equal to the batch's round-off (1e-8 relative, the batch tolerance of the
-    integrator), in fewer calls. Up to the 1B/EO4 resonance (mu = 0, linear) with 2-revolution runs some steps are
-    halved and some are not; the branch stays bounded by the clearance scale."""
-    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
-    kwargs = dict(casing=Casing(mu=0.0), first_revolutions=2.0, revolutions=2.0, max_halvings=1)
+    integrator), in fewer calls. Up to the 1B/EO4 resonance (mu = 0, linear, capped at 60 kHz) with 3-revolution runs
+    some steps are halved and some are not; the branch stays bounded by the clearance scale."""
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9, frequency_cap=CAP)
+    kwargs = dict(casing=Casing(mu=0.0), first_revolutions=3.0, revolutions=3.0, max_halvings=1)
     real, calls = sweep_mod.simulate, []
 
     def counted(*a, **k):
@@ -415,7 +420,7 @@ def test_batched_halvings_accept_the_one_by_one_points(ci_rom, monkeypatch):
     assert [(p.omega, p.steady, p.halvings) for p in batched] == [(p.omega, p.steady, p.halvings) for p in one]
     speeds, halved = [p.omega for p in one], [p.halvings for p in one[1:]]
     assert speeds[0] == 1300.0 and speeds[-1] == 1380.0 and np.all(np.diff(speeds) > 0)
-    # the case exercises both paths: the response builds up towards the resonance over 2-revolution runs, so its
+    # the case exercises both paths: the response builds up towards the resonance over 3-revolution runs, so its
     # steadiness test fails near the resonance and passes away from it, a margin far above round-off
     assert 0 < sum(halved) < len(halved)
     assert all(np.isfinite(p.amplitude) for p in one)                          # bounded: no run blew up
@@ -428,9 +433,9 @@ def test_batched_halvings_accept_the_one_by_one_points(ci_rom, monkeypatch):
 def test_unsteady_points_keep_the_full_step_when_asked(ci_rom):
     """unsteady='full': a speed where neither the full nor the halved step is steady is accepted at the full step,
     marked not steady; the steady points are those of the paper's literal reading ('smallest', where the step stays
-    divided), which needs more points over the same range. Same case as the batched halvings (linear, mu = 0, runs
-    of 2 revolutions building up towards the 1B/EO4 resonance)."""
-    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
+    divided), which needs more points over the same range. Linear, mu = 0, capped at 60 kHz, runs of 2 revolutions
+    building up towards the 1B/EO4 resonance."""
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9, frequency_cap=CAP)
     kwargs = dict(casing=Casing(mu=0.0), first_revolutions=2.0, revolutions=2.0, max_halvings=1)
     full = sweep_mod.continuation(scheme, 1300.0, 1380.0, 40.0, unsteady="full", **kwargs)
     smallest = sweep_mod.continuation(scheme, 1300.0, 1380.0, 40.0, **kwargs)
@@ -533,7 +538,7 @@ def test_continuation_extends_a_shorter_branch(ci_rom, tmp_path, monkeypatch):
     (amplitudes to round-off). A branch with another step or start, or going the other way, starts from rest; one
     that ended where a run blew up is given back as it is."""
     sweep = sweep_mod
-    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
+    scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9, frequency_cap=CAP)
     kwargs = dict(casing=Casing(mu=0.0), first_revolutions=1.0, revolutions=1.0, max_halvings=1)
     calls = _counted_simulate(monkeypatch)
     whole = sweep.continuation(scheme, 1200.0, 1275.0, 25.0, **kwargs)

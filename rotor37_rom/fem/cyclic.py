@@ -56,7 +56,8 @@ def create_disk_sector(comm: MPI.Comm = MPI.COMM_WORLD, table: str | Path | None
 def create_annular_sector(inner: float, outer: float, thickness: float, n_sectors: int, size: float,
                           layers: int = 2, comm: MPI.Comm = MPI.COMM_WORLD, material: Material | None = None,
                           degree: int = 2) -> Sector:
-    """A sector of an annular plate clamped at its inner edge (``geometry.disk.create_annular_sector_model``)."""
+    """A sector of an annular plate clamped at its inner edge, ``size`` (m) in the plane and ``layers`` elements
+    through the thickness (``geometry.disk.create_annular_sector_model``)."""
     return build_on_rank0(
         comm, lambda: disk_geometry.create_annular_sector_model(inner, outer, thickness, n_sectors, size, layers),
         material or Material(), degree, "plate", "the plate sector")
