@@ -432,7 +432,7 @@ def _scale_for(scale: float, units: str | None) -> float:
 
 def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], tip: str | Sequence[float] | None = None,
                        preset: str | MeshPreset = "coarse", scale: float = 1.0, units: str | None = None,
-                       contact=None, cyclic=None, blade: str | None = None) -> BladeModel:
+                       contact=None, cyclic=None, blade: str | None = None, axis: str = "+z") -> BladeModel:
     """Load a user's blade into the current gmsh model: a CAD file (STEP, BREP: meshed with the preset) or a mesh
     from another FE code (gmsh .msh, Abaqus/CalculiX .inp, NASTRAN .bdf/.nas, VTK .vtk/.vtu; wedges, hexahedra and
     pyramids are split into conforming tetrahedra, see geometry.mesh_import).
@@ -483,8 +483,30 @@ def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], ti
         raise ValueError(f"blade: the name of the element set of a cyclic sector's blade (with cyclic=...), got "
                          f"{blade!r}" + ("" if cyclic is not None else " without cyclic"))
     gmsh.model.add("user_blade")
+    R = mesh_import.turn_to_z(axis)
+    if axis != "+z" and suffix not in mesh_import.MESH_SUFFIXES:
+        raise ValueError(f"axis {axis}: a CAD file is meshed as it is; turn it so that its axis is +z, or give a mesh "
+                         "file")
+
+    def turned(spec):                                   # a box or coordinates of the file's frame, in the turned one
+        if spec is None or isinstance(spec, (str, int, np.integer)) or axis == "+z":
+            return spec
+        arr = np.asarray(spec, dtype=float)
+        if arr.ndim == 1 and arr.size == 6 and np.all(arr[:3] <= arr[3:]):
+            corners = np.array(list(itertools.product(*zip(arr[:3], arr[3:])))) @ R.T
+            return tuple(corners.min(axis=0)) + tuple(corners.max(axis=0))
+        if arr.ndim == 2 and arr.shape[1] == 3:
+            return arr @ R.T
+        return spec
+
     if suffix in mesh_import.MESH_SUFFIXES:
         mesh = mesh_import.read_mesh(path, scale)
+        if axis != "+z":
+            mesh = dataclasses.replace(mesh, points=mesh.points @ R.T)
+            clamp, tip = turned(clamp), turned(tip)
+            cyclic = cyclic if cyclic is None else (turned(cyclic[0]), turned(cyclic[1]), cyclic[2])
+            contact = contact if contact is None or isinstance(contact, str) or np.ndim(contact) != 2 \
+                else turned(contact)
         facets = mesh_import.boundary_facets(mesh.tets)
         groups, named = {}, {}
         faces = ((BladeGroup.CLAMP, "clamp", clamp), (BladeGroup.TIP, "tip", tip))
@@ -527,6 +549,11 @@ def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], ti
                            for (_, what), f in groups.items())
         if parts is not None:
             caught += f"; blade {blade!r}: {blade_tets.size} of {len(mesh.tets)} tetrahedra"
+        if axis != "+z":
+            names = ["x", "y", "z"]
+            image = ", ".join(("-" if R[i][np.flatnonzero(R[i])[0]] < 0 else "") + names[np.flatnonzero(R[i])[0]]
+                              for i in range(3))
+            caught += f"; its axis {axis} turned to +z: (x, y, z) -> ({image}), the results in that frame"
         return BladeModel(source=f"file:{path}", volume=float("nan"),        # assembled on the mesh (fem)
                           tip_nodes=tip_nodes, preset=preset, n_nodes=len(mesh.points),
                           summary=f"{mesh.summary()}; {caught}", n_sectors=0 if cyclic is None else int(cyclic[2]))

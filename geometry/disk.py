@@ -306,8 +306,8 @@ def create_annular_sector_model(inner: float, outer: float, thickness: float, n_
                                 size: float, layers: int = 2) -> SectorModel:
     """A sector of a flat annular plate (inner radius clamped, outer edge free; mid-plane z = 0) with radial cyclic
     faces at theta = 0 and 2 pi / N, meshed as a structured grid of about ``size`` (m) in r and along the mid-radius
-    arc and exactly ``layers`` elements through the thickness: each (r, theta, z) cell split into the 6 tetrahedra of its
-    main diagonal (Kuhn's subdivision: the same in every cell, so the mesh is conforming and the right face's
+    arc and exactly ``layers`` elements through the thickness: each (r, theta, z) cell split into the 6 tetrahedra of
+    its main diagonal (Kuhn's subdivision: the same in every cell, so the mesh is conforming and the right face's
     triangles are the left face's turned). Groups: volume 'disk', faces 'clamp' (inner edge), 'left', 'right'. For
     verification against the Kirchhoff plate (``tests/test_disk.py``)."""
     import itertools

@@ -36,11 +36,28 @@ from .abaqus import AbaqusDeck, read_deck
 from .nastran import without_materials
 
 __all__ = ["MESH_SUFFIXES", "UNITS", "BLADE_MASS", "check_blade_mass", "group_report", "ImportedMesh", "read_mesh",
-           "split_to_tetrahedra", "boundary_facets", "order_le_to_te", "select_contact_nodes", "add_to_gmsh"]
+           "split_to_tetrahedra", "boundary_facets", "order_le_to_te", "select_contact_nodes", "add_to_gmsh", "AXES",
+           "turn_to_z"]
 
 MESH_SUFFIXES = (".msh", ".inp", ".bdf", ".nas", ".fem", ".vtk", ".vtu")
 UNITS = {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "in": 0.0254}
 BLADE_MASS = (1e-3, 100.0)                 # kg: a blade's mass lies between a gram and a hundred kilograms
+
+
+#: the rotation axis of a file -> the proper rotation that turns it to +z (the project's axis): new = R @ old
+AXES = {"+z": np.eye(3), "-z": np.diag([1.0, -1.0, -1.0]),
+        "+x": np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]),
+        "-x": np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]]),
+        "+y": np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+        "-y": np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])}
+
+
+def turn_to_z(axis: str) -> np.ndarray:
+    """R (3, 3): the proper rotation taking the file's rotation ``axis`` ('+x', '-y', ...) to +z; ValueError for
+    another axis."""
+    if axis not in AXES:
+        raise ValueError(f"axis must be one of {', '.join(AXES)} (the rotation axis of the file), got {axis!r}")
+    return AXES[axis]
 
 
 def check_blade_mass(mass: float, scale: float, what: str) -> None:

@@ -358,7 +358,7 @@ def test_own_blade_demo(tmp_path):
     assert summary["r"] == 24 + 8 + 6 and len(summary["mu_star_per_node"]) == 8
     assert summary["mu_star_le_half"] is not None and 0 < summary["mu_star_le_half"] < 1
     assert not summary["diverged"] and summary["le_max_radial_mm"] > 0
-    assert summary["frame"] == {"axis": "+z", "rotation_sense": -1, "contact_normal": "x",
+    assert summary["frame"] == {"axis": "+z", "file_axis": "+z", "rotation_sense": -1, "contact_normal": "x",
                                 "tip_stagger_deg": pytest.approx(np.degrees(0.1943543), abs=1e-3)}
     with pytest.raises(ValueError, match=r"^--rotation-sense \+1 turns this blade with its trailing edge ahead"):
         run_own_blade(OwnBladeConfig(rotation_sense=1, out=str(tmp_path / "other_sense")))

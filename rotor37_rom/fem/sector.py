@@ -210,7 +210,7 @@ def create_sector_from_file(path: str | Path, clamp, tip=None, comm: MPI.Comm = 
                             preset="coarse", material: Material | None = None, degree: int = 2,
                             scale: float = 1.0, units: str | None = None, contact=None,
                             verbose: bool = True, mass_check: bool = True, cyclic=None,
-                            blade: str | None = None) -> Sector:
+                            blade: str | None = None, axis: str = "+z") -> Sector:
     """A user's blade from a CAD file (STEP/BREP) or a mesh from another FE code (.msh, .inp, .bdf/.nas, .vtk/.vtu);
     see geometry.blade.import_blade_model for clamp, tip, scale/units and contact (the contact nodes, ordered
     LE -> TE). With ``verbose``, rank 0 prints what was read, the bounding box and the mass. A mass outside 1 g -
@@ -220,14 +220,15 @@ def create_sector_from_file(path: str | Path, clamp, tip=None, comm: MPI.Comm = 
     ``left`` (at the lower angle) and ``right`` (turned by 2 pi / N) are groups of the file or boxes; they are paired
     node for node (``locate_cyclic_pairs``), and the sector takes every cyclic operator as the built-in disk's
     does. ``blade``: the element set of a cyclic sector's blade, which makes its volumes 'blade' and 'disk' as the
-    built-in sector's (the SAFE diagram's blade share, ``clamp_cell_group``).
+    built-in sector's (the SAFE diagram's blade share, ``clamp_cell_group``). ``axis``: the file's rotation axis
+    ('+z', '-x', ...), turned to +z (the project's: the rotation, the casing, the cyclic faces are about it).
 
     Normalisation of the cyclic modes (``solve_cyclic_modes``, ``CyclicModes``): each cos/sin pair (a, b) is
     normalised on the sector, a^T M a + b^T M b = 1; expanded on the whole structure (``expand``) its modal mass is
     N/2 for 0 < k < N/2 and N for k = 0 and k = N/2 (one real shape), as in every cyclic-symmetry code."""
     material = file_material(path, material, units, scale, verbose and comm.rank == 0)
     sector = build_on_rank0(comm, lambda: blade_geometry.import_blade_model(path, clamp, tip, preset, scale, units,
-                                                                           contact, cyclic, blade),
+                                                                           contact, cyclic, blade, axis),
                             material, degree, str(preset), str(path))
     if not np.isfinite(sector.volume):                 # a mesh file: its volume from the mesh (curved P2 cells too)
         sector = dataclasses.replace(sector, volume=assemble_scalar(1.0 * ufl.dx(domain=sector.mesh), sector.comm))

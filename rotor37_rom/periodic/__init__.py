@@ -2,7 +2,7 @@
 arc-length continuation (``harmonic_balance``). Pure NumPy/SciPy, on any second-order system whose nonlinear force
 evaluates a batch of states with its Jacobian, as the reduced models' forces do."""
 from .harmonic_balance import (Branch, Harmonics, HarmonicBalance, PeriodicSolution, continue_branch, model_force,
-    solve_periodic, time_state)
+    solve_periodic, time_state, backbone)
 
 __all__ = ["Branch", "Harmonics", "HarmonicBalance", "PeriodicSolution", "continue_branch", "solve_periodic",
-           "model_force", "time_state"]
+           "model_force", "time_state", "backbone"]

@@ -30,7 +30,7 @@ import numpy as np
 import scipy.linalg
 
 __all__ = ["Harmonics", "HarmonicBalance", "PeriodicSolution", "Branch", "continue_branch", "solve_periodic",
-           "model_force", "time_state"]
+           "model_force", "time_state", "backbone"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -289,3 +289,40 @@ def continue_branch(hb: HarmonicBalance, start: PeriodicSolution, omega_end: flo
             return Branch(points, folds, f"reached omega = {omega_end:g}")
         h = min(step_max, 1.5 * h)
     return Branch(points, folds, f"stopped after {max_points} points")
+
+
+def backbone(hb: HarmonicBalance, dof: int, amplitudes, x0: np.ndarray, omega0: float, tol: float = 1e-12,
+             max_iter: int = 30) -> list:
+    """The backbone (the nonlinear normal mode's frequency against amplitude) of the undamped, unforced system of
+    ``hb`` (its C and F must be zero): its synchronous periodic orbits, even in time (cosine terms only: an orbit
+    released from rest at its largest displacement), each with the first-harmonic amplitude a_1 of ``dof`` given by
+    ``amplitudes`` (in order; each solved by Newton on (a, omega) from the previous one, the first from (x0,
+    omega0)). The cosine rows of the balance are solved for the cosine coefficients and omega; the phase of the
+    autonomous orbit is fixed by leaving the sine terms out. Returns PeriodicSolutions (no stability: a
+    conservative orbit's exponents sit on the imaginary axis)."""
+    if np.any(hb.C) or np.any(hb.F):
+        raise ValueError("backbone: the system must be undamped and unforced (C = 0, F = 0)")
+    H, n = hb.basis.H, hb.n
+    cos = np.r_[0, 2 * np.arange(1, H + 1) - 1]                    # the coefficient rows 1, cos tau, cos 2 tau, ...
+    keep = (cos[:, None] * n + np.arange(n)[None, :]).ravel()
+    pin = 1 * n + dof                                               # a_1 of dof: the amplitude, given
+    free = keep[keep != pin]
+    x = np.asarray(x0, float).ravel().copy()
+    x[np.setdiff1d(np.arange(hb.size), keep)] = 0.0
+    omega, out = float(omega0), []
+    for A in amplitudes:
+        x[pin] = A
+        for it in range(1, max_iter + 1):
+            R, J, dRw = hb.residual(x, omega)
+            A_ = np.column_stack([J[np.ix_(keep, free)], dRw[keep]])
+            dz = np.linalg.solve(A_, -R[keep])
+            x[free] += dz[:-1]
+            omega += dz[-1]
+            if np.linalg.norm(dz) <= tol * max(np.linalg.norm(x) + abs(omega), 1e-300):
+                break
+        else:
+            raise ValueError(f"backbone: Newton did not converge in {max_iter} iterations at amplitude {A:g}")
+        R = hb.residual(x, omega, jacobian=False)
+        out.append(PeriodicSolution(omega, x.reshape(hb.basis.size, n).copy(), residual=float(np.linalg.norm(R)),
+                                    iterations=it))
+    return out

@@ -495,7 +495,8 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
     omega = eigenfrequencies(model)
     onset = sprag_slip_onsets(model, config.sweep.casing, config.sector)
     summary = model_summary(config, model, omega, onset)
-    summary["frame"] = {"axis": "+z", "rotation_sense": casing.rotation_sense, "contact_normal": casing.direction,
+    summary["frame"] = {"axis": "+z", "file_axis": "+z" if config.rom.mesh is None else config.rom.mesh.axis,
+                        "rotation_sense": casing.rotation_sense, "contact_normal": casing.direction,
                         "tip_stagger_deg": float(np.degrees(stagger))}
     if rank == 0 and not config.quiet:
         print(f"frame: rotation about +z, sense {casing.rotation_sense:+d} (towards "

@@ -14,13 +14,13 @@ from pathlib import Path
 
 from rotor37_rom.checks import flagged, readable_file, whole_number
 from rotor37_rom.forms import Material
-from rotor37_rom.geometry.mesh_import import MESH_SUFFIXES, UNITS
+from rotor37_rom.geometry.mesh_import import AXES, MESH_SUFFIXES, UNITS
 
 __all__ = ["SectorFile", "add_sector_options", "SECTOR_OPTIONS"]
 
 #: the command-line destinations of ``add_sector_options``
 SECTOR_OPTIONS = ("mesh", "clamp", "tip", "left", "right", "n_sectors", "blade", "units", "contact", "material",
-                  "mass_check")
+                  "mass_check", "axis")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -40,6 +40,8 @@ class SectorFile:
         material: (E Pa, nu, rho kg/m^3); None: an Abaqus deck's own *MATERIAL, else the paper's maraging steel
             (which is said).
         mass_check: refuse a sector whose mass is outside 1 g - 100 kg (a unit slip) with the likely units.
+        axis: the rotation axis in the file's frame ('+z', the project's; '-z', '+x', '-x', '+y', '-y'): the mesh is
+            turned so that it is +z, and the results are in that turned frame (said when it is read).
     """
 
     path: Path
@@ -53,6 +55,7 @@ class SectorFile:
     contact: int = 8
     material: tuple[float, float, float] | None = None
     mass_check: bool = True
+    axis: str = "+z"
 
     def __post_init__(self):
         readable_file("--mesh", self.path)
@@ -84,6 +87,9 @@ class SectorFile:
             object.__setattr__(self, "material", tuple(float(v) for v in self.material))
         if not isinstance(self.mass_check, bool):
             raise ValueError(f"--mass-check must be on or off, got {self.mass_check!r}")
+        if self.axis not in AXES:
+            raise ValueError(f"--axis must be one of {', '.join(AXES)} (the rotation axis in the file), got "
+                             f"{self.axis!r}")
 
     @property
     def cyclic(self) -> tuple[str, str, int] | None:
@@ -101,7 +107,7 @@ class SectorFile:
             return fem.create_sector_from_file(
                 self.path, clamp=self.clamp, tip=self.tip, comm=comm or MPI.COMM_WORLD, preset="ci",
                 units=self.units, contact=self.contact if self.tip is not None else None, verbose=verbose,
-                mass_check=self.mass_check, cyclic=self.cyclic, blade=self.blade,
+                mass_check=self.mass_check, cyclic=self.cyclic, blade=self.blade, axis=self.axis,
                 material=None if self.material is None else Material(*self.material))
         except ValueError as exc:
             raise ValueError(f"--mesh: {exc}") from None
@@ -125,7 +131,7 @@ class SectorFile:
                    right=getattr(args, "right", None), n_sectors=getattr(args, "n_sectors", None),
                    blade=getattr(args, "blade", None), units=args.units, contact=args.contact,
                    material=None if args.material is None else tuple(args.material),
-                   mass_check=args.mass_check == "on")
+                   mass_check=args.mass_check == "on", axis=args.axis)
 
 
 def add_sector_options(parser: argparse.ArgumentParser, cyclic: bool = True) -> None:
@@ -149,3 +155,6 @@ def add_sector_options(parser: argparse.ArgumentParser, cyclic: bool = True) -> 
                        help="E (Pa), nu, rho (kg/m^3); default: the deck's own, else the paper's maraging steel")
     group.add_argument("--mass-check", choices=["on", "off"], default="on",
                        help="refuse a mass outside 1 g - 100 kg (a unit slip; default on)")
+    group.add_argument("--axis", choices=list(AXES), default="+z",
+                       help="the rotation axis in the file (default +z, the project's): the mesh is turned so that it "
+                            "is +z, and the results are in that frame")
