@@ -124,11 +124,7 @@ class PeriodicSolution:
 
     def amplitude(self, dof: int, basis: Harmonics, n_samples: int = 512) -> float:
         """max |q_dof(t)| over the period, sampled on ``n_samples`` points."""
-        tau = 2 * np.pi * np.arange(n_samples) / n_samples
-        cols = [np.ones(n_samples)]
-        for h in range(1, basis.H + 1):
-            cols += [np.cos(h * tau), np.sin(h * tau)]
-        return float(np.abs(np.column_stack(cols) @ self.X[:, dof]).max())
+        return float(np.abs(Harmonics(basis.H, n_samples).synthesis @ self.X[:, dof]).max())
 
 
 class HarmonicBalance:
@@ -195,6 +191,11 @@ class HarmonicBalance:
         return central[np.argsort(central.real, kind="stable")]
 
 
+def _stable(exponents: np.ndarray | None, omega: float) -> bool | None:
+    """Every Floquet exponent with a negative real part (round-off: 1e-9 omega); None without exponents."""
+    return None if exponents is None else bool(np.all(exponents.real < 1e-9 * omega))
+
+
 def solve_periodic(hb: HarmonicBalance, x0: np.ndarray, omega: float, tol: float = 1e-10, max_iter: int = 30,
                    stability: bool = True) -> PeriodicSolution:
     """Newton on R(x, omega) = 0 at fixed omega from x0 (relative tolerance ``tol`` on the update); ValueError
@@ -207,8 +208,7 @@ def solve_periodic(hb: HarmonicBalance, x0: np.ndarray, omega: float, tol: float
         if np.linalg.norm(dx) <= tol * max(np.linalg.norm(x), 1e-300):
             R, J, _ = hb.residual(x, omega)
             exps = hb.floquet_exponents(x, omega, J) if stability else None
-            return PeriodicSolution(omega, x.reshape(hb.basis.size, hb.n), exps,
-                                    None if exps is None else bool(np.all(exps.real < 1e-9 * omega)),
+            return PeriodicSolution(omega, x.reshape(hb.basis.size, hb.n), exps, _stable(exps, omega),
                                     float(np.linalg.norm(R)), it)
     raise ValueError(f"harmonic balance: Newton did not converge in {max_iter} iterations at omega = {omega:g}")
 
@@ -282,8 +282,7 @@ def continue_branch(hb: HarmonicBalance, start: PeriodicSolution, omega_end: flo
             folds.append(len(points))                          # a turning point between the last point and this one
         exps = hb.floquet_exponents(z[:-1] * sx, z[-1] * sw, J) if stability else None
         points.append(PeriodicSolution(z[-1] * sw, (z[:-1] * sx).reshape(hb.basis.size, hb.n), exps,
-                                       None if exps is None else bool(np.all(exps.real < 1e-9 * z[-1] * sw)),
-                                       float(np.linalg.norm(R))))
+                                       _stable(exps, z[-1] * sw), float(np.linalg.norm(R))))
         y, t = z, t_new
         if (y[-1] * sw - omega_end) * direction >= 0:
             return Branch(points, folds, f"reached omega = {omega_end:g}")
