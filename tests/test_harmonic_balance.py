@@ -8,7 +8,8 @@ import scipy.integrate
 import scipy.optimize
 import scipy.special
 
-from rotor37_rom.periodic import Harmonics, HarmonicBalance, backbone, continue_branch, solve_periodic, time_state
+from rotor37_rom.periodic import (Harmonics, HarmonicBalance, backbone, bifurcation_kind, continue_branch,
+                                  solve_periodic, time_state)
 
 ZETA, GAMMA, F0 = 0.02, 0.1, 0.05       # hardening, peak amplitude ~1.25, bistable between ~1.046 and ~1.054 rad/s
 
@@ -104,6 +105,11 @@ def test_one_harmonic_is_the_closed_form(branch):
     changes = np.flatnonzero(stable[1:] != stable[:-1]) + 1
     assert changes.tolist() == br.folds
     assert stable[:br.folds[0]].all() and not stable[br.folds[0]:br.folds[1]].any() and stable[br.folds[1]:].all()
+    # the bifurcations the branch reports: the same two, each a real multiplier through +1
+    assert [b[0] for b in br.bifurcations] == br.folds
+    assert all(kind == "fold" and abs(mu.imag) < 1e-9 and mu.real > 1 for _, kind, mu in br.bifurcations)
+    assert [bifurcation_kind(m) for m in (1.02, -1.02, 1.02 * np.exp(1j))] == ["fold", "period doubling",
+                                                                               "Neimark-Sacker"]
 
 
 def test_harmonics_converge_to_the_time_integrations_orbit(branch):

@@ -7,8 +7,8 @@ into its frame, u_R^n = R u_L^{n+1} (eq. 43), so with B = [Phi_s, Psi_L, Psi_R R
 m = B^T M B (eqs. 45-49). The cyclic DOFs of all sectors are then reduced on r_cyclic interface modes Pi (eq. 50), the
 eigenvectors of the cyclic block of the assembled matrices whose frequencies are closest to the sector's fixed-interface
 modes (eq. 51). For a tuned disk that block is block-circulant, so its modes are computed per harmonic index k from an
-n_L-size Hermitian problem (in the real cos/sin form of ``rotor37_rom.disk.symmetry``) instead of one of size N n_L: 19
-problems of 2 n_L instead of one of 36 n_L. The reduced model has r = N r_s + r_cyclic (eq. 53).
+n_L-size Hermitian problem instead of one of size N n_L: 19 problems of n_L instead of one of 36 n_L, each complex mode
+giving the cos/sin pair of ``rotor37_rom.disk.symmetry``. The reduced model has r = N r_s + r_cyclic (eq. 53).
 
 Nonlinear forces (eq. 61): the cyclic DOFs stay linear and each sector's reduced force depends on its own q^n only,
 g~^n(q^n) = Phi_s^T g_s(Phi_s q^n): one sector's reduced force (exact tensors or quadrature) evaluated with the
@@ -52,7 +52,7 @@ class SectorMatrices:
 
 
 def _harmonic_blocks(s: SectorMatrices, A: np.ndarray, k: int, n_sectors: int) -> np.ndarray:
-    """The cyclic block of the assembled matrix for harmonic index k, in real form (n_L, or 2 n_L for 0 < k < N/2):
+    """The cyclic block of the assembled matrix for harmonic index k (n_L, Hermitian; real for k = 0 and k = N/2):
     H_k = C0 + C1 e^{i k alpha} + C1^T e^{-i k alpha}, C0 = A_LL + A_RR, C1 = A_LR."""
     C0 = s.part(A, "L", "L") + s.part(A, "R", "R")
     C1 = s.part(A, "L", "R")
@@ -60,8 +60,7 @@ def _harmonic_blocks(s: SectorMatrices, A: np.ndarray, k: int, n_sectors: int) -
     re = C0 + (C1 + C1.T) * np.cos(phase)
     if k == 0 or 2 * k == n_sectors:
         return re
-    im = (C1 - C1.T) * np.sin(phase)               # H = re + i im, im antisymmetric
-    return np.block([[re, -im], [im, re]])
+    return re + 1j * ((C1 - C1.T) * np.sin(phase))  # the imaginary part antisymmetric
 
 
 def interface_modes(s: SectorMatrices, n_sectors: int, r_cyclic: int, per_k: int = 12, selection: str = "closest"
@@ -79,14 +78,13 @@ def interface_modes(s: SectorMatrices, n_sectors: int, r_cyclic: int, per_k: int
     candidates = []                                # (distance to the targets, omega, k, (a, b))
     for k in harmonic_indices(N):
         Kk, Mk = _harmonic_blocks(s, s.K, k, N), _harmonic_blocks(s, s.M, k, N)
-        m = Kk.shape[0] // nL
-        count = min(per_k * m, Kk.shape[0])
+        count = min(per_k, nL)
         lam, V = scipy.linalg.eigh(Kk, Mk, subset_by_index=[0, count - 1])
         w = np.sqrt(np.maximum(lam, 0.0))
-        for j in range(0, count, m):               # pairs (m = 2) enter together
-            dist = np.min(np.abs(s.omega_c - w[j]))
-            vecs = [(V[:nL, i], V[nL:, i] if m == 2 else None) for i in range(j, min(j + m, count))]
-            candidates.append((dist, w[j], k, vecs))
+        for j in range(count):                     # z = x + i y: the pair (x, y), (-y, x) of the real doubled form
+            z = V[:, j]
+            vecs = [(z, None)] if np.isrealobj(V) else [(z.real, z.imag), (-z.imag, z.real)]
+            candidates.append((np.min(np.abs(s.omega_c - w[j])), w[j], k, vecs))
     if selection == "per_k":                       # rank within each harmonic first, then by frequency
         rank = {}
         for c in sorted(candidates, key=lambda c: c[1]):

@@ -30,7 +30,7 @@ import numpy as np
 import scipy.linalg
 
 __all__ = ["Harmonics", "HarmonicBalance", "PeriodicSolution", "Branch", "continue_branch", "solve_periodic",
-           "model_force", "time_state", "backbone"]
+           "model_force", "time_state", "backbone", "bifurcation_kind"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -109,7 +109,8 @@ def time_state(X: np.ndarray, omega: float, tau: float = 0.0) -> tuple[np.ndarra
 @dataclasses.dataclass
 class PeriodicSolution:
     """A periodic orbit: its frequency omega (rad/s), coefficients X (2 H + 1, n), Floquet exponents (2 n,) and
-    multipliers, stability, the residual norm reached, Newton iterations."""
+    multipliers, stability, the residual norm reached, Newton iterations; with contact (``contact.ContactBalance``)
+    the coefficients L (2 H + 1, n_c) of each law's multipliers."""
 
     omega: float
     X: np.ndarray
@@ -117,6 +118,12 @@ class PeriodicSolution:
     stable: bool | None = None
     residual: float = np.nan
     iterations: int = 0
+    L: tuple = ()
+
+    @property
+    def unknowns(self) -> np.ndarray:
+        """x: the balance's unknowns, [X.ravel(), L_1.ravel(), ...]."""
+        return np.concatenate([self.X.ravel()] + [L.ravel() for L in self.L])
 
     @property
     def multipliers(self) -> np.ndarray | None:
@@ -157,8 +164,8 @@ class HarmonicBalance:
         kron(I, K) + omega kron(D, C) + omega^2 kron(D^2, M)."""
         return self._lin[0] + omega * self._lin[1] + omega ** 2 * self._lin[2]
 
-    def residual(self, x: np.ndarray, omega: float, jacobian: bool = True):
-        """R(x, omega), and with ``jacobian`` dR/dx and dR/domega."""
+    def residual(self, x: np.ndarray, omega: float, jacobian: bool = True, domega: bool = True):
+        """R(x, omega), and with ``jacobian`` dR/dx and dR/domega (None without ``domega``)."""
         X = x.reshape(self.basis.size, self.n)
         R = self.linear_matrix(omega) @ x - self.F.ravel()
         J = self.linear_matrix(omega) if jacobian else None
@@ -171,7 +178,7 @@ class HarmonicBalance:
                 J = J + np.einsum("at,tij,tb->aibj", self._P, dG, self._E).reshape(self.size, self.size)
         if not jacobian:
             return R
-        dR_domega = (self._lin[1] + 2 * omega * self._lin[2]) @ x
+        dR_domega = (self._lin[1] + 2 * omega * self._lin[2]) @ x if domega else None
         return R, J, dR_domega
 
     def floquet_exponents(self, x: np.ndarray, omega: float, J: np.ndarray | None = None) -> np.ndarray:
@@ -196,35 +203,87 @@ def _stable(exponents: np.ndarray | None, omega: float) -> bool | None:
     return None if exponents is None else bool(np.all(exponents.real < 1e-9 * omega))
 
 
+def _newton_step(J: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """-J^-1 R; where J is singular (a contact law's iterate that sticks at every sample leaves the mean position
+    free), the least-squares step."""
+    try:
+        return np.linalg.solve(J, -R)
+    except np.linalg.LinAlgError:
+        return np.linalg.lstsq(J, -R, rcond=None)[0]
+
+
+def _split(hb, x):
+    """(X, (L, ...)) of the unknowns x of a balance (with contact laws or without)."""
+    if hasattr(hb, "split"):
+        X, Ls = hb.split(x)
+        return X.copy(), tuple(L.copy() for L in Ls)
+    return x.reshape(hb.basis.size, hb.n).copy(), ()
+
+
 def solve_periodic(hb: HarmonicBalance, x0: np.ndarray, omega: float, tol: float = 1e-10, max_iter: int = 30,
                    stability: bool = True) -> PeriodicSolution:
     """Newton on R(x, omega) = 0 at fixed omega from x0 (relative tolerance ``tol`` on the update); ValueError
     where it does not converge."""
     x = np.asarray(x0, float).ravel().copy()
     for it in range(1, max_iter + 1):
-        R, J, _ = hb.residual(x, omega)
-        dx = np.linalg.solve(J, -R)
+        R, J, _ = hb.residual(x, omega, domega=False)
+        dx = _newton_step(J, R)
+        if hasattr(hb, "scales"):
+            # contact: a semismooth Newton, the step halved while it raises the residual (a contact set that
+            # cycles), the update measured in the unknowns' own scales
+            r0, a = np.linalg.norm(R), 1.0
+            while a > 1 / 64 and np.linalg.norm(hb.residual(x + a * dx, omega, jacobian=False)) > r0:
+                a /= 2
+            dx *= a
+            s = hb.scales(x)
+            small = np.linalg.norm(dx / s) <= tol * max(np.linalg.norm(x / s), 1e-300)
+        else:
+            small = np.linalg.norm(dx) <= tol * max(np.linalg.norm(x), 1e-300)
         x += dx
-        if np.linalg.norm(dx) <= tol * max(np.linalg.norm(x), 1e-300):
-            R, J, _ = hb.residual(x, omega)
-            exps = hb.floquet_exponents(x, omega, J) if stability else None
-            return PeriodicSolution(omega, x.reshape(hb.basis.size, hb.n), exps, _stable(exps, omega),
-                                    float(np.linalg.norm(R)), it)
-    raise ValueError(f"harmonic balance: Newton did not converge in {max_iter} iterations at omega = {omega:g}")
+        if small:
+            if stability:
+                R, J, _ = hb.residual(x, omega, domega=False)
+                exps = hb.floquet_exponents(x, omega, J)
+            else:
+                R, exps = hb.residual(x, omega, jacobian=False), None
+            X, L = _split(hb, x)
+            return PeriodicSolution(omega, X, exps, _stable(exps, omega), float(np.linalg.norm(R)), it, L)
+    raise ValueError(f"periodic orbit: Newton did not converge in {max_iter} iterations at omega = {omega:g}")
 
 
 @dataclasses.dataclass
 class Branch:
     """A continued branch: its solutions in arc-length order, the indices where a fold lies between two points
-    (the tangent's omega component changes sign), and why it ended."""
+    (the tangent's omega component changes sign), why it ended, and its bifurcations: (i, kind, multiplier) where
+    the stability changes between points i - 1 and i, the kind told by the multiplier that crossed the unit circle
+    (``bifurcation_kind``)."""
 
     points: list
     folds: list
     ended: str
+    bifurcations: list = dataclasses.field(default_factory=list)
 
     @property
     def omega(self) -> np.ndarray:
         return np.array([p.omega for p in self.points])
+
+
+def bifurcation_kind(multiplier: complex, angle_tol: float = 0.1) -> str:
+    """What a Floquet multiplier crossing the unit circle makes: 'fold' at +1 (a turning point, or a branch point
+    where the branch's symmetry breaks), 'period doubling' at -1 (an orbit of twice the period is born),
+    'Neimark-Sacker' for a complex pair (a torus: the response modulated at the pair's frequency)."""
+    a = abs(np.angle(multiplier))
+    return "fold" if a < angle_tol else "period doubling" if a > np.pi - angle_tol else "Neimark-Sacker"
+
+
+def _crossing(before: PeriodicSolution, after: PeriodicSolution):
+    """(kind, multiplier) of the stability change between two neighbouring points: the largest multiplier of the
+    unstable one (the one that left the unit circle), or None."""
+    if before.stable is None or after.stable is None or before.stable == after.stable:
+        return None
+    mult = (after if before.stable else before).multipliers
+    mu = complex(mult[np.argmax(np.abs(mult))])
+    return bifurcation_kind(mu), mu
 
 
 def _tangent(J: np.ndarray, dR_domega: np.ndarray, previous: np.ndarray | None) -> np.ndarray:
@@ -250,23 +309,29 @@ def continue_branch(hb: HarmonicBalance, start: PeriodicSolution, omega_end: flo
         raise ValueError(f"step must be > 0 (the relative arc length of a continuation step), got {step}")
     step_min = step / 64 if step_min is None else step_min
     step_max = 8 * step if step_max is None else step_max
-    sx = max(np.linalg.norm(start.X), 1e-300)
+    sx = hb.scales(start.unknowns) if hasattr(hb, "scales") else np.full(hb.size, max(np.linalg.norm(start.X),
+                                                                                           1e-300))
     sw = start.omega
-    scale = np.r_[np.full(hb.size, sx), sw]
-    y = np.r_[start.X.ravel(), start.omega] / scale
+    scale = np.r_[sx, sw]
+    y = np.r_[start.unknowns, start.omega] / scale
     direction = np.sign(omega_end - start.omega) or 1.0
     _, J, dRw = hb.residual(y[:-1] * sx, y[-1] * sw)
-    t = _tangent(J * sx, dRw * sw, np.r_[np.zeros(hb.size), direction])
-    points, folds, h = [start], [], step
+    t = _tangent(J * sx[None, :], dRw * sw, np.r_[np.zeros(hb.size), direction])
+    points, folds, bifurcations, h = [start], [], [], step
     while len(points) < max_points:
         pred = y + h * t
         z, ok = pred.copy(), False
         for _ in range(max_iter):
-            R, J, dRw = hb.residual(z[:-1] * sx, z[-1] * sw)
-            A = np.vstack([np.hstack([J * sx, dRw[:, None] * sw]), t[None]])
+            try:                      # a shooting map refuses an omega past its step's limit: a failed corrector
+                R, J, dRw = hb.residual(z[:-1] * sx, z[-1] * sw)
+            except ValueError:
+                break
+            A = np.vstack([np.hstack([J * sx[None, :], dRw[:, None] * sw]), t[None]])
             rhs = -np.r_[R, t @ (z - y) - h]
             dz = np.linalg.solve(A, rhs)
             z += dz
+            if not np.all(np.isfinite(z)) or np.linalg.norm(z - pred) > 4 * h:
+                break                 # the corrector left the predictor's neighbourhood: a smaller step
             if np.linalg.norm(dz) <= tol * max(np.linalg.norm(z), 1.0):
                 ok = True
                 break
@@ -274,20 +339,24 @@ def continue_branch(hb: HarmonicBalance, start: PeriodicSolution, omega_end: flo
             h /= 2
             if h < step_min:
                 return Branch(points, folds, f"the corrector failed at omega = {y[-1] * sw:g} with the step at its "
-                                             f"minimum {step_min:g}")
+                                             f"minimum {step_min:g}", bifurcations)
             continue
         R, J, dRw = hb.residual(z[:-1] * sx, z[-1] * sw)
-        t_new = _tangent(J * sx, dRw * sw, t)
+        t_new = _tangent(J * sx[None, :], dRw * sw, t)
         if t_new[-1] * t[-1] < 0:
             folds.append(len(points))                          # a turning point between the last point and this one
         exps = hb.floquet_exponents(z[:-1] * sx, z[-1] * sw, J) if stability else None
-        points.append(PeriodicSolution(z[-1] * sw, (z[:-1] * sx).reshape(hb.basis.size, hb.n), exps,
-                                       _stable(exps, z[-1] * sw), float(np.linalg.norm(R))))
+        X, L = _split(hb, z[:-1] * sx)
+        points.append(PeriodicSolution(z[-1] * sw, X, exps, _stable(exps, z[-1] * sw), float(np.linalg.norm(R)),
+                                       L=L))
+        change = _crossing(points[-2], points[-1])
+        if change is not None:
+            bifurcations.append((len(points) - 1,) + change)
         y, t = z, t_new
         if (y[-1] * sw - omega_end) * direction >= 0:
-            return Branch(points, folds, f"reached omega = {omega_end:g}")
+            return Branch(points, folds, f"reached omega = {omega_end:g}", bifurcations)
         h = min(step_max, 1.5 * h)
-    return Branch(points, folds, f"stopped after {max_points} points")
+    return Branch(points, folds, f"stopped after {max_points} points", bifurcations)
 
 
 def backbone(hb: HarmonicBalance, dof: int, amplitudes, x0: np.ndarray, omega0: float, tol: float = 1e-12,

@@ -26,7 +26,7 @@ from rotor37_rom.model.disk_basis import DiskBasis
 from rotor37_rom.forces.sector import SectorForces
 from rotor37_rom.forces.tensors import QuadratureForces, compute_polynomial_forces
 from rotor37_rom.npz import load_npz, save_npz
-from rotor37_rom.reduction.craig_bampton import (CRITERIA, CraigBamptonBasis, craig_bampton, modal_damping,
+from rotor37_rom.reduction.craig_bampton import (CraigBamptonBasis, craig_bampton, modal_damping,
     select_pairs, selection_weights)
 from rotor37_rom.model.reduced import ReducedModel, reduced_model_key, save_reduced_model
 from rotor37_rom.dynamics.newmark import simulate_linear_newmark
@@ -55,6 +55,29 @@ def _positions(free: np.ndarray, dofs: np.ndarray, what: str) -> np.ndarray:
     if dofs.size == 0 or np.any(pos >= free.size) or not np.array_equal(free[np.minimum(pos, free.size - 1)], dofs):
         raise ValueError(f"{what}: DOFs must be on the mesh and not clamped")
     return pos
+
+
+def _tied(A: np.ndarray, n_lin: int, n_L: int) -> np.ndarray:
+    """A matrix on [lin, Psi_L, Psi_Rr] (n_lin + 2 n_L) on the tied basis [lin, Psi_L + Psi_Rr]: the right face's rows
+    and columns added to the left face's (no new products with the sector's operators)."""
+    m = n_lin + n_L
+    T = A[:m, :m].copy()
+    T[:, n_lin:] += A[:m, m:]
+    T[n_lin:] += A[m:, :m]
+    T[n_lin:, n_lin:] += A[m:, m:]
+    return T
+
+
+def _with_derivatives(A_B: np.ndarray, A_f, B: np.ndarray, n_lin: int, r_s: int) -> np.ndarray:
+    """B^T A_f B for B = [lin, Z, Psi_L, Psi_Rr] (the modal derivatives Z: its columns n_lin ... r_s - 1) from A_B,
+    the same matrix without Z's rows and columns (computed before Z existed): only Z's products with A_f are new."""
+    rest = np.r_[:n_lin, r_s:B.shape[1]]
+    out = np.empty((B.shape[1], B.shape[1]))
+    out[np.ix_(rest, rest)] = A_B
+    A_Z = A_f @ B[:, n_lin:r_s]
+    out[:, n_lin:r_s] = B.T @ A_Z
+    out[n_lin:r_s] = A_Z.T @ B
+    return out
 
 
 def _disk_metadata(sector, config: DiskReductionConfig) -> dict:
@@ -169,8 +192,14 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     factorised.clear()                       # MUMPS frees K_ii's factors
     # training (§3.3.1): the 0-diameter load at node LE along e_z, on the sector with its faces tied for k = 0
     lin = np.hstack([Psi_tip, Theta_f, S_f])
+    n_lin = lin.shape[1]
     tied = np.hstack([lin, Psi_L + Psi_Rr])
-    K0, M0 = tied.T @ (K_f @ tied), tied.T @ (M_f @ tied)
+    # the sector's matrices on [lin, Psi_L, Psi_Rr], B below without its modal derivatives, computed once (seconds of
+    # sparse and dense products): tied's are sums of their rows and columns, B's get the modal derivatives' ones
+    B = np.hstack([lin, Psi_L, Psi_Rr])
+    K_B, M_B = B.T @ (K_f @ B), B.T @ (M_f @ B)
+    del B                                    # n_free x (n_lin + 2 n_L), not kept through the modal derivatives
+    K0, M0 = _tied(K_B, n_lin, nL), _tied(M_B, n_lin, nL)
     C0, _ = modal_damping(K0, M0)
     f_shape = config.training_force * (tied.T @ f_free)
     period = 2 * np.pi / config.training_omega
@@ -198,8 +227,9 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     Phi_s = np.hstack([Psi_full[:, :nb], Theta_full, Z])                 # Theta_full ends with S
     r_s = Phi_s.shape[1]
     lap("modal_derivatives")
-    B = np.hstack([Phi_s[free], Psi_L, Psi_Rr])
-    s = SectorMatrices(K=B.T @ (K_f @ B), M=B.T @ (M_f @ B), r_s=r_s, n_L=nL, omega_c=omega_c)
+    B = np.hstack([Phi_s[free], Psi_L, Psi_Rr])                      # Phi_s[free] = [lin, Z[free]]
+    s = SectorMatrices(K=_with_derivatives(K_B, K_f, B, n_lin, r_s), M=_with_derivatives(M_B, M_f, B, n_lin, r_s),
+                       r_s=r_s, n_L=nL, omega_c=omega_c)
     Pi, omega_pi, k_pi = interface_modes(s, N, config.r_cyclic, selection=config.interface)
     scales = np.ones(N) if config.mistuning is None else np.asarray(config.mistuning, float)
     K, M = assemble_disk_matrices(s, Pi, N, scales)

@@ -1,0 +1,180 @@
+"""Periodic orbits of the project's explicit scheme itself, by shooting: Newton on z(T) = z(0) for the scheme's state
+z = (q_0, q_-1) over one period of n steps, with the casing contact of the maps (Lagrange multipliers, Coulomb
+friction; ``dynamics.contact_step``'s law, plastic at the node) and the reduced geometric nonlinearity.
+
+The Jacobian of the period map is the monodromy of the scheme, marched beside the orbit: each step's tangent is the
+scheme's linear operators, the GNL force's exact Jacobian premultiplied like the force, and, on a step that
+touches, the contact correction's projection with the step's active set held (the multipliers are piecewise linear
+in the predicted gaps). It is the exact derivative of the discrete map wherever the contact sets of the period do not
+change under a small perturbation; its eigenvalues are the Floquet multipliers of the discrete orbit (the stability
+of the orbit of the time-marching model, not of an approximation of it). A plastic impact erases the normal velocity
+of a node: its multipliers are (near) zero.
+
+``Shooting`` offers ``residual`` (R = z(T) - z(0), dR/dz = monodromy - I, dR/domega by a difference),
+``floquet_exponents``, ``size``, ``split``, so that ``solve_periodic`` and ``continue_branch`` (arc length through
+folds) work on it as on the harmonic balance. The branch parameter is the fundamental frequency omega = 2 pi / T: the
+casing's two lobes pass a blade every pi / Omega, so for the period m pi / Omega, Omega = m omega / 2.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from rotor37_rom.dynamics.casing import Casing, ContactSolver, casing_profile, contact_matrices
+
+__all__ = ["Shooting"]
+
+
+class Shooting:
+    """The period map of the explicit scheme ``scheme`` (a blade's ``dynamics.explicit.CentralDifference``) with n
+    steps per period.
+
+    Args:
+        scheme: the scheme (its model, GNL on or off, damping, mass); its step is replaced by T / n per omega.
+        casing: the casing (steady: the ovalisation complete, eq. 38 at t -> infinity), or None (no contact).
+        forcing: f(t, omega) -> (r,), the external force, or None.
+        m: the period in bump passings, m pi / Omega (1: the orbit with the casing's own period; 2: period doubled).
+        steps: n, the steps per period (the same along a branch, so that the map is smooth in omega); the step
+            T / n must stay below the scheme's linear stability limit (ValueError otherwise; a GNL orbit needs the
+            tangent's limit, ``dynamics.explicit.gnl_time_step``, which the caller takes into account).
+        jacobian_every: see ``march``.
+    """
+
+    def __init__(self, scheme, casing: Casing | None = None, forcing=None, m: int = 1, steps: int = 2000,
+                 jacobian_every: int = 1):
+        if getattr(scheme, "harmonic", None) is not None or getattr(scheme, "massless", False):
+            raise ValueError("shooting takes a blade's scheme (not a tuned disk's or the massless variant)")
+        if not (isinstance(m, (int, np.integer)) and m >= 1):
+            raise ValueError(f"m (the period in bump passings, m pi / Omega) must be an integer >= 1, got {m!r}")
+        if not (isinstance(steps, (int, np.integer)) and steps >= 2):
+            raise ValueError(f"steps (per period) must be an integer >= 2, got {steps!r}")
+        if not (isinstance(jacobian_every, (int, np.integer)) and jacobian_every >= 1):
+            raise ValueError(f"jacobian_every must be an integer >= 1, got {jacobian_every!r}")
+        if casing is None and forcing is None:
+            raise ValueError("shooting needs an excitation: a casing, a forcing or both")
+        self.scheme, self.casing, self.forcing, self.m, self.steps = scheme, casing, forcing, int(m), int(steps)
+        self.jacobian_every = int(jacobian_every)
+        self.r = scheme.r
+        self.n = self.r                       # the model's coordinates (for PeriodicSolution's users)
+        self._h = None
+        if casing is not None:
+            self.N, self.S, self.theta0, self.rows = contact_matrices(scheme.model.nodes, self.r, casing)
+
+    @property
+    def size(self) -> int:
+        return 2 * self.r
+
+    def split(self, x: np.ndarray):
+        """(Z (2, r): q_0 and q_-1, ()): a shooting orbit's unknowns."""
+        return np.asarray(x, float).reshape(2, self.r).copy(), ()
+
+    def scheme_at(self, omega: float):
+        """The scheme with the step T / n of the period 2 pi / omega; ValueError past its stability limit."""
+        h = 2 * np.pi / omega / self.steps
+        if h > self.scheme.h_crit:
+            raise ValueError(f"the step T / n = {h:.4g} s at omega = {omega:g} rad/s exceeds the scheme's stability "
+                             f"limit {self.scheme.h_crit:.4g} s: give more steps per period")
+        if self._h != h:
+            self._scheme, self._h = self.scheme.with_step(h), h
+            if self.casing is not None:
+                W = self._scheme.W
+                self.WN, self.WT = -(self.N @ W.T).T, -(self.S @ W.T).T
+                self.solver = ContactSolver(self.N @ self.WN, self.N @ self.WT)
+        return self._scheme
+
+    def speed(self, omega: float) -> float:
+        """Omega (rad/s) of the fundamental frequency omega: m omega / 2."""
+        return self.m * omega / 2
+
+    def march(self, z: np.ndarray, omega: float, tangent: bool = True, record: bool = False):
+        """One period from z = (q_0, q_-1): (z(T), monodromy (2 r, 2 r) or None, records (n + 1, r) of q or None).
+
+        The orbit is marched first (its states and each touching step's active set kept), then the tangent along
+        it. The GNL force's exact Jacobian is evaluated at every step (the exact derivative of the discrete map), or,
+        on an orbit that does not touch, every ``jacobian_every`` steps and interpolated linearly between (a
+        quadratic polynomial of the smooth q(t): an error O((k h)^2) in the tangent, which slows Newton a little
+        and moves the multipliers by as much; a contact correction rings the highest modes, whose periods are a
+        few steps, so an orbit that touches always gets the exact one)."""
+        sc = self.scheme_at(omega)
+        h, r, n = sc.h, self.r, self.steps
+        Q, Qp = np.array(z[:r], float), np.array(z[r:], float)
+        Xg = sc.Xg
+        force = sc.model.forces if sc.nonlinear else None
+        casing = self.casing
+        if casing is not None:
+            sense, Om, mu = casing.rotation_sense, self.speed(omega), casing.mu
+            B = self.WN + mu * self.WT
+        states = np.empty((n + 1, r))
+        states[0] = Q
+        touched = {}
+        for k in range(n):
+            Qn = sc.X1 @ Q + sc.X2 @ Qp
+            if self.forcing is not None:
+                Qn += sc.X0 @ np.asarray(self.forcing(k * h, omega), float)
+            if force is not None:
+                Qn += Xg.evaluate(Q[:, None])[:, 0] if Xg is not None else -sc.X0 @ force.evaluate(Q[:, None])[:, 0]
+            if casing is not None:
+                theta = self.theta0 + sense * Om * (k + 1) * h
+                g = casing.c0 - casing_profile(theta, casing.c0, casing.p0, casing.width) - self.N @ Qn
+                if (g < 0).any():
+                    lam, _ = self.solver.solve(mu, g)
+                    act = np.nonzero(lam > 0)[0]
+                    if act.size:
+                        Qn = Qn + B[:, act] @ lam[act]
+                        touched[k] = act
+            Qp, Q = Q, Qn
+            states[k + 1] = Q
+        zT = np.r_[Q, Qp]
+        if not tangent:
+            return zT, None, (states if record else None)
+        # the tangent: d q_n / d z and d q_n-1 / d z along the orbit
+        T, Tp = np.eye(2 * r)[:r].copy(), np.eye(2 * r)[r:].copy()
+        # an orbit that touches rings the highest modes (periods of a few steps): J at every step there
+        every = 1 if touched else self.jacobian_every
+        if force is not None:
+            knots = np.unique(np.r_[np.arange(0, n, every), n - 1])
+            Jk = {int(k): sc.X0 @ force.jacobian(states[k]) for k in knots}
+        for k in range(n):
+            A = sc.X1
+            if force is not None:
+                k0 = knots[np.searchsorted(knots, k, side="right") - 1]
+                if k0 == k or k0 == knots[-1]:
+                    XJ = Jk[int(k0)]
+                else:
+                    k1 = knots[np.searchsorted(knots, k, side="right")]
+                    s = (k - k0) / (k1 - k0)
+                    XJ = (1 - s) * Jk[int(k0)] + s * Jk[int(k1)]
+                A = A - XJ
+            Tn = A @ T + sc.X2 @ Tp
+            act = touched.get(k)
+            if act is not None:
+                D = (self.solver.DN + mu * self.solver.DT)[np.ix_(act, act)]
+                # lambda_A = D_AA^-1 (c - N_A q_pred): d q = (I - B_A D_AA^-1 N_A) d q_pred
+                Tn = Tn - B[:, act] @ np.linalg.solve(D, self.N[act] @ Tn)
+            Tp, T = T, Tn
+        return zT, np.vstack([T, Tp]), (states if record else None)
+
+    def orbit(self, solution) -> np.ndarray:
+        """q over the period of a shooting ``solution`` (a PeriodicSolution of this map): (n + 1, r), the states
+        at t = 0, h, ..., T."""
+        return self.march(solution.unknowns, solution.omega, tangent=False, record=True)[2]
+
+    def residual(self, x: np.ndarray, omega: float, jacobian: bool = True, domega: bool = True):
+        zT, mono, _ = self.march(x, omega, tangent=jacobian)
+        R = zT - x
+        if not jacobian:
+            return R
+        if not domega:
+            return R, mono - np.eye(self.size), None
+        d = 1e-7 * omega
+        dR = (self.march(x, omega + d, tangent=False)[0] - self.march(x, omega - d, tangent=False)[0]) / (2 * d)
+        return R, mono - np.eye(self.size), dR
+
+    def floquet_exponents(self, x: np.ndarray, omega: float, J: np.ndarray | None = None) -> np.ndarray:
+        """The 2 r exponents log(multiplier) / T of the discrete orbit (the monodromy's eigenvalues), by increasing
+        real part; a multiplier 0 (a plastic impact) is an exponent of real part -inf."""
+        if J is None:
+            J = self.residual(x, omega)[1]
+        mult = np.linalg.eigvals(J + np.eye(self.size))
+        with np.errstate(divide="ignore"):
+            lam = (np.log(np.abs(mult)) + 1j * np.angle(mult)) * omega / (2 * np.pi)
+        return lam[np.argsort(lam.real, kind="stable")]
