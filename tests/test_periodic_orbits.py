@@ -210,6 +210,40 @@ def test_shooting_orbit_is_the_schemes_attractor(linear_contact):
     assert abs(rate / abs(mu[k]) - 1) < 0.02
 
 
+def test_unstable_rubbing_orbit_departs_at_its_multiplier(linear_contact):
+    """(d) of #72, unstable side: continued by arc length from 0.9 of the 1B/EO4 speed, the rubbing branch of the
+    ci blade loses stability through a complex pair of multipliers (Neimark-Sacker: the response becomes
+    modulated, not periodic with the rotor); on the first orbit with |mu| > 1.02, a 1e-9 perturbation along that
+    Floquet mode grows in ``simulate`` by |mu| per period, its amplitude measured in the pair's invariant plane (to
+    1e-3 over 30 periods, before it is large enough to change a contact set)."""
+    from rotor37_rom.dynamics.explicit import simulate
+    from rotor37_rom.periodic import continue_branch
+
+    shooting, sol = linear_contact
+    branch = continue_branch(shooting, sol, 1.15 / 0.9 * sol.omega, step=0.05, tol=1e-9, max_points=30)
+    unstable = [p for p in branch.points if np.abs(p.multipliers).max() > 1.02]
+    assert unstable and any(kind == "Neimark-Sacker" for _, kind, _ in branch.bifurcations)
+    orbit = unstable[0]
+    mu, V = np.linalg.eig(shooting.march(orbit.unknowns, orbit.omega)[1])
+    k = np.argmax(np.abs(mu))
+    plane = np.column_stack([V[:, k].real, V[:, k].imag])            # the pair's invariant plane
+    z = orbit.unknowns
+    dz = 1e-9 * np.abs(z).max() * plane[:, 0] / np.abs(plane[:, 0]).max()
+    q0, qm = orbit.X
+    n, periods = shooting.steps, 30
+    run = simulate(shooting.scheme_at(orbit.omega), shooting.speed(orbit.omega), casing=shooting.casing,
+                   n_steps=periods * n, initial=(q0 + dz[:q0.size], qm + dz[q0.size:]), duration=1e-12,
+                   record_q=True)
+    Q = run.records_q[0]                                              # every step: q at k n and k n - 1
+    dev = np.vstack([Q[:, n::n] - q0[:, None], Q[:, n - 1::n][:, :periods] - qm[:, None]])
+    # the perturbation's coordinates (a, b) in the plane: dz_k = Re(c mu^k v), |c mu^k| = |(a, -b)| grows by |mu|
+    amp = np.linalg.norm(np.linalg.lstsq(plane, dev, rcond=None)[0], axis=0)
+    rate = np.exp(np.polyfit(np.arange(1, periods + 1), np.log(amp), 1)[0])
+    print(f"unstable rubbing orbit at Omega = {shooting.speed(orbit.omega):.1f} rad/s: |mu| = {abs(mu[k]):.5f} "
+          f"(arg {np.angle(mu[k]):+.3f}); the perturbation grows by {rate:.5f} per period")
+    assert abs(rate / abs(mu[k]) - 1) < 1e-3
+
+
 def test_shooting_equals_harmonic_balance(ci_rom):
     """(e) of #72: on the ci blade's GNL model (exact tensors) forced by 20 N at LE at 0.98 of its 1B frequency, the
     periodic orbit of the explicit scheme (0.9 of its stability limit, ~3,100 steps a period) found by shooting
