@@ -168,6 +168,23 @@ def test_contact_map_config_names_the_option(fields, flag):
         contact_map.ContactMapConfig.from_options(**fields)
 
 
+def test_a_saved_disks_sector_range_is_its_own():
+    """A saved model's N is known once it is read: --sector 20 passes the check made before (36 at most) and is
+    refused, in one line naming the range, by a 12-sector disk's model."""
+    import types
+
+    from rotor37_rom.model.nodes import NodeMap
+
+    n = 12
+    nodes = NodeMap(names=("LE", "TE") * n, sector=np.repeat(np.arange(n), 2), coordinates=np.zeros((2 * n, 3)),
+                    q_index=np.arange(6 * n).reshape(-1, 3), sector_angle=2 * np.pi / n)
+    config = contact_map.ContactMapConfig.from_options(disk=True, sector=20)
+    with pytest.raises(ValueError, match=r"^--sector must be in \[0, 11\] \(the sectors of the model read\), got 20$"):
+        config.sweep_spec(types.SimpleNamespace(nodes=nodes))
+    assert contact_map.ContactMapConfig.from_options(disk=True, sector=11).sweep_spec(
+        types.SimpleNamespace(nodes=nodes)).monitor[-1] == nodes.row("TE", 11)
+
+
 @pytest.mark.parametrize("args, flag", [
     (["--preset", "huge"], "--preset"), (["--model", "{text}"], "--model"), (["--revolutions", "-1"], "--revolutions"),
     (["--speeds", "1600", "1200", "5"], "--speeds"), (["--mu", "-0.1"], "--mu")])

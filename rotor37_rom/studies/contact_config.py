@@ -153,7 +153,7 @@ class MapModel:
     @property
     def n_sectors(self) -> int:
         """The sectors of the disk built (a user's N, rotor 37's 36), or of a saved model that may be a disk (36 at
-        most checked before it is read); 1 for a blade."""
+        most checked before it is read, its own N after: ``sweep_spec``); 1 for a blade."""
         if self.mesh is not None and self.mesh.cyclic is not None:
             return self.mesh.n_sectors
         return N_SECTORS if self.disk or self.path is not None else 1
@@ -532,7 +532,10 @@ class ContactMapConfig:
         """The contact scenario each speed runs (``sweep``); a disk records node LE of every sector and TE of
         ``sector``."""
         monitor = None
-        if model.nodes.n_sectors > 1:
+        n = model.nodes.n_sectors
+        if n > 1 and not 0 <= self.sector < n:           # a saved model's N is known once it is read
+            raise ValueError(f"--sector must be in [0, {n - 1}] (the sectors of the model read), got {self.sector}")
+        if n > 1:
             try:
                 rows = [model.nodes.row("LE", s) for s in range(model.nodes.n_sectors)]
                 rows += [model.nodes.row("TE", self.sector)] if "TE" in model.nodes.names else []
