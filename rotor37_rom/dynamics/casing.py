@@ -199,7 +199,8 @@ class ContactSolver:
         self.DN, self.DT, self.max_iter, self.max_kept = DN, DT, max_iter, max_kept
         self._inverses: dict = {}
 
-    def _inverse(self, mu: float, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def inverse(self, mu: float, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(A, D_AA^-1) of the active set ``active`` (a mask over the nodes), kept for the next call."""
         key = (float(mu), active.tobytes())
         if key not in self._inverses:
             if len(self._inverses) >= self.max_kept:          # a disk meets many sets as blades pass the bumps
@@ -219,7 +220,7 @@ class ContactSolver:
         for _ in range(self.max_iter):
             lam[:] = 0.0
             if active.any():
-                A, inv = self._inverse(mu, active)
+                A, inv = self.inverse(mu, active)
                 lam_A = inv @ g[A]
                 if (lam_A < 0).any():
                     active[A[np.argmin(lam_A)]] = False

@@ -112,11 +112,6 @@ class ContactBalance:
             out.append(np.full(L.size, max(np.linalg.norm(L), float(law.limit.max()))))
         return np.concatenate(out)
 
-    def multipliers(self, x: np.ndarray, n_samples: int = 256) -> list:
-        """Each law's multipliers on ``n_samples`` instants of the period, (n_c, n_samples)."""
-        E = Harmonics(self.basis.H, n_samples).synthesis
-        return [(E @ L).T for L in self.split(x)[1]]
-
     def _laws(self, x: np.ndarray, omega: float):
         """Per law: (its block's bounds, phi, d phi / d lambda, d phi / d v) at the collocation instants."""
         X, Ls = self.split(x)

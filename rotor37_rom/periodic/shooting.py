@@ -54,7 +54,6 @@ class Shooting:
         self.scheme, self.casing, self.forcing, self.m, self.steps = scheme, casing, forcing, int(m), int(steps)
         self.jacobian_every = int(jacobian_every)
         self.r = scheme.r
-        self.n = self.r                       # the model's coordinates (for PeriodicSolution's users)
         self._h = None
         if casing is not None:
             self.N, self.S, self.theta0, self.rows = contact_matrices(scheme.model.nodes, self.r, casing)
@@ -117,10 +116,10 @@ class Shooting:
                 g = casing.c0 - casing_profile(theta, casing.c0, casing.p0, casing.width) - self.N @ Qn
                 if (g < 0).any():
                     lam, _ = self.solver.solve(mu, g)
-                    act = np.nonzero(lam > 0)[0]
-                    if act.size:
+                    if (lam > 0).any():
+                        act, inv = self.solver.inverse(mu, lam > 0)        # D_AA^-1, kept by the solver
                         Qn = Qn + B[:, act] @ lam[act]
-                        touched[k] = act
+                        touched[k] = act, inv
             Qp, Q = Q, Qn
             states[k + 1] = Q
         zT = np.r_[Q, Qp]
@@ -130,26 +129,20 @@ class Shooting:
         T, Tp = np.eye(2 * r)[:r].copy(), np.eye(2 * r)[r:].copy()
         # an orbit that touches rings the highest modes (periods of a few steps): J at every step there
         every = 1 if touched else self.jacobian_every
-        if force is not None:
-            knots = np.unique(np.r_[np.arange(0, n, every), n - 1])
-            Jk = {int(k): sc.X0 @ force.jacobian(states[k]) for k in knots}
+        if force is not None:                     # J at k = 0, every, 2 every, ... and n - 1, linear between
+            Jk = {k: sc.X0 @ force.jacobian(states[k]) for k in sorted({*range(0, n, every), n - 1})}
         for k in range(n):
             A = sc.X1
             if force is not None:
-                k0 = knots[np.searchsorted(knots, k, side="right") - 1]
-                if k0 == k or k0 == knots[-1]:
-                    XJ = Jk[int(k0)]
-                else:
-                    k1 = knots[np.searchsorted(knots, k, side="right")]
-                    s = (k - k0) / (k1 - k0)
-                    XJ = (1 - s) * Jk[int(k0)] + s * Jk[int(k1)]
-                A = A - XJ
+                k0 = k - k % every
+                k1 = min(k0 + every, n - 1)
+                s = (k - k0) / (k1 - k0) if k1 > k0 else 0.0
+                A = A - (Jk[k0] if s == 0.0 else (1 - s) * Jk[k0] + s * Jk[k1])
             Tn = A @ T + sc.X2 @ Tp
-            act = touched.get(k)
-            if act is not None:
-                D = (self.solver.DN + mu * self.solver.DT)[np.ix_(act, act)]
+            if k in touched:
+                act, inv = touched[k]
                 # lambda_A = D_AA^-1 (c - N_A q_pred): d q = (I - B_A D_AA^-1 N_A) d q_pred
-                Tn = Tn - B[:, act] @ np.linalg.solve(D, self.N[act] @ Tn)
+                Tn = Tn - B[:, act] @ (inv @ (self.N[act] @ Tn))
             Tp, T = T, Tn
         return zT, np.vstack([T, Tp]), (states if record else None)
 
@@ -173,7 +166,7 @@ class Shooting:
         """The 2 r exponents log(multiplier) / T of the discrete orbit (the monodromy's eigenvalues), by increasing
         real part; a multiplier 0 (a plastic impact) is an exponent of real part -inf."""
         if J is None:
-            J = self.residual(x, omega)[1]
+            J = self.residual(x, omega, domega=False)[1]
         mult = np.linalg.eigvals(J + np.eye(self.size))
         with np.errstate(divide="ignore"):
             lam = (np.log(np.abs(mult)) + 1j * np.angle(mult)) * omega / (2 * np.pi)
