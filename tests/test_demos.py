@@ -147,7 +147,8 @@ def test_contact_map_config_composes_the_library_objects(tmp_path):
 
 
 @pytest.mark.parametrize("fields, flag", [
-    ({"preset": "huge"}, "--preset"), ({"speeds": (1400, 1450, 2.5)}, "--speeds"), ({"revolutions": 0}, "--revolutions"),
+    ({"preset": "huge"}, "--preset"), ({"speeds": (1400, 1450, 2.5)}, "--speeds"),
+    ({"revolutions": 0}, "--revolutions"),
     ({"gnl": "maybe"}, "--gnl"), ({"c0": 0}, "--c0"), ({"hb": -1e-3}, "--hb"), ({"direction": "z"}, "--direction"),
     ({"safety": 1.5}, "--safety"), ({"h": -1e-7}, "--h"), ({"batch": 0}, "--batch"), ({"r_c": 0}, "--r-c"),
     ({"continuation": -5}, "--continuation"), ({"precision": "half"}, "--precision"),
@@ -162,7 +163,8 @@ def test_contact_map_config_composes_the_library_objects(tmp_path):
     ({"cubature": 1e-4, "cubature_speeds": (1300.0, float("inf"))}, "--cubature-speeds"),
     ({"capped_training": True, "frequency_cap": 120.0}, "--capped-training"),
     ({"capped_training": True, "cubature": 1e-4}, "--capped-training"),
-    ({"capped_training": True, "tolerance": 0.05}, "--capped-training")])
+    ({"capped_training": True, "tolerance": 0.05}, "--capped-training"),
+    ({"periodic": -0.1}, "--periodic"), ({"periodic": 0.05, "disk": True}, "--periodic")])
 def test_contact_map_config_names_the_option(fields, flag):
     with pytest.raises(ValueError, match=f"^{flag}[ :]"):
         contact_map.ContactMapConfig.from_options(**fields)

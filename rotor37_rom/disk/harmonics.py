@@ -144,6 +144,18 @@ def sector_harmonics(V: np.ndarray, blocks: np.ndarray) -> np.ndarray:
     return _dominant_harmonic(V[blocks.ravel()].reshape(blocks.shape[0], blocks.shape[1], -1))
 
 
+def disk_blocks(model, what: str):
+    """(model.sectors, N, r_s) of a disk model whose sector blocks come first in q, in order; ValueError starting with
+    ``what`` (e.g. "harmonic coordinates need") for a blade's model or other blocks."""
+    basis = getattr(model, "sectors", None)
+    if basis is None:
+        raise ValueError(f"{what} a disk model (model.sectors is None: a single blade's model)")
+    N, rs = basis.blocks.shape
+    if not np.array_equal(basis.blocks.ravel(), np.arange(N * rs)):
+        raise ValueError(f"{what} the sector blocks first in q, in order")
+    return basis, N, rs
+
+
 def harmonic_coordinates(model, tol: float = 1e-8) -> tuple[scipy.sparse.csr_matrix, np.ndarray, np.ndarray,
                                                           np.ndarray]:
     """(T (r, r), k (r,), K~, M~): a tuned disk model's harmonic coordinates q~ = T q, the harmonic index 0 ... N/2 of
@@ -151,12 +163,7 @@ def harmonic_coordinates(model, tol: float = 1e-8) -> tuple[scipy.sparse.csr_mat
     (``real_dft``) of the sector blocks, the interface coordinates unchanged (each column of Pi is one harmonic
     exactly: its DFT over the sectors). ValueError for a blade's model, for sector blocks not first in q, and for a
     mistuned disk (its K or M couple the harmonics by more than ``tol`` of their norm)."""
-    basis = getattr(model, "sectors", None)
-    if basis is None:
-        raise ValueError("harmonic coordinates need a disk model (model.sectors is None: a single blade's model)")
-    N, rs = basis.blocks.shape
-    if not np.array_equal(basis.blocks.ravel(), np.arange(N * rs)):
-        raise ValueError("harmonic coordinates need the sector blocks first in q, in order")
+    basis, N, rs = disk_blocks(model, "harmonic coordinates need")
     nL = basis.Psi_L.shape[1]
     k_pi = _dominant_harmonic(basis.Pi.reshape(N, nL, -1))
     dft_k = np.array([0] + [k for k in range(1, (N + 1) // 2) for _ in (0, 1)] + ([N // 2] if N % 2 == 0 else []))

@@ -30,7 +30,8 @@ import numpy as np
 import scipy.linalg
 
 __all__ = ["Harmonics", "HarmonicBalance", "PeriodicSolution", "Branch", "continue_branch", "solve_periodic",
-           "model_force", "time_state", "backbone", "bifurcation_kind"]
+           "model_force", "time_state", "backbone", "bifurcation_kind", "hill_eigenvalues",
+           "hill_exponents"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -189,13 +190,70 @@ class HarmonicBalance:
         I = np.eye(self.basis.size)
         D1 = np.kron(I, self.C) + 2 * omega * np.kron(self._D, self.M)
         D2 = np.kron(I, self.M)
-        N = self.size
-        A = np.block([[np.zeros((N, N)), np.eye(N)], [-J, -D1]])
-        B = np.block([[np.eye(N), np.zeros((N, N))], [np.zeros((N, N)), D2]])
-        lam = scipy.linalg.eigvals(A, B)
-        lam = lam[np.isfinite(lam)]
-        central = lam[np.argsort(np.abs(lam.imag), kind="stable")[:2 * self.n]]
+        lam, centre = hill_eigenvalues(J, D1, D2, lambda P: _harmonic_energy(P, self.basis.size, self.n),
+                                       stiffness=self._lin[0])
+        central = lam[hill_exponents(lam, centre, omega, self.basis.H)]
         return central[np.argsort(central.real, kind="stable")]
+
+
+def _harmonic_energy(P: np.ndarray, k: int, n: int) -> np.ndarray:
+    """(2 H + 1, m): the energy of each complex harmonic -H .. H of perturbations whose real coefficients (k n, m)
+    are coefficient-major blocks [p_0, p_a1, p_b1, ...] (p_a cos + p_b sin = ((p_a - i p_b) e^(i h tau) + (p_a +
+    i p_b) e^(-i h tau)) / 2)."""
+    P = P.reshape(k, n, -1)
+    H = (k - 1) // 2
+    out = np.empty((k, P.shape[2]))
+    out[H] = (np.abs(P[0]) ** 2).sum(axis=0)
+    for h in range(1, H + 1):
+        a, b = P[2 * h - 1], P[2 * h]
+        out[H + h] = (np.abs(a - 1j * b) ** 2).sum(axis=0) / 4
+        out[H - h] = (np.abs(a + 1j * b) ** 2).sum(axis=0) / 4
+    return out
+
+
+def hill_eigenvalues(J: np.ndarray, D1: np.ndarray, D2: np.ndarray, energy: Callable,
+                     stiffness: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(lambda, centre): the eigenvalues of Hill's quadratic problem (J + lambda D1 + lambda^2 D2) p = 0, and the
+    barycentre over the harmonics -H .. H of each eigenvector's energy (``energy(P)`` -> (2 H + 1, m) for the
+    eigenvectors' columns P). Each exponent appears 2 H + 1 times, shifted by i m omega with its eigenvector's
+    harmonics shifted by -m; ``hill_exponents`` keeps one copy of each. Picking by the smallest imaginary part
+    alone fails on a stiff model: a mode far above H omega is never the nearest the real axis, while shifted copies
+    of low modes are; there the copy to keep is the one whose eigenvector is centred on the constant harmonic
+    (Lazarus & Thomas, C. R. Mecanique 338 (2010) 510-517, choose by the eigenvectors likewise).
+
+    The problem is solved in the coordinates of ``stiffness`` and D2 (symmetric, D2 positive definite: p = Phi u,
+    Phi^T D2 Phi = I, Phi^T stiffness Phi = diag(w^2)) on the state [w u, lambda u]: its matrix's norm is then the
+    highest frequency w, not w^2 as in the plain first-order form [p, lambda p], whose round-off (eps w_max^2 on a
+    reduced model whose stiffest coordinate sits 1,000 times above its first mode) swamps the real parts of the low
+    exponents, the damping that decides stability. Without ``stiffness`` D2 alone is made the identity."""
+    n = J.shape[0]
+    if stiffness is None:
+        Phi, w = np.linalg.inv(np.linalg.cholesky(D2)).T, np.ones(n)
+    else:
+        w2, Phi = scipy.linalg.eigh(stiffness, D2)
+        w = np.sqrt(np.abs(w2))
+        w = np.maximum(w, 1e-8 * max(w.max(), 1e-300))
+    Jt, D1t = Phi.T @ J @ Phi, Phi.T @ D1 @ Phi
+    A = np.block([[np.zeros((n, n)), np.diag(w)], [-Jt / w[None, :], -D1t]])
+    lam, Y = scipy.linalg.eig(A)
+    keep = np.isfinite(lam)
+    lam, P = lam[keep], Phi @ (Y[:n, keep] / w[:, None])
+    e = energy(P)
+    H = (e.shape[0] - 1) // 2
+    centre = (np.arange(-H, H + 1)[:, None] * e).sum(axis=0) / np.maximum(e.sum(axis=0), 1e-300)
+    return lam, centre
+
+
+def hill_exponents(lam: np.ndarray, centre: np.ndarray, omega: float, H: int) -> np.ndarray:
+    """The indices of Hill's eigenvalues ``lam`` that are the Floquet exponents, one copy of each: those with
+    |Im| <= omega / 2 (each exponent whose copies reach that band has one copy there, as in the usual choice by the
+    smallest imaginary part, robust where an eigenvector spreads over the harmonics near a resonance), and, above
+    the band the balance resolves (|Im| > (H + 1/2) omega: a mode too stiff for any copy to reach omega / 2), those
+    whose eigenvector is centred on the constant harmonic (``hill_eigenvalues``'s centre within 1/2). On a linear
+    system this is every eigenvalue exactly once, modulo i omega."""
+    band = np.abs(lam.imag) <= 0.5 * omega * (1 + 1e-9)
+    stiff = (np.abs(lam.imag) > (H + 0.5) * omega) & (np.abs(centre) < 0.5)
+    return np.flatnonzero(band | stiff)
 
 
 def _stable(exponents: np.ndarray | None, omega: float) -> bool | None:

@@ -168,6 +168,6 @@ class Shooting:
         if J is None:
             J = self.residual(x, omega, domega=False)[1]
         mult = np.linalg.eigvals(J + np.eye(self.size))
-        with np.errstate(divide="ignore"):
-            lam = (np.log(np.abs(mult)) + 1j * np.angle(mult)) * omega / (2 * np.pi)
+        with np.errstate(divide="ignore"):          # real and imaginary parts apart: -inf + i 0, not nan
+            lam = np.log(np.abs(mult)) * (omega / (2 * np.pi)) + 1j * (np.angle(mult) * omega / (2 * np.pi))
         return lam[np.argsort(lam.real, kind="stable")]

@@ -268,12 +268,16 @@ class MapContinuation:
         steady_window: a continued run is steady when its max over the last N revolutions and the N before agree.
         unsteady_step: the continuation's point when no halving is steady: 'smallest' (the paper read literally:
             the step stays divided) or 'full' (the full step, marked not steady).
+        periodic: relative arc-length step of the periodic orbits' continuation over the same range (option
+            ``periodic``; ``studies.periodic_map``: the map's scheme and casing by shooting, with their stability);
+            0: none. A blade's model only.
     """
 
     step: float = 0.0
     range: tuple[float, float] | None = None
     steady_window: int = 1
     unsteady_step: str = "smallest"
+    periodic: float = 0.0
 
     def __post_init__(self):
         real_number("--continuation (the speed step, rad/s; 0: none)", self.step, 0, MAX_SPEED)
@@ -285,7 +289,10 @@ class MapContinuation:
         _whole("steady_window", self.steady_window, 1)
         if self.unsteady_step not in ("smallest", "full"):
             raise ValueError(f"--unsteady-step must be 'smallest' or 'full', got {self.unsteady_step!r}")
+        real_number("--periodic (the relative arc-length step of the periodic orbits; 0: none)", self.periodic, 0,
+                    0.5)
         object.__setattr__(self, "step", float(self.step))
+        object.__setattr__(self, "periodic", float(self.periodic))
         if self.range is not None:
             object.__setattr__(self, "range", tuple(float(w) for w in self.range))
 
@@ -302,6 +309,7 @@ OPTIONS = {
     "direction": ("sweep.casing", "direction"), "rotation_sense": ("sweep.casing", "rotation_sense"),
     "continuation": ("continuation", "step"), "continuation_range": ("continuation", "range"),
     "steady_window": ("continuation", "steady_window"), "unsteady_step": ("continuation", "unsteady_step"),
+    "periodic": ("continuation", "periodic"),
     **{name: ("", name) for name in ("speeds", "gnl", "sector", "stress", "tolerance", "out", "cache", "quiet")},
 }
 
@@ -422,6 +430,9 @@ class ContactMapConfig:
         if self.stress and not (self.rom.disk or self.rom.path is not None):
             raise ValueError("--stress is the disk's (--disk or a disk --model); the blade's stress at t_max is "
                              "demos/report.py's")
+        if self.continuation.periodic > 0 and self.rom.disk:
+            raise ValueError("--periodic: periodic orbits by shooting take a blade (not --disk; a tuned disk's "
+                             "travelling wave is periodic.TravellingWaveBalance)")
         half = continued_revolutions(self.sweep.revolutions) / 2
         if not self.continuation.steady_window <= half:
             raise ValueError(f"--steady-window must be in 1..{int(half)} revolutions (half of a continued run), got "
@@ -646,6 +657,11 @@ def build_parser() -> ArgumentParser:
                         help="the continuation's point where no halved step is steady: smallest (the paper read "
                              "literally, the default: the step stays divided) or full (the full step, marked not "
                              "steady: 8 times fewer points across an unsteady stretch)")
+    parser.add_argument("--periodic", type=float, metavar="STEP",
+                        help="also the periodic orbits of the map's scheme and casing over the continuation's range "
+                             "(its --continuation-range, else the map's speeds), continued by arc length with this "
+                             "relative step (e.g. 0.05; 0: none, the default), with their Floquet multipliers: "
+                             "stable and unstable branches, folds, Neimark-Sacker points; a blade only")
     parser.add_argument("--out", type=Path, help="output folder (default results/contact_map)")
     parser.add_argument("--cache", type=Path, help="folder of the model, cubature and probe caches (default "
                                                    "OUT/cache; another map's to share its cubature)")

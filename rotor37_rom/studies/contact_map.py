@@ -34,10 +34,11 @@ from rotor37_rom.studies.contact_config import (GNL_SETTINGS, N_SECTORS, PRECISI
     MapModel, MapScheme, build_parser, continued_revolutions, map_model, parse_options)
 from rotor37_rom.studies.contact_scheme import (capped_gnl_step, capped_probe, capped_probe_states, cubature_model,
     print_step_outliers, setting_names, time_scheme)
+from rotor37_rom.studies.periodic_map import PeriodicBranch, periodic_branch
 from rotor37_rom.studies.sweep import (ContinuationPoint, InteractionMap, compute_seconds, continuation,
     interaction_map, idle_barrier, load_speed, load_sweep, record_row, rerun_diverged, run_sweep, sector_maxima,
     sweep_folder)
-from rotor37_rom.viz.charts import plot_interaction_map, plot_nfrc, plot_time_history
+from rotor37_rom.viz.charts import plot_interaction_map, plot_nfrc, plot_periodic_nfrc, plot_time_history
 
 if TYPE_CHECKING:
     from mpi4py import MPI
@@ -47,7 +48,8 @@ __all__ = ["run_contact_map", "ContactMapResult", "MapResult", "Branch", "reduce
            "disk_stress_of", "disk_peak_stress", "merge_earlier_runs", "write_summary", "world_comm", "PAPER",
            "ContactMapConfig", "MapModel", "MapScheme", "MapContinuation", "build_parser", "parse_options", "map_model",
            "continued_revolutions", "GNL_SETTINGS", "PRECISIONS", "N_SECTORS", "time_scheme", "setting_names",
-           "cubature_model", "capped_probe", "capped_gnl_step", "capped_probe_states", "print_step_outliers"]
+           "cubature_model", "capped_probe", "capped_gnl_step", "capped_probe_states", "print_step_outliers",
+           "PeriodicBranch"]
 
 PAPER = {"linear 1B/EO4": 1317.0, "zero IC, no GNL": 1446.0, "zero IC, GNL": 1535.0,
          "continuation, no GNL": 1520.0, "continuation, GNL": 1551.0}
@@ -80,6 +82,8 @@ class MapResult:
         retried: {speed (rad/s): step of its last retry (s)} for the speeds run again after a blow-up.
         wall_s: wall time of the sweep and its retries (s).
         branches: {'up' | 'down': Branch}, empty without a continuation.
+        periodic: the periodic orbits over the continuation's range (``studies.periodic_map``), None without
+            --periodic.
     """
 
     label: str
@@ -91,6 +95,7 @@ class MapResult:
     retried: dict[float, float]
     wall_s: float
     branches: dict[str, Branch]
+    periodic: PeriodicBranch | None = None
 
     @property
     def speeds(self) -> np.ndarray:
@@ -298,6 +303,10 @@ def chart_map(config: ContactMapConfig, result: MapResult, records: list[dict], 
                                            "+" if name == "up" else "o") for name, b in result.branches.items()}
         curves["zero IC"] = (imap.speeds, imap.nfrc, "--")
         files.append(plot_nfrc(curves, out / f"nfrc_continuation_{result.tag}.png", lin_res, PAPER))
+    if result.periodic is not None:
+        files.append(plot_periodic_nfrc(result.periodic, out / f"nfrc_periodic_{result.tag}.png",
+                                        (imap.speeds, imap.nfrc, f"from rest, {config.sweep.revolutions:g} rev."),
+                                        lin_res, f"{result.label}: periodic orbits (shooting) and the map"))
     return files
 
 
@@ -328,6 +337,8 @@ def summary_entry(config: ContactMapConfig, scheme: CentralDifference, result: M
         per_sector = [sector_maxima(r) for r in records]
         entry["largest_over_sectors"] = [float(np.nanmax(a)) if np.isfinite(a).any() else None for a in per_sector]
         entry["largest_sector"] = [int(np.nanargmax(a)) if np.isfinite(a).any() else None for a in per_sector]
+    if result.periodic is not None:
+        entry["periodic"] = result.periodic.summary()
     for name, branch in result.branches.items():
         entry[f"continuation_{name}_peak"] = branch.peak.omega
         entry[f"continuation_{name}"] = [(p.omega, p.amplitude, p.steady, p.halvings, p.period)
@@ -439,6 +450,8 @@ def print_map(result: MapResult, linear_resonance: float) -> None:
         print(f"         continuation {name} (h = {branch.h:.3g} s, {branch.wall_s:.0f} s): largest response at "
               f"{best.omega:.0f} rad/s ({best.amplitude * 1e3:.3f} mm); {len(branch.points)} speeds, not steady at "
               f"{', '.join(unsteady) or 'none'}")
+    if result.periodic is not None:
+        print(f"         {result.periodic.describe()}")
 
 
 def merge_earlier_runs(summary: dict, previous: Path) -> None:
@@ -520,8 +533,9 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
         branches = continuation_branches(setting, scheme, retried, tag, comm)
         if rank != 0:
             continue
+        periodic = periodic_branch(setting, scheme) if setting.continuation.periodic > 0 else None
         runs[label] = result = MapResult(label, tag, folder, interaction_map(records, config.node), scheme.h,
-                                         scheme.h_crit, retried, wall, branches)
+                                         scheme.h_crit, retried, wall, branches, periodic)
         files += chart_map(setting, result, records, omega, model.r, summary["linear_resonance"])
         summary["runs"][label] = summary_entry(setting, scheme, result, records)
         if config.tolerance is not None:

@@ -8,7 +8,6 @@ of the states a GNL run reaches (the cubature's training runs, or a short probe:
 """
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import importlib
 import json
@@ -147,8 +146,8 @@ def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: Re
 
 
 def print_step_outliers(step: dict, dropped: bool = False) -> None:
-    """A line when a few states set the GNL step far below the others' (``dynamics.explicit.step_outliers``), and whether
-    the step was taken without them (--step-outliers drop)."""
+    """A line when a few states set the GNL step far below the others' (``dynamics.explicit.step_outliers``), and
+    whether the step was taken without them (--step-outliers drop)."""
     out = step["outliers"]
     if out.size and step["h_without_outliers"] > step["h"]:
         w = step["w_states"]

@@ -127,6 +127,43 @@ def plot_nfrc(curves: dict, path: str | Path, linear_resonance: float | None = N
     return _save(fig, path)
 
 
+def plot_periodic_nfrc(branch, path: str | Path, map_curve: tuple | None = None,
+                       linear_resonance: float | None = None, title: str = "") -> Path:
+    """The periodic orbits' NFRC over the map's (#72): node LE's amplitude against the speed, stable orbits solid,
+    unstable dashed, the stability changes marked by kind (fold, period doubling, Neimark-Sacker); below, the
+    largest Floquet multiplier's modulus. ``branch``: a ``studies.periodic_map.PeriodicBranch``; ``map_curve``:
+    (speeds, amplitudes (m), label) of the map's runs from rest."""
+    plt = _pyplot()
+    fig, (ax, bx) = plt.subplots(2, 1, figsize=(7.5, 6.0), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
+    if map_curve is not None:
+        speeds, amp, label = map_curve
+        ax.plot(speeds, np.asarray(amp, float) * 1e3, "o", ms=3.5, color="0.55", label=label)
+    w, a, stable = branch.speeds, branch.amplitude * 1e3, np.asarray(branch.stable, bool)
+    for k in range(len(w) - 1):                   # each segment as its end points say: both stable -> solid
+        solid = stable[k] and stable[k + 1]
+        ax.plot(w[k:k + 2], a[k:k + 2], "-" if solid else "--", color="C0", lw=1.6 if solid else 1.1)
+    ax.plot([], [], "-", color="C0", label="periodic orbits, stable")
+    ax.plot([], [], "--", color="C0", label="periodic orbits, unstable")
+    markers = {"fold": ("^", "C3"), "period doubling": ("s", "C2"), "Neimark-Sacker": ("D", "C1")}
+    for kind, (m, c) in markers.items():
+        at = [b["index"] for b in branch.bifurcations if b["kind"] == kind]
+        if at:
+            ax.plot(w[at], a[at], m, color=c, ms=6, label=kind)
+            bx.plot(w[at], np.asarray(branch.multiplier)[at], m, color=c, ms=5)
+    if linear_resonance is not None:
+        ax.axvline(linear_resonance, color="k", ls=":", lw=0.8, label=f"linear 1B/EO4 {linear_resonance:.0f} rad/s")
+    ax.set_ylabel("max |u_LE,n| (mm)")
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    bx.plot(w, branch.multiplier, ".-", color="C0", ms=3, lw=0.8)
+    bx.axhline(1.0, color="k", lw=0.8)
+    bx.set_ylabel("largest |multiplier|")
+    bx.set_xlabel("angular speed Omega (rad/s)")
+    bx.grid(alpha=0.3)
+    return _save(fig, path)
+
+
 def plot_time_history(t: np.ndarray, series: dict, path: str | Path, title: str = "",
                       ylabel: str = "radial displacement (mm)") -> Path:
     """Displacement histories (mm) vs time (ms). series: {label: values (m)}."""
