@@ -210,6 +210,28 @@ def test_bad_input():
         solve_periodic(duffing(3), np.full(7, 3.0), 1.05, max_iter=2)
 
 
+def test_newton_stops_at_the_round_off_floor():
+    """A tolerance no update can meet (0) ends a smooth balance's Newton at its round-off floor (the residual no
+    longer falls, the update below 1e-6) on the orbit a met tolerance gives, to round-off; a balance that does not
+    declare itself smooth (friction: a stagnating semismooth Newton may be a contact set that cycles) still says it
+    did not converge."""
+    hb = duffing(5)
+    met = solve_periodic(hb, np.zeros(hb.size), 1.02, tol=1e-12)
+    floor = solve_periodic(hb, np.zeros(hb.size), 1.02, tol=0.0)
+    assert floor.iterations > met.iterations
+    assert np.abs(floor.X - met.X).max() <= 1e3 * np.finfo(float).eps * np.abs(met.X).max()
+
+    class NotSmooth:                                  # the same balance, not declared smooth
+        def __init__(self, inner):
+            self.inner, self.basis, self.n, self.size = inner, inner.basis, inner.n, inner.size
+
+        def residual(self, *args, **kwargs):
+            return self.inner.residual(*args, **kwargs)
+
+    with pytest.raises(ValueError, match="did not converge in 30 iterations"):
+        solve_periodic(NotSmooth(hb), np.zeros(hb.size), 1.02, tol=0.0, stability=False)
+
+
 def test_the_reduced_blades_orbit_is_the_explicit_schemes(ci_rom):
     """Harmonic balance on the ci blade's r = 45 model with its exact cubic tensors (AFT; no contact), forced by
     20 N along e_x at node LE at 0.98 of its 1B frequency: started on the H-harmonic orbit, the project's own

@@ -147,6 +147,8 @@ class HarmonicBalance:
         basis: the Harmonics.
     """
 
+    smooth = True              # a smooth residual: Newton may stop at its round-off floor (``_at_floor``)
+
     def __init__(self, M, C, K, force: Callable | None, excitation: np.ndarray, basis: Harmonics):
         self.M, self.C, self.K = (np.asarray(A, float) for A in (M, C, K))
         self.n = self.K.shape[0]
@@ -278,13 +280,24 @@ def _split(hb, x):
     return x.reshape(hb.basis.size, hb.n).copy(), ()
 
 
+def _at_floor(hb, norms: list, step: float, size: float) -> bool:
+    """Whether Newton on a smooth balance (``hb.smooth``) has reached the round-off floor: after 3 iterations an
+    update below 1e-6 of the unknowns while the residual no longer falls (not below half the least of the three
+    before). A stiff model's floor can sit above a relative tolerance of 1e-10 (the maps' disk model, r = 1,728:
+    ~1e-9); quadratic convergence ends there, where a wrong Jacobian would still be converging linearly."""
+    return bool(getattr(hb, "smooth", False) and len(norms) >= 4 and step <= 1e-6 * size
+                and norms[-1] >= 0.5 * min(norms[-4:-1]))
+
+
 def solve_periodic(hb: HarmonicBalance, x0: np.ndarray, omega: float, tol: float = 1e-10, max_iter: int = 30,
                    stability: bool = True) -> PeriodicSolution:
-    """Newton on R(x, omega) = 0 at fixed omega from x0 (relative tolerance ``tol`` on the update); ValueError
-    where it does not converge."""
+    """Newton on R(x, omega) = 0 at fixed omega from x0 (relative tolerance ``tol`` on the update, or a smooth
+    balance's round-off floor, ``_at_floor``); ValueError where it does not converge."""
     x = np.asarray(x0, float).ravel().copy()
+    norms = []
     for it in range(1, max_iter + 1):
         R, J, _ = hb.residual(x, omega, domega=False)
+        norms.append(float(np.linalg.norm(R)))
         dx = _newton_step(J, R)
         if hasattr(hb, "scales"):
             # contact: a semismooth Newton, the step halved while it raises the residual (a contact set that
@@ -296,7 +309,8 @@ def solve_periodic(hb: HarmonicBalance, x0: np.ndarray, omega: float, tol: float
             s = hb.scales(x)
             small = np.linalg.norm(dx / s) <= tol * max(np.linalg.norm(x / s), 1e-300)
         else:
-            small = np.linalg.norm(dx) <= tol * max(np.linalg.norm(x), 1e-300)
+            small = np.linalg.norm(dx) <= tol * max(np.linalg.norm(x), 1e-300) or \
+                _at_floor(hb, norms, np.linalg.norm(dx), np.linalg.norm(x))
         x += dx
         if small:
             if stability:
@@ -378,19 +392,21 @@ def continue_branch(hb: HarmonicBalance, start: PeriodicSolution, omega_end: flo
     points, folds, bifurcations, h = [start], [], [], step
     while len(points) < max_points:
         pred = y + h * t
-        z, ok = pred.copy(), False
+        z, ok, norms = pred.copy(), False, []
         for _ in range(max_iter):
             try:                      # a shooting map refuses an omega past its step's limit: a failed corrector
                 R, J, dRw = hb.residual(z[:-1] * sx, z[-1] * sw)
             except ValueError:
                 break
+            norms.append(float(np.linalg.norm(R)))
             A = np.vstack([np.hstack([J * sx[None, :], dRw[:, None] * sw]), t[None]])
             rhs = -np.r_[R, t @ (z - y) - h]
             dz = np.linalg.solve(A, rhs)
             z += dz
             if not np.all(np.isfinite(z)) or np.linalg.norm(z - pred) > 4 * h:
                 break                 # the corrector left the predictor's neighbourhood: a smaller step
-            if np.linalg.norm(dz) <= tol * max(np.linalg.norm(z), 1.0):
+            if np.linalg.norm(dz) <= tol * max(np.linalg.norm(z), 1.0) or \
+                    _at_floor(hb, norms, np.linalg.norm(dz), max(np.linalg.norm(z), 1.0)):
                 ok = True
                 break
         if not ok:

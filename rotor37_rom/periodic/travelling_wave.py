@@ -124,6 +124,8 @@ class TravellingWaveBalance:
         M, C, K: the operators (default the model's; e.g. the explicit scheme's capped mass).
     """
 
+    smooth = True              # polynomial forces: Newton may stop at its round-off floor
+
     def __init__(self, model, excitation: np.ndarray, basis: Harmonics, n_diameters: int, M=None, C=None, K=None):
         R_eta = sector_turn(model)
         N, rs = model.sectors.blocks.shape
