@@ -66,17 +66,15 @@ def main(argv=None) -> int:
             return 2
 
     from rotor37_rom.disk.harmonics import harmonic_frequencies
+    from rotor37_rom.disk.loads import node_load_matrix
     from rotor37_rom.periodic import (Harmonics, HarmonicBalance, TravellingWaveBalance, continue_branch,
                                       model_force, solve_periodic, travelling_excitation)
 
     t0 = time.perf_counter()
     model = map_model(args.model, Path("results/cache"))
     t_model = time.perf_counter() - t0
-    N = model.sectors.blocks.shape[0]
-    nodes = model.nodes
-    P = np.zeros((model.r, N))
-    P[[nodes.q_index[nodes.row("LE", s), 2] for s in range(N)], np.arange(N)] = 1.0
-    le = nodes.q_index[nodes.row("LE", 0), 2]
+    P = node_load_matrix(model.nodes, model.r, "LE", 2)
+    le = model.nodes.q_index[model.nodes.row("LE", 0), 2]
     w0 = float(harmonic_frequencies(model, 1)[args.k, 0])
     basis = Harmonics(args.H, 4 * args.H + 3)
     F = travelling_excitation(P, args.force, args.k, basis)

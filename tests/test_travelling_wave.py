@@ -9,6 +9,7 @@ import scipy.linalg
 import scipy.optimize
 
 from rotor37_rom.disk.harmonics import harmonic_frequencies
+from rotor37_rom.disk.loads import node_load_matrix
 from rotor37_rom.periodic import Harmonics, HarmonicBalance, model_force, solve_periodic
 from rotor37_rom.periodic.travelling_wave import TravellingWaveBalance, travelling_excitation
 
@@ -16,11 +17,8 @@ H, K_ND, LOAD = 2, 6, 20.0          # harmonics; the load's nodal diameters (EO6
 
 
 def le_loads(model):
-    """P (r, N): a unit axial force at LE of each sector (a boundary node: its entry of q is the nodal force's)."""
-    nodes, N = model.nodes, model.sectors.blocks.shape[0]
-    P = np.zeros((model.r, N))
-    P[[nodes.q_index[nodes.row("LE", s), 2] for s in range(N)], np.arange(N)] = 1.0
-    return P
+    """P (r, N): a unit axial force at LE of each sector."""
+    return node_load_matrix(model.nodes, model.r, "LE", 2)
 
 
 def disk_coefficients(tw, x, j=0):

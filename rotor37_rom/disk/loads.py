@@ -20,15 +20,21 @@ def harmonic_node_load(nodes, r: int, amplitude: float, omega: float, n_diameter
     q (a boundary node of the model's NodeMap): its row of the basis is the unit vector of its entry of q, so the
     reduced force is the nodal force itself. ``ramp`` (s): the envelope (1 - cos(pi t / ramp)) / 2 up to t = ramp
     (0: none; sectors whose phase is not 0 then start with a step). Returns t -> (r,)."""
+    repeat_count(max(nodes.n_sectors, 1), n_diameters)
+    return travelling_load(node_load_matrix(nodes, r, name, component), amplitude, omega, n_diameters, ramp)
+
+
+def node_load_matrix(nodes, r: int, name: str = "LE", component: int = 2) -> np.ndarray:
+    """P (r, N): the reduced force of a unit force on component ``component`` (sector frame) of node ``name`` of each
+    sector s (column s); the node must be a boundary node of the model's NodeMap (its entry of q is the force)."""
     N = max(nodes.n_sectors, 1)
-    repeat_count(N, n_diameters)
     if name not in nodes.names:
         raise ValueError(f"load node {name!r} is not in the model's boundary set {sorted(set(nodes.names))}")
     if component not in (0, 1, 2):
         raise ValueError(f"component must be 0, 1 or 2 (x, y, z), got {component}")
     P = np.zeros((r, N))
     P[[nodes.q_index[nodes.row(name, s), component] for s in range(N)], np.arange(N)] = 1.0
-    return travelling_load(P, amplitude, omega, n_diameters, ramp)
+    return P
 
 
 def harmonic_field_load(basis: DiskBasis, f: np.ndarray, amplitude: float, omega: float, n_diameters: int,

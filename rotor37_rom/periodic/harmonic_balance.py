@@ -31,7 +31,7 @@ import scipy.linalg
 
 __all__ = ["Harmonics", "HarmonicBalance", "PeriodicSolution", "Branch", "continue_branch", "solve_periodic",
            "model_force", "time_state", "backbone", "bifurcation_kind", "hill_eigenvalues",
-           "hill_exponents"]
+           "hill_exponents", "harmonic_energy"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -192,13 +192,13 @@ class HarmonicBalance:
         I = np.eye(self.basis.size)
         D1 = np.kron(I, self.C) + 2 * omega * np.kron(self._D, self.M)
         D2 = np.kron(I, self.M)
-        lam, centre = hill_eigenvalues(J, D1, D2, lambda P: _harmonic_energy(P, self.basis.size, self.n),
+        lam, centre = hill_eigenvalues(J, D1, D2, lambda P: harmonic_energy(P, self.basis.size, self.n),
                                        stiffness=self._lin[0])
         central = lam[hill_exponents(lam, centre, omega, self.basis.H)]
         return central[np.argsort(central.real, kind="stable")]
 
 
-def _harmonic_energy(P: np.ndarray, k: int, n: int) -> np.ndarray:
+def harmonic_energy(P: np.ndarray, k: int, n: int) -> np.ndarray:
     """(2 H + 1, m): the energy of each complex harmonic -H .. H of perturbations whose real coefficients (k n, m)
     are coefficient-major blocks [p_0, p_a1, p_b1, ...] (p_a cos + p_b sin = ((p_a - i p_b) e^(i h tau) + (p_a +
     i p_b) e^(-i h tau)) / 2)."""

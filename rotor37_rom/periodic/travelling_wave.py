@@ -33,7 +33,7 @@ import numpy as np
 import scipy.linalg
 
 from rotor37_rom.disk.harmonics import disk_blocks
-from rotor37_rom.periodic.harmonic_balance import Harmonics, hill_eigenvalues, hill_exponents
+from rotor37_rom.periodic.harmonic_balance import Harmonics, harmonic_energy, hill_eigenvalues, hill_exponents
 
 __all__ = ["TravellingWaveBalance", "travelling_excitation", "sector_turn"]
 
@@ -164,9 +164,8 @@ class TravellingWaveBalance:
             raise ValueError(f"the excitation is not a wave of {self.k} nodal diameters travelling towards increasing "
                              f"sector index (departure {departure / np.linalg.norm(F):.2g} of its norm)")
         self._E, self._P = basis.synthesis, basis.analysis
-        self._operators = {0: self._projected(self.V)}
-        self._A = {0: self._sector_map(self.V)}
-        self._maps, self._class_V = {}, {0: self.V}
+        self._A = self._sector_map(self.V)              # the wave's own class: sector 0's map, times N
+        self._classes = {0: (self.V, self._projected(self.V), None)}     # j -> (bases, operators, sectors' maps)
 
     # --- the subspaces --------------------------------------------------------------------------------------------
     def _turn_matrix(self, R_eta: np.ndarray) -> np.ndarray:
@@ -193,14 +192,8 @@ class TravellingWaveBalance:
 
     def coefficients(self, x: np.ndarray, V: list | None = None) -> np.ndarray:
         """The disk's coefficients X (2 H + 1, r) of the one-sector unknowns x."""
-        V = self.V if V is None else V
         x = np.asarray(x, float).ravel()
-        offsets = np.r_[0, np.cumsum([B.shape[1] for B in V])]
-        X = np.zeros((self.basis.size, self.r))
-        X[0] = V[0] @ x[offsets[0]:offsets[1]]
-        for h in range(1, self.basis.H + 1):
-            X[2 * h - 1:2 * h + 1] = (V[h] @ x[offsets[h]:offsets[h + 1]]).reshape(2, self.r)
-        return X
+        return self._coefficient_columns(x[:, None], self.V if V is None else V).reshape(self.basis.size, self.r)
 
     def restrict(self, X: np.ndarray, V: list | None = None) -> np.ndarray:
         """x = V^T X: the one-sector unknowns of the disk's coefficients X (2 H + 1, r) (their projection)."""
@@ -264,13 +257,14 @@ class TravellingWaveBalance:
             A[2 * h, :, cols[h]:cols[h + 1]] = -s * a + c * b
         return A.reshape(self.basis.size * m, -1)
 
-    def _sector_maps(self, j: int) -> np.ndarray | None:
-        """(N, (2 H + 1) m, d_j): every sector's map of class j (``_sector_map``), on sector 0's clock. On the wave's
-        own class (j = 0) they are all sector 0's."""
-        if self.sector_force is None:
-            return None
-        V = self._bases(j)
-        return np.stack([self._sector_map(V, n) for n in range(self.N)])
+    def _class(self, j: int) -> tuple:
+        """(bases, projected operators, every sector's map on sector 0's clock (N, (2 H + 1) m, d_j) or None) of
+        class j, built once."""
+        if j not in self._classes:
+            V = self._bases(j)
+            maps = None if self.sector_force is None else np.stack([self._sector_map(V, n) for n in range(self.N)])
+            self._classes[j] = (V, self._projected(V), maps)
+        return self._classes[j]
 
     def _sector_force(self, x: np.ndarray, A: np.ndarray, jacobian: bool):
         """Sector 0's force coefficients (2 H + 1) m and, with ``jacobian``, their Jacobian on sector 0's
@@ -289,7 +283,7 @@ class TravellingWaveBalance:
 
     # --- the balance ----------------------------------------------------------------------------------------------
     def linear_matrix(self, omega: float, j: int = 0) -> np.ndarray:
-        ops = self._class_operators(j)
+        ops = self._class(j)[1]
         return ops["K"] + omega * ops["C1"] + omega ** 2 * ops["M2"]
 
     def residual(self, x: np.ndarray, omega: float, jacobian: bool = True, domega: bool = True):
@@ -299,23 +293,15 @@ class TravellingWaveBalance:
         R = L @ x - self.F
         J = L if jacobian else None
         if self.sector_force is not None:
-            A = self._A[0]
-            G, Jg = self._sector_force(x, A, jacobian)
-            R = R + self.N * (A.T @ G)
+            G, Jg = self._sector_force(x, self._A, jacobian)
+            R = R + self.N * (self._A.T @ G)
             if jacobian:
-                J = J + self.N * (A.T @ Jg @ A)
+                J = J + self._class_force_jacobian(Jg, 0)
         if not jacobian:
             return R
-        ops = self._operators[0]
+        ops = self._class(0)[1]
         dR = (ops["C1"] + 2 * omega * ops["M2"]) @ x if domega else None
         return R, J, dR
-
-    def _class_operators(self, j: int) -> dict:
-        if j not in self._operators:
-            V = self._bases(j)
-            self._operators[j] = self._projected(V)
-            self._maps[j] = self._sector_maps(j)
-        return self._operators[j]
 
     def _class_force_jacobian(self, Jg: np.ndarray, j: int) -> np.ndarray:
         """The disk's nonlinear force's balance Jacobian on class j: sum over the sectors of their maps' transposes
@@ -323,37 +309,39 @@ class TravellingWaveBalance:
         sum is N times sector 0's term; on a class of a pair +-j the terms between +j and -j cancel over the sectors,
         so the sum is not N times one sector's)."""
         if j == 0:
-            return self.N * (self._A[0].T @ Jg @ self._A[0])
-        self._class_operators(j)
-        U = self._maps[j]
+            return self.N * (self._A.T @ Jg @ self._A)
+        U = self._class(j)[2]
         return np.einsum("nai,ab,nbk->ik", U, Jg, U, optimize=True)
+
+    def _orbit_jacobian(self, x: np.ndarray) -> np.ndarray | None:
+        """Sector 0's force's balance Jacobian at the wave x (None for a linear model)."""
+        return None if self.sector_force is None else self._sector_force(x, self._A, True)[1]
+
+    def _hill_matrices(self, Jg, omega: float, j: int) -> tuple:
+        """(J, D1, D2, stiffness) of Hill's problem on class j (``harmonic_balance.hill_eigenvalues``)."""
+        ops = self._class(j)[1]
+        J = self.linear_matrix(omega, j)
+        if Jg is not None:
+            J = J + self._class_force_jacobian(Jg, j)
+        return J, ops["HC"] + 2 * omega * ops["HM1"], ops["HM2"], ops["K"]
 
     def class_basis(self, j: int) -> list:
         """Class j's real bases per coefficient block (the constant, then each harmonic's [a; b])."""
-        return self._bases(j)
+        return self._class(j)[0]
 
     def class_jacobian(self, x: np.ndarray, omega: float, j: int) -> np.ndarray:
         """Hill's J on class j: the disk's balance Jacobian at the wave x, projected on class j's subspace."""
-        x = np.asarray(x, float).ravel()
-        J = self.linear_matrix(omega, j)
-        if self.sector_force is not None:
-            J = J + self._class_force_jacobian(self._sector_force(x, self._A[0], True)[1], j)
-        return J
+        return self._hill_matrices(self._orbit_jacobian(np.asarray(x, float).ravel()), omega, j)[0]
 
     def class_exponents(self, x: np.ndarray, omega: float) -> dict:
         """{j: class j's Floquet exponents}: Hill's eigenvalues of every class (their union is the full disk's Hill
         spectrum), one copy of each exponent kept (``harmonic_balance.hill_exponents``) with the class it came from, by
         increasing real part."""
-        x = np.asarray(x, float).ravel()
-        Jg = self._sector_force(x, self._A[0], True)[1] if self.sector_force is not None else None
+        Jg = self._orbit_jacobian(np.asarray(x, float).ravel())
         values, centres, labels = [], [], []
         for j in self.classes:
-            ops = self._class_operators(j)
-            J = ops["K"] + omega * ops["C1"] + omega ** 2 * ops["M2"]
-            if Jg is not None:
-                J = J + self._class_force_jacobian(Jg, j)
-            lam, centre = hill_eigenvalues(J, ops["HC"] + 2 * omega * ops["HM1"], ops["HM2"],
-                                           lambda P, j=j: self._energy(P, j), stiffness=ops["K"])
+            J, D1, D2, K = self._hill_matrices(Jg, omega, j)
+            lam, centre = hill_eigenvalues(J, D1, D2, lambda P, j=j: self._energy(P, j), stiffness=K)
             values.append(lam)
             centres.append(centre)
             labels.append(np.full(lam.size, j))
@@ -366,19 +354,19 @@ class TravellingWaveBalance:
         return out
 
     def _energy(self, P: np.ndarray, j: int) -> np.ndarray:
-        """(2 H + 1, m): the energy of each complex harmonic -H .. H of class j's perturbations P (n_j, m)."""
-        V = self._bases(j) if j not in self._class_V else self._class_V[j]
-        self._class_V[j] = V
+        """(2 H + 1, m): the energy of each complex harmonic -H .. H of class j's perturbations P (n_j, m), on the
+        disk's coefficients."""
+        V = self._class(j)[0]
+        return harmonic_energy(self._coefficient_columns(P, V), self.basis.size, self.r)
+
+    def _coefficient_columns(self, P: np.ndarray, V: list) -> np.ndarray:
+        """The disk's coefficients (coefficient-major, (2 H + 1) r rows) of the columns P of unknowns on V."""
         offsets = np.r_[0, np.cumsum([B.shape[1] for B in V])]
-        H = self.basis.H
-        out = np.empty((2 * H + 1, P.shape[1]))
-        out[H] = (np.abs(V[0] @ P[offsets[0]:offsets[1]]) ** 2).sum(axis=0)
-        for h in range(1, H + 1):
-            ab = V[h] @ P[offsets[h]:offsets[h + 1]]
-            a, b = ab[:self.r], ab[self.r:]
-            out[H + h] = (np.abs(a - 1j * b) ** 2).sum(axis=0) / 4
-            out[H - h] = (np.abs(a + 1j * b) ** 2).sum(axis=0) / 4
-        return out
+        out = np.empty((self.basis.size, self.r, P.shape[1]), dtype=P.dtype)
+        out[0] = V[0] @ P[offsets[0]:offsets[1]]
+        for h in range(1, self.basis.H + 1):
+            out[2 * h - 1:2 * h + 1] = (V[h] @ P[offsets[h]:offsets[h + 1]]).reshape(2, self.r, -1)
+        return out.reshape(-1, P.shape[1])
 
     def floquet_exponents(self, x: np.ndarray, omega: float, J: np.ndarray | None = None) -> np.ndarray:
         """Every class's exponents together (the disk's 2 r), by increasing real part."""

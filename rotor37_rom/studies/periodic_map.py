@@ -84,8 +84,7 @@ def periodic_branch(config, scheme, max_points: int = 400) -> PeriodicBranch:
     start = solve_periodic(shooting, np.zeros(shooting.size), 2 * low, tol=1e-9)
     branch = continue_branch(shooting, start, 2 * high, config.continuation.periodic, tol=1e-9,
                              max_points=max_points)
-    node = list(model.nodes.labels).index(config.node)
-    Nn = contact_matrices(model.nodes, model.r, casing, rows=[node])[0]
+    Nn = contact_matrices(model.nodes, model.r, casing, rows=[model.nodes.row("LE", config.sector)])[0]
     amplitude = np.array([np.abs(shooting.orbit(p) @ Nn[0]).max() for p in branch.points])
     bifurcations = [{"index": int(i), "speed": branch.points[i].omega / 2, "kind": kind, "modulus": float(abs(mu)),
                      "argument": float(np.angle(mu))} for i, kind, mu in branch.bifurcations]
