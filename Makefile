@@ -97,6 +97,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_contact_reference.py --gnl --no-full-order --speeds 1280 1520 --r-md 0 20 50 --rom-cap 120 --rom-step 4e-7
 	$(PY) benchmarks/bench_contact_ecsw.py
 	$(PY) benchmarks/bench_integrator.py
+	$(PY) benchmarks/bench_force_jacobians.py
 	$(PY) benchmarks/bench_disk_stress_convergence.py
 
 # the speed-accuracy study (docs/choosing-a-model.md): every scene's candidates, cost and error, the charts and the

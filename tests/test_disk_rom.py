@@ -276,6 +276,8 @@ def test_disk_force_with_the_faces(tmp_path, ci_disk, ci_disk_ops, disk_model, d
     rem = [np.linalg.norm(forces.evaluate(q + e * d)[:, 0] - g - e * (J @ d)) for e in (1e-2, 5e-3, 2.5e-3)]
     for a, b in zip(rem, rem[1:]):
         assert 3.5 < a / b < 4.5
+    Jb = forces.jacobians(np.column_stack([q, 0.5 * q]))                 # batched: the same two Jacobians
+    np.testing.assert_allclose(Jb, np.stack([J, forces.jacobian(0.5 * q)]), rtol=0, atol=1e-10 * np.abs(J).max())
     back = load_reduced_model(save_reduced_model(model, tmp_path / "faces.npz"))
     np.testing.assert_array_equal(back.forces.evaluate(q), forces.evaluate(q))
 

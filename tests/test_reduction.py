@@ -237,6 +237,13 @@ def test_intrusive_forces_equal_projection(ci_blade, ci_ops, rom):
     assert np.linalg.norm(qp.evaluate(Q, chunk=2 * H.shape[0]) - direct) <= 1e-10 * np.linalg.norm(direct)
     J_qp = qp.jacobian(q)
     assert np.abs(J_qp - J).max() <= 1e-9 * np.abs(J).max()                 # measured 2e-15
+    # batched over states (the shooting's tangent, the balance's samples): the same Jacobians, the tensors' as two
+    # GEMMs over gathered tensors (other summation order: the 1e-10 bound above)
+    for force in (model.forces, qp):
+        batch = force.jacobians(Q)
+        single = np.stack([force.jacobian(x) for x in Q.T])
+        assert batch.shape == (Q.shape[1], model.r, model.r)
+        assert np.abs(batch - single).max() <= 1e-10 * np.abs(single).max()
     # B~ filled in column chunks (the memory bound of large bases): chunks of 1 and 1000 entries per row give the
     # same numbers as one chunk (each entry is the same six gathered terms summed in the same order)
     one = compute_polynomial_forces(qp)

@@ -7,9 +7,10 @@ a cyclic sector), and provides the full-order nonlinear static (Newton, exact ta
 is serial; the communicator always comes from the mesh.
 
 Modules: ``sector`` (building sectors), ``operators`` (forms and assembly), ``solvers`` (eigen, static, transient,
-the factorisation and eigen-solver given to ``reduction.craig_bampton.craig_bampton``), ``fields`` (displacements and stress on the
-mesh), ``cyclic`` (disk and plate sectors, face pairing, operators and modes per nodal diameter), ``periodic``
-(the full-order transient of a disk under a nodal-diameter load on the sectors it repeats over), ``safe`` (SAFE diagram).
+the factorisation and eigen-solver given to ``reduction.craig_bampton.craig_bampton``), ``fields`` (displacements
+and stress on the mesh), ``cyclic`` (disk and plate sectors, face pairing, operators and modes per nodal diameter),
+``periodic`` (the full-order transient of a disk under a nodal-diameter load on the sectors it repeats over),
+``safe`` (SAFE diagram).
 """
 # SLEPc initialises (and finalises at exit) collectively on PETSc's COMM_WORLD: importing it here makes every rank
 # that imports this package do so, also when only rank 0 then solves eigenproblems on its own copy of a mesh (a rank

@@ -26,6 +26,8 @@ class NonlinearForce(Protocol):
         has_potential: whether ``potential`` is available (the energy of the explicit scheme needs it).
         evaluate(Q): g~ for states Q (r,) or (r, P) -> (r, P).
         jacobian(q): d g~ / d q at one state (r, r), exact.
+        jacobians(Q): the same at each column of Q (r, P) -> (P, r, r), batched where the force can do better than
+            one call per state (the shooting's tangent along an orbit, the harmonic balance's time samples).
         with_precision(precision): the same force evaluated in 'double' or 'single'; refused (ValueError) by a force
             that has one arithmetic only.
         scaled(factor): the force times ``factor`` (a perturbation of the model, a mistuned sector's E).
@@ -47,6 +49,8 @@ class NonlinearForce(Protocol):
     def evaluate(self, Q: np.ndarray) -> np.ndarray: ...
 
     def jacobian(self, q: np.ndarray) -> np.ndarray: ...
+
+    def jacobians(self, Q: np.ndarray) -> np.ndarray: ...
 
     def with_precision(self, precision: str) -> "NonlinearForce": ...
 

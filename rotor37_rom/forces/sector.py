@@ -100,11 +100,24 @@ class SectorForces:
         """dg~/dq (r, r) at one state: block-diagonal over the sectors (and their coupling through eta with faces)."""
         q = np.asarray(q, float).ravel()
         X = self._inputs(q[:, None])[:, :, 0]
+        return self._assemble(self.forces.jacobians(X.T))
+
+    def jacobians(self, Q: np.ndarray) -> np.ndarray:
+        """``jacobian`` at each column of Q (r, P) -> (P, r, r): the N P sectors' Jacobians in one batch."""
+        Q = np.asarray(Q, float).reshape(self.r, -1)
+        N, P = self.blocks.shape[0], Q.shape[1]
+        Jn = self.forces.jacobians(self.sector_states(Q))              # sector-major columns: (N P, m, m)
+        m = Jn.shape[-1]
+        Jn = Jn.reshape(N, P, m, m)
+        return np.stack([self._assemble(Jn[:, p]) for p in range(P)]) if P else np.zeros((0, self.r, self.r))
+
+    def _assemble(self, Js: np.ndarray) -> np.ndarray:
+        """The disk's Jacobian (r, r) from the sectors' unscaled ones Js (N, m, m)."""
         rs = self.blocks.shape[1]
         eta = slice(self.blocks.size, self.r)
         J = np.zeros((self.r, self.r))
         for n, block in enumerate(self.blocks):                # N small Jacobians, one per sector
-            Jn = self.scales[n] * self.forces.jacobian(X[n])
+            Jn = self.scales[n] * Js[n]
             J[np.ix_(block, block)] = Jn[:rs, :rs]
             if self.faces is not None:
                 E = self.faces[n]

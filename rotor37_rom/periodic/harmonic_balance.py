@@ -90,9 +90,9 @@ class Harmonics:
 
 def model_force(forces) -> Callable:
     """The harmonic balance's ``force`` of a reduced model's nonlinear force (``forces.protocol.NonlinearForce``:
-    ``evaluate`` on a batch of states, ``jacobian`` at one): Q (r, m) -> (G (r, m), J (m, r, r))."""
+    ``evaluate`` and ``jacobians`` on a batch of states): Q (r, m) -> (G (r, m), J (m, r, r))."""
     def force(Q):
-        return forces.evaluate(Q), np.stack([forces.jacobian(q) for q in Q.T])
+        return forces.evaluate(Q), forces.jacobians(Q)
 
     return force
 
@@ -297,6 +297,9 @@ def solve_periodic(hb: HarmonicBalance, x0: np.ndarray, omega: float, tol: float
     norms = []
     for it in range(1, max_iter + 1):
         R, J, _ = hb.residual(x, omega, domega=False)
+        if not (np.isfinite(R).all() and np.isfinite(J).all()):
+            raise ValueError(f"periodic orbit: the residual is not finite at omega = {omega:g} after {it - 1} Newton "
+                             "iterations (a shooting iterate past the scheme's stability limit)")
         norms.append(float(np.linalg.norm(R)))
         dx = _newton_step(J, R)
         if hasattr(hb, "scales"):

@@ -130,7 +130,8 @@ class Shooting:
         # an orbit that touches rings the highest modes (periods of a few steps): J at every step there
         every = 1 if touched else self.jacobian_every
         if force is not None:                     # J at k = 0, every, 2 every, ... and n - 1, linear between
-            Jk = {k: sc.X0 @ force.jacobian(states[k]) for k in sorted({*range(0, n, every), n - 1})}
+            ks = sorted({*range(0, n, every), n - 1})
+            Jk = dict(zip(ks, sc.X0 @ force.jacobians(states[ks].T)))
         for k in range(n):
             A = sc.X1
             if force is not None:
@@ -145,6 +146,25 @@ class Shooting:
                 Tn = Tn - B[:, act] @ (inv @ (self.N[act] @ Tn))
             Tp, T = T, Tn
         return zT, np.vstack([T, Tp]), (states if record else None)
+
+    def from_rest(self, omega: float, periods: int) -> np.ndarray:
+        """A start for Newton at ``omega``: the state after ``periods`` periods of the scheme (step T / n) from rest,
+        the casing's ovalisation ramped in over the run as in the maps (eq. 38; complete at its end to 1e-10), so
+        that the last state has the casing where the period map starts it. A GNL orbit from rest against the full
+        casing at once, or Newton's first steps from there, can reach states past the tangent's stability limit;
+        the transient brings the scheme onto its attractor first (ValueError if it blows up)."""
+        from rotor37_rom.dynamics.explicit import simulate
+
+        if not (isinstance(periods, (int, np.integer)) and periods >= 1):
+            raise ValueError(f"periods (of the transient from rest) must be an integer >= 1, got {periods!r}")
+        sc = self.scheme_at(omega)
+        forcing = None if self.forcing is None else (lambda t: np.asarray(self.forcing(t, omega), float))
+        run = simulate(sc, self.speed(omega), casing=self.casing, n_steps=int(periods) * self.steps,
+                       forcing=forcing, record_every=self.steps, on_blowup="flag")
+        if run.diverged_step[0] >= 0:
+            raise ValueError(f"the transient from rest at Omega = {self.speed(omega):g} rad/s blew up at step "
+                             f"{run.diverged_step[0]} (T / n = {sc.h:.3g} s): no start for the periodic orbit")
+        return np.r_[run.q_final[:, 0], run.q_prev[:, 0]]
 
     def orbit(self, solution) -> np.ndarray:
         """q over the period of a shooting ``solution`` (a PeriodicSolution of this map): (n + 1, r), the states

@@ -276,7 +276,7 @@ class TravellingWaveBalance:
         G = (self._P @ g.T).ravel()
         if not jacobian:
             return G, None
-        dG = self.scale * np.stack([self.sector_force.jacobian(q) for q in Q.T])
+        dG = self.scale * self.sector_force.jacobians(Q)
         n = self.basis.size * m
         Jg = np.einsum("at,tij,tb->aibj", self._P, dG, self._E).reshape(n, n)
         return G, Jg

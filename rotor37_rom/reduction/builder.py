@@ -18,7 +18,7 @@ from rotor37_rom.forces.cubature import train_ecsw
 from rotor37_rom.model.modes import normalise_signs
 from rotor37_rom.forces.tensors import QuadratureForces, compute_polynomial_forces
 from rotor37_rom.reduction.config import ReductionConfig
-from rotor37_rom.reduction.craig_bampton import (CRITERIA, GLOBAL_MD_MAX, CraigBamptonBasis, craig_bampton,
+from rotor37_rom.reduction.craig_bampton import (CraigBamptonBasis, craig_bampton,
     fixed_interface_correction, lift_states, modal_damping, select_pairs, selection_weights)
 from rotor37_rom.model.nodes import NodeMap
 from rotor37_rom.model.reduced import ReducedModel, load_reduced_model, reduced_model_key, save_reduced_model

@@ -34,7 +34,7 @@ from rotor37_rom.studies.contact_config import (GNL_SETTINGS, N_SECTORS, PRECISI
     MapModel, MapScheme, build_parser, continued_revolutions, map_model, parse_options)
 from rotor37_rom.studies.contact_scheme import (capped_gnl_step, capped_probe, capped_probe_states, cubature_model,
     print_step_outliers, setting_names, time_scheme)
-from rotor37_rom.studies.periodic_map import PeriodicBranch, periodic_branch
+from rotor37_rom.studies.periodic_map import PeriodicBranch, describe_against, periodic_branch
 from rotor37_rom.studies.sweep import (ContinuationPoint, InteractionMap, compute_seconds, continuation,
     interaction_map, idle_barrier, load_speed, load_sweep, record_row, rerun_diverged, run_sweep, sector_maxima,
     sweep_folder)
@@ -303,10 +303,13 @@ def chart_map(config: ContactMapConfig, result: MapResult, records: list[dict], 
                                            "+" if name == "up" else "o") for name, b in result.branches.items()}
         curves["zero IC"] = (imap.speeds, imap.nfrc, "--")
         files.append(plot_nfrc(curves, out / f"nfrc_continuation_{result.tag}.png", lin_res, PAPER))
-    if result.periodic is not None:
+    if result.periodic is not None and len(result.periodic.speeds):
+        continued = {f"continuation {name}": ([p.omega for p in b.points], [p.amplitude for p in b.points])
+                     for name, b in result.branches.items()}
         files.append(plot_periodic_nfrc(result.periodic, out / f"nfrc_periodic_{result.tag}.png",
                                         (imap.speeds, imap.nfrc, f"from rest, {config.sweep.revolutions:g} rev."),
-                                        lin_res, f"{result.label}: periodic orbits (shooting) and the map"))
+                                        lin_res, f"{result.label}: periodic orbits (shooting) and the map",
+                                        continued))
     return files
 
 
@@ -452,6 +455,8 @@ def print_map(result: MapResult, linear_resonance: float) -> None:
               f"{', '.join(unsteady) or 'none'}")
     if result.periodic is not None:
         print(f"         {result.periodic.describe()}")
+        for name, comparison in result.periodic.continuation.items():
+            print(f"         {describe_against(name, comparison)}")
 
 
 def merge_earlier_runs(summary: dict, previous: Path) -> None:
@@ -533,7 +538,8 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
         branches = continuation_branches(setting, scheme, retried, tag, comm)
         if rank != 0:
             continue
-        periodic = periodic_branch(setting, scheme) if setting.continuation.periodic > 0 else None
+        periodic = (periodic_branch(setting, scheme, {name: b.points for name, b in branches.items()})
+                    if setting.continuation.periodic > 0 else None)
         runs[label] = result = MapResult(label, tag, folder, interaction_map(records, config.node), scheme.h,
                                          scheme.h_crit, retried, wall, branches, periodic)
         files += chart_map(setting, result, records, omega, model.r, summary["linear_resonance"])

@@ -19,7 +19,7 @@ import numpy as np
 from rotor37_rom.dynamics.casing import contact_matrices
 from rotor37_rom.periodic import Shooting, continue_branch, solve_periodic
 
-__all__ = ["PeriodicBranch", "periodic_branch"]
+__all__ = ["PeriodicBranch", "against_continuation", "describe_against", "periodic_branch"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -36,6 +36,7 @@ class PeriodicBranch:
         folds: the speeds (rad/s) of the points just past each turning point.
         ended: why the branch ended (reached its speed, or a corrector that failed with the step at its minimum).
         steps: explicit steps per period; wall_s: wall time (s).
+        continuation: {name: ``against_continuation``'s comparison} of the map's sequential continuation branches.
     """
 
     speeds: np.ndarray
@@ -47,17 +48,21 @@ class PeriodicBranch:
     ended: str
     steps: int
     wall_s: float
+    continuation: dict = dataclasses.field(default_factory=dict)
 
     def summary(self) -> dict:
         """Its entry in summary.json."""
         return {"speeds": self.speeds.tolist(), "amplitude": self.amplitude.tolist(),
                 "stable": self.stable.tolist(), "largest_multiplier": self.multiplier.tolist(),
                 "bifurcations": self.bifurcations, "folds": self.folds, "ended": self.ended,
-                "steps_per_period": self.steps, "wall_s": self.wall_s}
+                "steps_per_period": self.steps, "wall_s": self.wall_s,
+                **{f"continuation_{name}": c for name, c in self.continuation.items()}}
 
     def describe(self) -> str:
         """One line: points, stable share, the stability changes by kind and the first of them (all of them are in
         ``bifurcations``)."""
+        if not len(self.speeds):
+            return f"periodic orbits ({self.steps} steps a period, {self.wall_s:.0f} s): none; {self.ended}"
         kinds = [b["kind"] for b in self.bifurcations]
         counts = ", ".join(f"{kinds.count(k)} {k}" for k in dict.fromkeys(kinds)) or "none"
         first = self.bifurcations[0] if self.bifurcations else None
@@ -68,11 +73,62 @@ class PeriodicBranch:
                 f"{self.ended}")
 
 
-def periodic_branch(config, scheme, max_points: int = 400) -> PeriodicBranch:
+def against_continuation(shooting: Shooting, points: list, row: np.ndarray, continued) -> dict:
+    """(g) of #72: the sequential continuation's points (``sweep.ContinuationPoint``: each speed's run started from
+    the previous one's end, the paper's §2.3.3) against the stable periodic orbits at their own speeds. Each steady
+    point within the branch is compared with the stable orbit(s) of the branch's stable stretches that cross its speed,
+    each solved there by Newton from the stretch's nearer end (a stretch with one stable end counts: the stability
+    changes somewhere between): its relative distance to the nearest stable one, with that
+    orbit's largest |multiplier| (a continued run of n periods is left |mu|^n of the distance it started at). A steady
+    point where no stable orbit is (a torus past a Neimark-Sacker point, another period, a branch the orbits did not
+    reach) is listed apart. ``points``: the branch's PeriodicSolutions; ``row``: the map node's normal row."""
+    w = np.array([p.omega / 2 for p in points])
+    stable = [bool(p.stable) for p in points]
+    rows, elsewhere = [], []
+    for c in continued:
+        if not (c.steady and np.isfinite(c.amplitude) and w.min() <= c.omega <= w.max()):
+            continue
+        found = []
+        for k in range(len(points) - 1):
+            if (stable[k] or stable[k + 1]) and min(w[k], w[k + 1]) <= c.omega <= max(w[k], w[k + 1]):
+                near = points[k] if abs(w[k] - c.omega) <= abs(w[k + 1] - c.omega) else points[k + 1]
+                try:
+                    orbit = solve_periodic(shooting, near.unknowns, 2 * c.omega, tol=1e-9)
+                except ValueError:
+                    continue
+                if orbit.stable:
+                    amp = float(np.abs(shooting.orbit(orbit) @ row).max())
+                    found.append((amp, float(np.abs(orbit.multipliers).max())))
+        if not found:
+            elsewhere.append(float(c.omega))
+            continue
+        amp, mu = min(found, key=lambda f: abs(f[0] - c.amplitude))
+        rows.append({"speed": float(c.omega), "continuation": float(c.amplitude), "orbit": amp, "multiplier": mu,
+                     "period": int(c.period), "difference": abs(c.amplitude - amp) / amp})
+    worst = max((r["difference"] for r in rows), default=None)
+    return {"compared": rows, "no_stable_orbit": elsewhere, "largest_difference": worst}
+
+
+def describe_against(name: str, comparison: dict) -> str:
+    """One line: how the continuation ``name`` sits on the stable orbits (``against_continuation``)."""
+    rows, other = comparison["compared"], comparison["no_stable_orbit"]
+    if not rows and not other:
+        return f"continuation {name} against the periodic orbits: no steady point within the branch's speeds"
+    line = f"continuation {name} against the periodic orbits: {len(rows)} steady points on a stable orbit"
+    if rows:
+        line += f" (largest difference {100 * comparison['largest_difference']:.3g} %)"
+    if other:
+        line += f"; {len(other)} where no stable orbit is: " + ", ".join(f"{w:.0f}" for w in other) + " rad/s"
+    return line
+
+
+def periodic_branch(config, scheme, continued: dict | None = None, max_points: int = 400) -> PeriodicBranch:
     """The periodic orbits of ``scheme`` (the map's scheme of one GNL setting) against the map's casing, from rest
     at the low end of ``config.continuation_span`` continued by arc length (relative step
-    ``config.continuation.periodic``) to its high end. ValueError for a disk's model (shooting marches a blade's
-    2 r states; a tuned disk's travelling wave is ``periodic.TravellingWaveBalance``)."""
+    ``config.continuation.periodic``) to its high end; with ``continued`` ({name: list of
+    ``sweep.ContinuationPoint``}, the map's sequential continuation) each branch compared with the stable orbits
+    (``against_continuation``). ValueError for a disk's model (shooting marches a blade's 2 r states; a tuned disk's
+    travelling wave is ``periodic.TravellingWaveBalance``)."""
     model = scheme.model
     if model.sectors is not None:
         raise ValueError("--periodic: periodic orbits by shooting take a blade's model, not a disk's")
@@ -81,11 +137,21 @@ def periodic_branch(config, scheme, max_points: int = 400) -> PeriodicBranch:
     steps = int(np.ceil(np.pi / (low * scheme.h)))
     t0 = time.perf_counter()
     shooting = Shooting(scheme, casing, steps=steps)
-    start = solve_periodic(shooting, np.zeros(shooting.size), 2 * low, tol=1e-9)
+    # the map's own run from rest at the low speed (its revolutions, two periods each) is Newton's start
+    try:
+        start = solve_periodic(shooting, shooting.from_rest(2 * low, max(1, round(2 * config.sweep.revolutions))),
+                               2 * low, tol=1e-9)
+    except ValueError as error:                      # no orbit to continue: an empty branch that says why
+        return PeriodicBranch(speeds=np.zeros(0), amplitude=np.zeros(0), stable=np.zeros(0, bool),
+                              multiplier=np.zeros(0), bifurcations=[], folds=[],
+                              ended=f"no periodic orbit found at {low:g} rad/s: {error}", steps=steps,
+                              wall_s=time.perf_counter() - t0)
     branch = continue_branch(shooting, start, 2 * high, config.continuation.periodic, tol=1e-9,
                              max_points=max_points)
     Nn = contact_matrices(model.nodes, model.r, casing, rows=[model.nodes.row("LE", config.sector)])[0]
     amplitude = np.array([np.abs(shooting.orbit(p) @ Nn[0]).max() for p in branch.points])
+    against = {name: against_continuation(shooting, branch.points, Nn[0], points)
+               for name, points in (continued or {}).items()}
     bifurcations = [{"index": int(i), "speed": branch.points[i].omega / 2, "kind": kind, "modulus": float(abs(mu)),
                      "argument": float(np.angle(mu))} for i, kind, mu in branch.bifurcations]
     last = branch.points[-1].omega / 2                  # the branch's parameter is omega = 2 Omega: said in Omega
@@ -96,4 +162,4 @@ def periodic_branch(config, scheme, max_points: int = 400) -> PeriodicBranch:
                           stable=np.array([bool(p.stable) for p in branch.points]),
                           multiplier=np.array([float(np.abs(p.multipliers).max()) for p in branch.points]),
                           bifurcations=bifurcations, folds=[float(branch.points[i].omega / 2) for i in branch.folds],
-                          ended=ended, steps=steps, wall_s=time.perf_counter() - t0)
+                          ended=ended, steps=steps, wall_s=time.perf_counter() - t0, continuation=against)

@@ -128,16 +128,19 @@ def plot_nfrc(curves: dict, path: str | Path, linear_resonance: float | None = N
 
 
 def plot_periodic_nfrc(branch, path: str | Path, map_curve: tuple | None = None,
-                       linear_resonance: float | None = None, title: str = "") -> Path:
+                       linear_resonance: float | None = None, title: str = "", continued: dict | None = None) -> Path:
     """The periodic orbits' NFRC over the map's (#72): node LE's amplitude against the speed, stable orbits solid,
     unstable dashed, the stability changes marked by kind (fold, period doubling, Neimark-Sacker); below, the
     largest Floquet multiplier's modulus. ``branch``: a ``studies.periodic_map.PeriodicBranch``; ``map_curve``:
-    (speeds, amplitudes (m), label) of the map's runs from rest."""
+    (speeds, amplitudes (m), label) of the map's runs from rest; ``continued``: {label: (speeds, amplitudes (m))}
+    of the sequential continuation's branches."""
     plt = _pyplot()
     fig, (ax, bx) = plt.subplots(2, 1, figsize=(7.5, 6.0), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
     if map_curve is not None:
         speeds, amp, label = map_curve
         ax.plot(speeds, np.asarray(amp, float) * 1e3, "o", ms=3.5, color="0.55", label=label)
+    for (label, (speeds, amp)), marker in zip((continued or {}).items(), "+x"):
+        ax.plot(speeds, np.asarray(amp, float) * 1e3, marker, ms=5, color="0.25", label=label)
     w, a, stable = branch.speeds, branch.amplitude * 1e3, np.asarray(branch.stable, bool)
     for k in range(len(w) - 1):                   # each segment as its end points say: both stable -> solid
         solid = stable[k] and stable[k + 1]
