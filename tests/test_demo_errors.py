@@ -28,6 +28,8 @@ CASES = {
                "numbers": (["--speeds", "1600", "1200", "5"], "--speeds")},
     "bladed_disk": {"preset": (["--preset", "huge"], "--preset"), "model file": (["--table", "{text}"], "--table"),
                     "numbers": (["--modes", "99"], "--modes")},
+    "campbell": {"preset": (["--preset", "huge"], "--preset"), "numbers": (["--speeds", "0", "-5", "3"], "--speeds"),
+                 "orders": (["--orders", "0", "4"], "--orders"), "refine": (["--refine", "-1"], "--refine")},
 }
 
 

@@ -20,12 +20,13 @@ from petsc4py import PETSc
 from rotor37_rom import forms
 
 from .operators import (JIT_PARAMS, SvkOperators, _require_serial, assemble_mass, assemble_spin_softening,
-                        assemble_stiffness, assemble_vector, create_svk_operators, gather_dof_values, scipy_to_petsc)
+                        assemble_stiffness, assemble_tangent, assemble_vector, create_svk_operators,
+                        gather_dof_values, scipy_to_petsc)
 from .sector import Sector
 
 __all__ = ["ModalResult", "StaticResult", "solve_eigenproblem", "compute_clamped_modes",
            "solve_static", "solve_clamped_static", "mumps_solver", "slepc_eigenpairs",
-           "shift_invert_solver", "static_compliance"]
+           "shift_invert_solver", "static_compliance", "rotating_modes"]
 
 LOG = logging.getLogger(__name__)
 
@@ -352,6 +353,30 @@ class _MumpsSolve:
             self.destroy()
         except Exception:                              # interpreter shutdown: PETSc may be finalised already
             pass
+
+
+def rotating_modes(sector: Sector, spin: float, n_modes: int, ops: SvkOperators | None = None,
+                   M: PETSc.Mat | None = None, rtol: float = 1e-10) -> tuple[np.ndarray, np.ndarray]:
+    """The first ``n_modes`` modes of the structure turning at ``spin`` (rad/s) about the machine axis e_z, without
+    Coriolis: K_T(u_c) - spin^2 M_P at the centrifugal equilibrium u_c (``solve_static(spin=...)``, nonlinear SVK,
+    Newton to ``rtol``) against the mass; at spin 0 the clamped stiffness K. Returns (omega (n,) rad/s ascending,
+    V (n_dofs, n) with V^T M V = I, this rank's owned entries). ``M``: the mass, if the caller keeps it."""
+    if not (np.isfinite(spin) and spin >= 0.0):
+        raise ValueError(f"spin must be a finite speed >= 0 rad/s, got {spin}")
+    ops = ops or create_svk_operators(sector)
+    own_mass = M is None
+    M = assemble_mass(sector, ops) if own_mass else M
+    if spin > 0.0:
+        u = solve_static(sector, spin=spin, n_steps=2, ops=ops, rtol=rtol).u.x.array
+        K = assemble_tangent(sector, u, ops, spin)
+    else:
+        K = assemble_stiffness(sector, ops)
+    omega, vecs = solve_eigenproblem(K, M, n_modes)
+    V = np.column_stack([v.array.copy() for v in vecs])
+    K.destroy()
+    if own_mass:
+        M.destroy()
+    return np.asarray(omega), V
 
 
 def mumps_solver(A) -> Callable[[np.ndarray], np.ndarray]:

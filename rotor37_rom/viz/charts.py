@@ -167,6 +167,34 @@ def plot_periodic_nfrc(branch, path: str | Path, map_curve: tuple | None = None,
     return _save(fig, path)
 
 
+def plot_campbell(result, orders, path: str | Path, title: str = "") -> Path:
+    """The Campbell diagram (#73): each followed mode's frequency against the speed (rad/s both), the engine-order
+    lines omega = e Omega, and the crossings marked and labelled (mode/EO, speed). ``result``: a
+    ``studies.campbell.CampbellResult``."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7.5, 5.5))
+    W = np.asarray(result.speeds, float)
+    top = float(np.max(result.omega)) * 1.08
+    for e in orders:
+        ax.plot(W, e * W, color="0.6", lw=0.8, ls="--")
+        end = min(W[-1], top / e)
+        ax.text(end, e * end, f"EO{e}", fontsize=7, color="0.4", ha="right", va="bottom")
+    for k, label in enumerate(result.labels):
+        ax.plot(W, result.omega[:, k], "-o", ms=3, lw=1.4, label=label)
+    for c in result.crossings:
+        ax.plot(c["speed"], c["frequency"], "kx", ms=6)
+        ax.annotate(f"{c['label']}/EO{c['order']} {c['speed']:.0f}", (c["speed"], c["frequency"]), fontsize=6,
+                    xytext=(3, -9), textcoords="offset points")
+    ax.set_ylim(0, top)
+    ax.set_xlim(W[0], W[-1])
+    ax.set_xlabel("angular speed Omega (rad/s)")
+    ax.set_ylabel("frequency omega (rad/s)")
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=7, loc="upper left")
+    ax.grid(alpha=0.3)
+    return _save(fig, path)
+
+
 def plot_time_history(t: np.ndarray, series: dict, path: str | Path, title: str = "",
                       ylabel: str = "radial displacement (mm)") -> Path:
     """Displacement histories (mm) vs time (ms). series: {label: values (m)}."""

@@ -1,0 +1,77 @@
+"""The Campbell diagram's algebra (#73), pure NumPy: modes followed across speeds, and their crossings with the
+engine-order lines omega = e Omega.
+
+A mode is followed from one speed to the next by its shape (the modal assurance criterion, MAC, of the unweighted
+displacement vectors: 1 for the same shape, whatever its sign or scale), not by its rank in frequency, so that two
+modes that cross or veer keep their names. Between two neighbouring speeds the squared frequency of a mode is
+linear in Omega^2 to first order (Southwell: omega^2 = omega_0^2 + S Omega^2, geometric stiffening and spin
+softening both quadratic in Omega), so a crossing with engine order e in that bracket solves
+a + b Omega^2 = e^2 Omega^2 through the bracket's two points.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["mac", "track_modes", "engine_order_crossings"]
+
+
+def mac(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """MAC[i, j] = (a_i . b_j)^2 / (|a_i|^2 |b_j|^2) of the columns of A (n, p) and B (n, q)."""
+    A, B = np.asarray(A, float), np.asarray(B, float)
+    num = (A.T @ B) ** 2
+    return num / np.outer(np.sum(A * A, axis=0), np.sum(B * B, axis=0))
+
+
+def track_modes(frequencies: list, vectors: list) -> tuple[np.ndarray, np.ndarray]:
+    """Follow the modes from speed to speed. ``frequencies``: per speed, (m,) ascending; ``vectors``: per speed,
+    (n, m) shapes. Returns (omega (n_speeds, m): column k the mode that is k-th at the first speed, mac (n_speeds,)
+    the smallest MAC of a pairing at each step, 1 at the first): each speed's modes paired with the previous speed's
+    by the largest MAC, greedily from the best pair (a mode leaving the computed set shows as a low MAC)."""
+    m = len(frequencies[0])
+    omega = np.empty((len(frequencies), m))
+    omega[0] = frequencies[0]
+    worst = np.ones(len(frequencies))
+    previous = np.asarray(vectors[0], float)
+    for s in range(1, len(frequencies)):
+        V = np.asarray(vectors[s], float)
+        C = mac(previous, V)
+        order = np.empty(m, dtype=int)
+        taken_rows, taken_cols = set(), set()
+        for flat in np.argsort(-C, axis=None):
+            i, j = divmod(int(flat), C.shape[1])
+            if i in taken_rows or j in taken_cols:
+                continue
+            order[i] = j
+            taken_rows.add(i)
+            taken_cols.add(j)
+            if len(taken_rows) == m:
+                break
+        omega[s] = np.asarray(frequencies[s])[order]
+        worst[s] = C[np.arange(m), order].min()
+        previous = V[:, order]
+    return omega, worst
+
+
+def engine_order_crossings(speeds: np.ndarray, omega: np.ndarray, orders) -> list[dict]:
+    """Where each followed mode (column of ``omega`` (n_speeds, m), rad/s, at ``speeds`` rad/s ascending) meets each
+    engine order e: the speeds Omega (rad/s) with omega_k(Omega) = e Omega, one per bracket where omega_k - e Omega
+    changes sign, solved with omega_k^2 linear in Omega^2 across the bracket. Returns dicts {'mode', 'order',
+    'speed', 'frequency', 'bracket' (its two speeds' indices)} by speed."""
+    speeds = np.asarray(speeds, float)
+    omega = np.asarray(omega, float)
+    out = []
+    for k in range(omega.shape[1]):
+        for e in orders:
+            g = omega[:, k] - e * speeds
+            for s in np.flatnonzero((g[:-1] > 0) != (g[1:] > 0)):
+                x0, x1 = speeds[s] ** 2, speeds[s + 1] ** 2
+                y0, y1 = omega[s, k] ** 2, omega[s + 1, k] ** 2
+                b = (y1 - y0) / (x1 - x0)
+                a = y0 - b * x0
+                if e * e <= b:
+                    continue                         # parallel to the line: no single crossing in the bracket
+                W = float(np.sqrt(max(a, 0.0) / (e * e - b)))
+                W = min(max(W, speeds[s]), speeds[s + 1])
+                out.append({"mode": int(k), "order": int(e), "speed": W, "frequency": e * W,
+                            "bracket": (int(s), int(s + 1))})
+    return sorted(out, key=lambda c: c["speed"])
