@@ -1,11 +1,11 @@
 # # The turning rotor 37 blade's Campbell diagram (#73)
 #
 # At each speed the blade's centrifugal equilibrium (nonlinear SVK) and the modes of its tangent there, geometric
-# stiffening and spin softening included (Coriolis not yet), followed across speeds by their shapes; the engine-order
-# lines and every crossing, each iterated on the blade to 0.01 rad/s. The chart and summary.json go to
+# stiffening and spin softening included (Coriolis with `--coriolis`), followed across speeds by their shapes; the
+# engine-order lines and every crossing, each iterated on the blade to 0.01 rad/s. The chart and summary.json go to
 # `results/campbell/`.
 #
-#     python demos/campbell.py                       # ci preset, 0-2,000 rad/s, EO 1-8: about 2 min
+#     python demos/campbell.py                       # ci preset, 0-2,000 rad/s, EO 1-8: about 1 min
 #     python demos/campbell.py --preset coarse --speeds 0 2000 21
 #
 # The study is one library function, `run_campbell(CampbellConfig(...))` of `rotor37_rom.studies.campbell`; this
@@ -55,6 +55,8 @@ def build_parser() -> ArgumentParser:
                         help="engine orders (1..100, default 1 to 8)")
     parser.add_argument("--refine", type=float, default=0.01,
                         help="iterate each crossing on the blade to this (rad/s; 0: interpolated; default 0.01)")
+    parser.add_argument("--coriolis", action="store_true",
+                        help="include the Coriolis force (gyroscopic, on 3x the modes without it)")
     parser.add_argument("--out", type=Path, default=Path("results/campbell"), help="output folder")
     return parser
 
@@ -63,7 +65,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Parse the options, run the study, print the crossings; raises ValueError for a bad input."""
     args = build_parser().parse_args(argv)
     config = CampbellConfig(preset=args.preset, speeds=tuple(args.speeds), n_modes=args.modes,
-                            orders=tuple(args.orders), refine=args.refine, out=args.out)
+                            orders=tuple(args.orders), refine=args.refine, coriolis=args.coriolis,
+                            out=args.out)
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s", force=True)
     logging.getLogger().handlers[0].setLevel(logging.WARNING)
     print_report(run_campbell(config))

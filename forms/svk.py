@@ -23,6 +23,7 @@ __all__ = [
     "mass",
     "centrifugal_force",
     "spin_softening",
+    "coriolis",
     "nonlinear_force",
     "second_derivative",
     "third_derivative",
@@ -81,7 +82,8 @@ def mass(v, du, rho, dx=ufl.dx):
 
 
 def _radial(w):
-    """P w: the part of a vector normal to the machine axis e_z (the rotation axis; x = r cos theta, y = r sin theta)."""
+    """P w: the part of a vector normal to the machine axis e_z (the rotation axis; x = r cos theta,
+    y = r sin theta)."""
     return ufl.as_vector((w[0], w[1], 0.0))
 
 
@@ -96,6 +98,13 @@ def spin_softening(v, du, rho, dx=ufl.dx):
     """M_P: rho P du . v, so that -spin^2 M_P is the derivative of ``centrifugal_force`` in u, negated (the spin
     softening of the rotating structure's tangent: K_T(u) - spin^2 M_P)."""
     return rho * ufl.inner(_radial(du), v) * dx
+
+
+def coriolis(v, du, rho, dx=ufl.dx):
+    """G_1: 2 rho (e_z x du) . v, so that spin G_1 u' is the Coriolis force of the structure turning at ``spin``
+    (rad/s) about e_z, seen in the turning frame (M u'' + spin G_1 u' + (K_T - spin^2 M_P) u = f); skew-symmetric:
+    it does no work."""
+    return 2.0 * rho * ufl.inner(ufl.cross(ufl.as_vector((0.0, 0.0, 1.0)), du), v) * dx
 
 
 def nonlinear_force(u, v, lmbda, mu, dx=ufl.dx):

@@ -16,6 +16,8 @@ rho Omega^2 L^2 / (2 E) = 1.3e-4 changing the geometry, and by its discretisatio
 60x2x2 to 120x4x4: see the test's docstring.
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 from dolfinx import mesh as dmesh
@@ -167,3 +169,43 @@ def test_campbell_of_the_ci_blade(tmp_path):
         print(f"1B/EO{c['order']}: {c['speed']:.2f} rad/s; 1B there {w:.2f} rad/s against e Omega {c['frequency']:.2f}")
         assert abs(w / c["order"] - c["speed"]) <= 0.01
     assert (tmp_path / "campbell.png").is_file() and (tmp_path / "summary.json").is_file()
+    # with Coriolis: a gyroscopic coupling only lowers the fundamental frequency (it repels the modes), so 1B at
+    # 2,000 rad/s and its EO4 crossing come down, by little on a blade (measured: 0.09 and 0.02 rad/s)
+    gyro = run_campbell(dataclasses.replace(config, speeds=(0.0, 2000.0, 2), n_modes=1, orders=(4,), coriolis=True,
+                                            out=tmp_path / "coriolis"), sector)
+    assert gyro.omega[-1, 0] <= result.omega[-1, k1b]
+    (eo4,) = gyro.crossings
+    assert eo4["refined"] > 0 and eo4["speed"] <= next(c["speed"] for c in found if c["order"] == 4) + 0.01
+
+
+def test_coriolis_splits_a_spinning_shaft_by_twice_the_speed():
+    """Coriolis (``forms.coriolis``, ``fem.reduced_coriolis``, ``model.campbell.gyroscopic_frequencies``): a slender
+    square rod on the machine axis (clamped at z = 0, L/h = 40) turning at Omega. Seen from the ground its bending
+    frequency omega_0 does not change (a Euler-Bernoulli shaft has no gyroscopic effect); seen from the turning frame
+    the whirls are omega_0 - Omega and omega_0 + Omega, forward and backward, exactly: the turning frame's
+    M u'' + Omega G_1 u' + (K - Omega^2 M_P) u = 0 has them as roots for an isotropic section. Without Coriolis both
+    are sqrt(omega_0^2 - Omega^2) (no split). The rod's rotary inertia (Rayleigh) splits a spinning shaft by
+    ~(h/L)^2 omega_0 ~ 6e-4 omega_0, the tetrahedra's anisotropy its two bending planes by ~1e-4: each whirl is
+    asserted to 2e-3 omega_0 at Omega = 0.3 omega_0, so the split to 4e-3 omega_0 = 1.3e-2 of its 2 Omega (measured:
+    whirls 6e-5 and 8e-5 of omega_0 off, split / Omega = 1.99952). A Coriolis force without its factor 2 splits by
+    Omega."""
+    from rotor37_rom.model.campbell import gyroscopic_frequencies
+
+    L, h = 1.0, 0.025
+    material = Material(E=1.0e7, nu=0.3, rho=1.0, sigma_y=1.0)
+    msh = dmesh.create_box(MPI.COMM_WORLD, [np.array([-h / 2, -h / 2, 0.0]), np.array([h / 2, h / 2, L])],
+                           [2, 2, 60], dmesh.CellType.tetrahedron)
+    clamp = dmesh.locate_entities_boundary(msh, 2, lambda x: np.isclose(x[2], 0.0))
+    tags = dmesh.meshtags(msh, 2, np.sort(clamp), np.full(clamp.size, 1, np.int32))
+    sector = fem.create_sector_from_mesh(msh, None, tags, {"clamp": 1}, material, degree=2, source="shaft")
+    omega0 = fem.rotating_modes(sector, 0.0, 2)[0]
+    spin = 0.3 * omega0.mean()
+    omega, V = fem.rotating_modes(sector, spin, 6, prestress=False)      # on the axis: no centrifugal load
+    np.testing.assert_allclose(omega[:2], np.sqrt(omega0**2 - spin**2), rtol=2e-3)   # no Coriolis: no split
+    Gr = fem.reduced_coriolis(sector, V)
+    np.testing.assert_allclose(Gr, -Gr.T, atol=1e-12 * np.abs(Gr).max())
+    whirls = gyroscopic_frequencies(np.diag(omega**2), np.eye(6), spin * Gr)[:2]
+    print(f"omega_0 {omega0.mean():.4f}, Omega {spin:.4f}: whirls {whirls} against {omega0.mean() - spin:.4f}, "
+          f"{omega0.mean() + spin:.4f}; split / Omega {(whirls[1] - whirls[0]) / spin:.5f}")
+    np.testing.assert_allclose(whirls, omega0.mean() + np.array([-spin, spin]), rtol=0, atol=2e-3 * omega0.mean())
+    assert abs((whirls[1] - whirls[0]) / spin - 2.0) <= 4e-3 / 0.3

@@ -35,8 +35,8 @@ from .cyclic import (CyclicModes, CyclicOperators, assemble_cyclic_operators, cr
                      sector_fields, solve_cyclic_modes)
 from .fields import (cell_midpoints, cell_vertices, cells_touching_points, displacement_function, root_junction,
                      von_mises_at_quadrature, von_mises_at_vertices, von_mises_function)
-from .operators import (JIT_PARAMS, MASS_DIAGONAL, SvkOperators, assemble_free_operators, assemble_mass,
-                        assemble_scalar, assemble_spin_softening, assemble_stiffness, assemble_tangent,
+from .operators import (JIT_PARAMS, MASS_DIAGONAL, SvkOperators, assemble_coriolis, assemble_free_operators,
+                        assemble_mass, assemble_scalar, assemble_spin_softening, assemble_stiffness, assemble_tangent,
                         assemble_tangent_scipy, assemble_vector,
                         create_svk_operators, evaluate_forces, evaluate_second_derivative, facet_centroid,
                         free_dofs, gather_dof_values, patch_load, petsc_to_scipy, quadrature_gradients,
@@ -45,8 +45,9 @@ from .periodic import RepeatingSectors, sector_harmonic_load, solve_repeating_ne
 from .sector import (Sector, build_on_rank0, clamp_cell_group, create_blade_sector, create_sector_from_file,
                      create_sector_from_gmsh, create_sector_from_mesh, locate_cyclic_pairs, tip_node_names,
                      write_sector_mesh)
-from .solvers import (ModalResult, StaticResult, compute_clamped_modes, mumps_solver, rotating_modes,
-                      slepc_eigenpairs, solve_clamped_static, solve_eigenproblem, solve_static, static_compliance)
+from .solvers import (ModalResult, StaticResult, compute_clamped_modes, mumps_solver, reduced_coriolis,
+                      rotating_modes, slepc_eigenpairs, solve_clamped_static, solve_eigenproblem, solve_static,
+                      static_compliance)
 
 __all__ = [
     "Sector", "SvkOperators", "ModalResult", "StaticResult",
@@ -54,8 +55,9 @@ __all__ = [
     "tip_node_names", "create_svk_operators", "assemble_stiffness", "assemble_mass", "assemble_vector",
     "assemble_scalar", "gather_dof_values", "free_dofs", "petsc_to_scipy", "scipy_to_petsc",
     "assemble_free_operators", "evaluate_forces", "evaluate_second_derivative", "assemble_tangent_scipy",
-    "assemble_tangent", "assemble_spin_softening",
+    "assemble_tangent", "assemble_spin_softening", "assemble_coriolis",
     "quadrature_gradients", "solve_eigenproblem", "compute_clamped_modes", "solve_static", "rotating_modes",
+    "reduced_coriolis",
     "solve_clamped_static", "mumps_solver", "slepc_eigenpairs", "displacement_function", "von_mises_function",
     "von_mises_at_quadrature", "von_mises_at_vertices", "cell_midpoints", "cell_vertices", "cells_touching_points",
     "root_junction", "MASS_DIAGONAL", "JIT_PARAMS",

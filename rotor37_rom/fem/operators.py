@@ -26,7 +26,7 @@ __all__ = ["SvkOperators", "create_svk_operators", "assemble_stiffness", "assemb
            "assemble_scalar", "facet_centroid", "patch_load", "tip_patch_interface", "gather_dof_values", "free_dofs",
            "petsc_to_scipy", "scipy_to_petsc", "assemble_free_operators", "evaluate_forces",
            "evaluate_second_derivative", "assemble_tangent_scipy", "assemble_tangent", "assemble_spin_softening",
-           "quadrature_gradients", "MASS_DIAGONAL", "JIT_PARAMS"]
+           "assemble_coriolis", "quadrature_gradients", "MASS_DIAGONAL", "JIT_PARAMS"]
 
 MASS_DIAGONAL = 1.0e-14
 JIT_PARAMS = {"cffi_extra_compile_args": ["-O2", "-march=native"], "cffi_libraries": ["m"]}
@@ -109,6 +109,15 @@ def assemble_spin_softening(sector: Sector, ops: SvkOperators | None = None) -> 
     ops = ops or create_svk_operators(sector)
     v, du = ufl.TestFunction(sector.V), ufl.TrialFunction(sector.V)
     form = fem.form(forms.spin_softening(v, du, ops.constants["rho"]), jit_params=JIT_PARAMS)
+    return _assemble_matrix(form, [sector.clamp_bc], 0.0)
+
+
+def assemble_coriolis(sector: Sector, ops: SvkOperators | None = None) -> PETSc.Mat:
+    """G_1 (kg): the Coriolis matrix per unit spin about e_z (``forms.coriolis``; skew-symmetric), clamped rows and
+    columns zero."""
+    ops = ops or create_svk_operators(sector)
+    v, du = ufl.TestFunction(sector.V), ufl.TrialFunction(sector.V)
+    form = fem.form(forms.coriolis(v, du, ops.constants["rho"]), jit_params=JIT_PARAMS)
     return _assemble_matrix(form, [sector.clamp_bc], 0.0)
 
 

@@ -19,14 +19,14 @@ from petsc4py import PETSc
 
 from rotor37_rom import forms
 
-from .operators import (JIT_PARAMS, SvkOperators, _require_serial, assemble_mass, assemble_spin_softening,
-                        assemble_stiffness, assemble_tangent, assemble_vector, create_svk_operators,
-                        gather_dof_values, scipy_to_petsc)
+from .operators import (JIT_PARAMS, SvkOperators, _require_serial, assemble_coriolis, assemble_mass,
+                        assemble_spin_softening, assemble_stiffness, assemble_tangent, assemble_vector,
+                        create_svk_operators, gather_dof_values, scipy_to_petsc)
 from .sector import Sector
 
 __all__ = ["ModalResult", "StaticResult", "solve_eigenproblem", "compute_clamped_modes",
            "solve_static", "solve_clamped_static", "mumps_solver", "slepc_eigenpairs",
-           "shift_invert_solver", "static_compliance", "rotating_modes"]
+           "shift_invert_solver", "static_compliance", "rotating_modes", "reduced_coriolis"]
 
 LOG = logging.getLogger(__name__)
 
@@ -356,18 +356,21 @@ class _MumpsSolve:
 
 
 def rotating_modes(sector: Sector, spin: float, n_modes: int, ops: SvkOperators | None = None,
-                   M: PETSc.Mat | None = None, rtol: float = 1e-10) -> tuple[np.ndarray, np.ndarray]:
+                   M: PETSc.Mat | None = None, rtol: float = 1e-10, prestress: bool = True
+                   ) -> tuple[np.ndarray, np.ndarray]:
     """The first ``n_modes`` modes of the structure turning at ``spin`` (rad/s) about the machine axis e_z, without
     Coriolis: K_T(u_c) - spin^2 M_P at the centrifugal equilibrium u_c (``solve_static(spin=...)``, nonlinear SVK,
-    Newton to ``rtol``) against the mass; at spin 0 the clamped stiffness K. Returns (omega (n,) rad/s ascending,
-    V (n_dofs, n) with V^T M V = I, this rank's owned entries). ``M``: the mass, if the caller keeps it."""
+    Newton to ``rtol``) against the mass; at spin 0 the clamped stiffness K; with ``prestress`` False, K - spin^2 M_P
+    (spin softening only: a structure on the axis, whose centrifugal load is nil). Returns (omega (n,) rad/s
+    ascending, V (n_dofs, n) with V^T M V = I, this rank's owned entries). ``M``: the mass, if the caller keeps it."""
     if not (np.isfinite(spin) and spin >= 0.0):
         raise ValueError(f"spin must be a finite speed >= 0 rad/s, got {spin}")
     ops = ops or create_svk_operators(sector)
     own_mass = M is None
     M = assemble_mass(sector, ops) if own_mass else M
     if spin > 0.0:
-        u = solve_static(sector, spin=spin, n_steps=2, ops=ops, rtol=rtol).u.x.array
+        u = (solve_static(sector, spin=spin, n_steps=2, ops=ops, rtol=rtol).u.x.array if prestress else
+             np.zeros(ops.u.x.array.size))
         K = assemble_tangent(sector, u, ops, spin)
     else:
         K = assemble_stiffness(sector, ops)
@@ -377,6 +380,24 @@ def rotating_modes(sector: Sector, spin: float, n_modes: int, ops: SvkOperators 
     if own_mass:
         M.destroy()
     return np.asarray(omega), V
+
+
+def reduced_coriolis(sector: Sector, V: np.ndarray, ops: SvkOperators | None = None) -> np.ndarray:
+    """V^T G_1 V (n, n): the Coriolis matrix per unit spin about e_z (``assemble_coriolis``) on the columns of V
+    (this rank's owned entries, e.g. ``rotating_modes``' vectors), summed over ranks and made exactly
+    skew-symmetric. With M-orthonormal modes V of K_T - spin^2 M_P, the turning structure with Coriolis is
+    I u'' + spin (V^T G_1 V) u' + diag(omega^2) u = 0 on their span (``model.campbell.gyroscopic_frequencies``)."""
+    ops = ops or create_svk_operators(sector)
+    G = assemble_coriolis(sector, ops)
+    x, y = G.createVecs()
+    GV = np.empty_like(V)
+    for k in range(V.shape[1]):
+        x.array[:] = V[:, k]
+        G.mult(x, y)
+        GV[:, k] = y.array
+    G.destroy()
+    Gr = sector.comm.allreduce(V.T @ GV, op=MPI.SUM)
+    return 0.5 * (Gr - Gr.T)
 
 
 def mumps_solver(A) -> Callable[[np.ndarray], np.ndarray]:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["mac", "track_modes", "engine_order_crossings"]
+__all__ = ["mac", "track_modes", "engine_order_crossings", "gyroscopic_frequencies"]
 
 
 def mac(A: np.ndarray, B: np.ndarray) -> np.ndarray:
@@ -75,3 +75,21 @@ def engine_order_crossings(speeds: np.ndarray, omega: np.ndarray, orders) -> lis
                 out.append({"mode": int(k), "order": int(e), "speed": W, "frequency": e * W,
                             "bracket": (int(s), int(s + 1))})
     return sorted(out, key=lambda c: c["speed"])
+
+
+def gyroscopic_frequencies(K: np.ndarray, M: np.ndarray, G: np.ndarray) -> np.ndarray:
+    """The frequencies (rad/s, ascending, > 0) of M u'' + G u' + K u = 0 with K symmetric positive definite, M
+    symmetric positive definite and G skew-symmetric (a turning structure's Coriolis matrix times its speed): the
+    eigenvalues of the first-order form are i omega in +- pairs (the system is conservative); the positive omegas,
+    each once. ValueError if an eigenvalue has a real part beyond round-off (K not positive, G not skew)."""
+    K, M, G = (np.asarray(A, float) for A in (K, M, G))
+    n = K.shape[0]
+    Minv = np.linalg.inv(M)
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ G]])
+    lam = np.linalg.eigvals(A)
+    scale = np.abs(lam).max()
+    if np.abs(lam.real).max() > 1e-8 * scale:
+        raise ValueError(f"gyroscopic_frequencies: an eigenvalue leaves the imaginary axis by "
+                         f"{np.abs(lam.real).max() / scale:.1e} of the largest: K and M must be positive definite and "
+                         f"G skew-symmetric")
+    return np.sort(lam.imag[lam.imag > 0])

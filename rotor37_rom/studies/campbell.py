@@ -2,14 +2,13 @@
 
 At each speed Omega the blade turns about the machine axis e_z: its centrifugal equilibrium (nonlinear SVK, Newton
 on the exact tangent, ``fem.solve_static(spin=...)``) and the modes of the tangent there, K_T(u_c) - Omega^2 M_P
-(geometric stiffening and spin softening), against the mass (``fem.rotating_modes``; Coriolis is not included: it
-couples a blade's modes only through the small in-plane velocities, and splits the cyclic disk's travelling waves,
-which are the next step). The modes are followed across speeds by their shapes (``model.campbell.track_modes``) and
-named at rest from the tip's motion (1B, 1T, 2B, ...). Each crossing with an engine order e (omega_k = e Omega) is
-bracketed on the speed grid, interpolated with omega^2 linear in Omega^2, then, with ``refine`` > 0, iterated on the
-blade itself: Omega = omega_k,0 / sqrt(e^2 - S_k(Omega)) with Southwell's coefficient
-S_k(Omega) = (omega_k(Omega)^2 - omega_k,0^2) / Omega^2 measured at the current estimate, until it moves by less than
-``refine`` rad/s.
+(geometric stiffening and spin softening), against the mass (``fem.rotating_modes``); with ``coriolis``, the
+gyroscopic coupling of the turning frame too, on 3 n_modes of those modes (``fem.reduced_coriolis``). The modes are
+followed across speeds by their shapes (``model.campbell.track_modes``) and named at rest from the tip's motion (1B,
+1T, 2B, ...). Each crossing with an engine order e (omega_k = e Omega) is bracketed on the speed grid, interpolated
+with omega^2 linear in Omega^2, then, with ``refine`` > 0, iterated on the blade itself:
+Omega = omega_k,0 / sqrt(e^2 - S_k(Omega)) with Southwell's coefficient S_k(Omega) = (omega_k(Omega)^2 -
+omega_k,0^2) / Omega^2 measured at the current estimate, until it moves by less than ``refine`` rad/s.
 """
 from __future__ import annotations
 
@@ -37,6 +36,8 @@ class CampbellConfig:
         n_modes: modes followed (1..20).
         orders: engine orders drawn and crossed (integers 1..100).
         refine: each crossing iterated on the blade to this (rad/s, > 0), or 0: interpolated on the grid only.
+        coriolis: include the Coriolis force (the turning frame's gyroscopic coupling), solved on 3 n_modes modes
+            of the problem without it (``fem.reduced_coriolis``, ``model.campbell.gyroscopic_frequencies``).
         out: output folder (the chart and summary.json).
     """
 
@@ -45,6 +46,7 @@ class CampbellConfig:
     n_modes: int = 4
     orders: tuple = (1, 2, 3, 4, 5, 6, 7, 8)
     refine: float = 0.01
+    coriolis: bool = False
     out: Path = Path("results/campbell")
 
     def __post_init__(self):
@@ -110,14 +112,14 @@ def run_campbell(config: CampbellConfig, sector=None) -> CampbellResult:
     speeds = config.speed_grid
     freqs, shapes = [], []
     for spin in speeds:
-        w, V = fem.rotating_modes(sector, float(spin), config.n_modes, ops, M)
+        w, V = _modes(sector, ops, M, config, float(spin))
         freqs.append(w)
         shapes.append(V)
     omega, worst = track_modes(freqs, shapes)
     tips = np.stack([shapes[0][sector.tip_dofs.ravel(), k].reshape(-1, 3) for k in range(config.n_modes)])
     labels = classify_blade_modes(tips, sector.tip_nodes)
     crossings = engine_order_crossings(speeds, omega, config.orders)
-    rest = omega[0] if speeds[0] == 0.0 else np.asarray(fem.rotating_modes(sector, 0.0, config.n_modes, ops, M)[0])
+    rest = omega[0] if speeds[0] == 0.0 else _modes(sector, ops, M, config, 0.0)[0]
     for c in crossings:
         c["label"] = labels[c["mode"]]
         c["refined"] = 0
@@ -128,18 +130,33 @@ def run_campbell(config: CampbellConfig, sector=None) -> CampbellResult:
     config.out.mkdir(parents=True, exist_ok=True)
     from rotor37_rom.viz.charts import plot_campbell
 
+    effects = "prestressed, spin softened, " + ("Coriolis" if config.coriolis else "no Coriolis")
     files = [plot_campbell(result, config.orders, config.out / "campbell.png",
-                           f"rotor 37 blade ({config.preset}): prestressed, spin softened, no Coriolis")]
+                           f"rotor 37 blade ({config.preset}): {effects}")]
     (config.out / "summary.json").write_text(json.dumps(result.summary(), indent=1))
     files.append(config.out / "summary.json")
     return dataclasses.replace(result, files=files)
 
 
+def _modes(sector, ops, M, config: CampbellConfig, spin: float) -> tuple[np.ndarray, np.ndarray]:
+    """(frequencies (n_modes,) rad/s, shapes (n_dofs, n_modes)) at ``spin``: the prestressed, spin-softened modes;
+    with Coriolis, the gyroscopic frequencies on 3 n_modes of them, the lowest n_modes, beside the shapes without
+    it (the Coriolis force of a blade moves its frequencies by little and keeps their order: the shapes follow
+    the modes across speeds)."""
+    from rotor37_rom import fem
+    from rotor37_rom.model.campbell import gyroscopic_frequencies
+
+    n = config.n_modes
+    if not config.coriolis or spin == 0.0:
+        return fem.rotating_modes(sector, spin, n, ops, M)
+    w, V = fem.rotating_modes(sector, spin, 3 * n, ops, M)
+    G = fem.reduced_coriolis(sector, V, ops)
+    return gyroscopic_frequencies(np.diag(w**2), np.eye(len(w)), spin * G)[:n], V[:, :n]
+
+
 def _refine(sector, ops, M, config: CampbellConfig, crossing: dict, omega0: float, shapes, freqs, omega) -> None:
     """Iterate one crossing on the blade (module docstring), the mode found at each estimate by its shape (largest
     MAC against the bracket's nearer speed's shape); updates ``crossing`` in place."""
-    from rotor37_rom import fem
-
     k, e = crossing["mode"], crossing["order"]
     s0, s1 = crossing["bracket"]
     W = crossing["speed"]
@@ -147,7 +164,7 @@ def _refine(sector, ops, M, config: CampbellConfig, crossing: dict, omega0: floa
     column = int(np.flatnonzero(np.isclose(freqs[near], omega[near, k]))[0])
     reference = shapes[near][:, [column]]
     for it in range(1, 21):
-        w, V = fem.rotating_modes(sector, W, config.n_modes, ops, M)
+        w, V = _modes(sector, ops, M, config, W)
         j = int(np.argmax(mac(reference, V)[0]))
         S = (w[j] ** 2 - omega0**2) / W**2 if W > 0 else 0.0
         new = float(omega0 / np.sqrt(e * e - S)) if e * e > S else W
