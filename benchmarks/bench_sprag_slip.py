@@ -42,8 +42,8 @@ SPINS = (1400.0, 1800.0)     # rad/s: the 1B/EO4 region and the design speed
 
 
 def frames(nodes: np.ndarray, normal: str, sense: int, root: np.ndarray, tip: np.ndarray):
-    """(normals, slides) (n, 3) of the contact nodes for one choice of normal (``dynamics.casing.contact_frames``; e_x turned
-    about e_z through a centroid for 'root centroid' and 'tip centroid')."""
+    """(normals, slides) (n, 3) of the contact nodes for one choice of normal (``dynamics.casing.contact_frames``;
+    e_x turned about e_z through a centroid for 'root centroid' and 'tip centroid')."""
     if normal in ("root centroid", "tip centroid"):
         c = root if normal == "root centroid" else tip
         beta = np.arctan2(c[1], c[0])
@@ -104,15 +104,14 @@ class Turning:
         self.record["turning"].append({"spin_rad_s": spin, "frequencies_rad_s": w.tolist(), "southwell": S})
 
     def finish(self) -> dict:
-        crossing, S = self.rest[0] / 4, 0.0
-        for _ in range(8):
-            K = rotating_tangent(self.blade, self.ops, crossing)
-            w, S = self.frequencies(K, crossing)
-            K.destroy()
-            new = self.rest[0] / np.sqrt(16 - S)
-            done, crossing = abs(new - crossing) < 1e-2, new
-            if done:
-                break
+        from rotor37_rom import fem
+        from rotor37_rom.studies.campbell import iterate_crossing
+
+        crossing, _ = iterate_crossing(lambda spin: fem.rotating_modes(self.blade, spin, 3, self.ops, self.M), 4,
+                                       self.rest[0] / 4, self.rest[0], lambda w, V: 0, tol=1e-2)
+        K = rotating_tangent(self.blade, self.ops, crossing)
+        _, S = self.frequencies(K, crossing)
+        K.destroy()
         self.M.destroy()
         self.record.update(eo4_crossing_rad_s=float(crossing), eo4_crossing_at_rest_rad_s=float(self.rest[0] / 4),
                            southwell=S)

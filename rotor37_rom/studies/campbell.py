@@ -23,7 +23,7 @@ from rotor37_rom.checks import before_work
 from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.model.campbell import engine_order_crossings, mac, track_modes
 
-__all__ = ["CampbellConfig", "CampbellResult", "run_campbell"]
+__all__ = ["CampbellConfig", "CampbellResult", "iterate_crossing", "run_campbell"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -155,22 +155,35 @@ def _modes(sector, ops, M, config: CampbellConfig, spin: float) -> tuple[np.ndar
 
 
 def _refine(sector, ops, M, config: CampbellConfig, crossing: dict, omega0: float, shapes, freqs, omega) -> None:
-    """Iterate one crossing on the blade (module docstring), the mode found at each estimate by its shape (largest
+    """Iterate one crossing on the blade (``iterate_crossing``), the mode found at each estimate by its shape (largest
     MAC against the bracket's nearer speed's shape); updates ``crossing`` in place."""
-    k, e = crossing["mode"], crossing["order"]
+    k = crossing["mode"]
     s0, s1 = crossing["bracket"]
-    W = crossing["speed"]
-    near = s0 if abs(W - config.speed_grid[s0]) <= abs(W - config.speed_grid[s1]) else s1
+    grid = config.speed_grid
+    near = s0 if abs(crossing["speed"] - grid[s0]) <= abs(crossing["speed"] - grid[s1]) else s1
     column = int(np.flatnonzero(np.isclose(freqs[near], omega[near, k]))[0])
     reference = shapes[near][:, [column]]
-    for it in range(1, 21):
-        w, V = _modes(sector, ops, M, config, W)
-        j = int(np.argmax(mac(reference, V)[0]))
-        S = (w[j] ** 2 - omega0**2) / W**2 if W > 0 else 0.0
+    W, steps = iterate_crossing(lambda spin: _modes(sector, ops, M, config, spin), crossing["order"],
+                                crossing["speed"], omega0, lambda w, V: int(np.argmax(mac(reference, V)[0])),
+                                config.refine)
+    crossing.update(speed=W, frequency=crossing["order"] * W, refined=steps)
+
+
+def iterate_crossing(modes, order: int, start: float, omega0: float, pick, tol: float = 0.01,
+                     max_iter: int = 20) -> tuple[float, int]:
+    """The speed where a mode meets engine order ``order``, iterated from ``start`` (rad/s): Omega = omega0 /
+    sqrt(e^2 - S(Omega)) with Southwell's S(Omega) = (omega(Omega)^2 - omega0^2) / Omega^2 measured at the current
+    estimate (omega0: the mode at rest), until it moves by less than ``tol``. ``modes(spin)`` -> (frequencies,
+    shapes) of the turning structure; ``pick(frequencies, shapes)`` -> the index of the mode followed. Returns (speed,
+    iterations), iterations -max_iter if it did not settle. The update contracts by about S' / (e^2 - S) a step (a
+    few per cent on a blade), so the last step bounds the distance to the crossing."""
+    W, e = float(start), int(order)
+    for it in range(1, max_iter + 1):
+        w, V = modes(W)
+        S = (w[pick(w, V)] ** 2 - omega0**2) / W**2 if W > 0 else 0.0
         new = float(omega0 / np.sqrt(e * e - S)) if e * e > S else W
-        done = abs(new - W) < config.refine
+        done = abs(new - W) < tol
         W = new
         if done:
-            crossing.update(speed=W, frequency=e * W, refined=it)
-            return
-    crossing.update(speed=W, frequency=e * W, refined=-20)         # did not settle in 20 iterations: said
+            return W, it
+    return W, -max_iter
