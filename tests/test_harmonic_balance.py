@@ -208,6 +208,19 @@ def test_bad_input():
         continue_branch(hb, start, 1.5, step=0.0)
     with pytest.raises(ValueError, match="did not converge in 2 iterations at omega = 1.05"):
         solve_periodic(duffing(3), np.full(7, 3.0), 1.05, max_iter=2)
+    from rotor37_rom.periodic import PeriodicProblem
+
+    assert isinstance(hb, PeriodicProblem)
+
+    class BlowsUp(type(hb)):                          # a residual past the floating-point range: stop at once
+        def residual(self, x, omega, jacobian=True, domega=True):
+            R, J, dR = super().residual(x, omega, jacobian, domega)
+            return R * np.inf, J, dR
+
+    blows = BlowsUp.__new__(BlowsUp)
+    blows.__dict__.update(hb.__dict__)
+    with pytest.raises(ValueError, match="residual is not finite at omega = 0.5 after 0 Newton iterations"):
+        solve_periodic(blows, start.unknowns, 0.5)
 
 
 def test_newton_stops_at_the_round_off_floor():

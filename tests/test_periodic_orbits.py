@@ -297,5 +297,10 @@ def test_shooting_bad_input(ci_rom):
         Shooting(scheme, Casing(), steps=1)
     with pytest.raises(ValueError, match="needs an excitation"):
         Shooting(scheme)
+    from rotor37_rom.periodic import PeriodicProblem
+
+    assert isinstance(Shooting(scheme, Casing()), PeriodicProblem)
+    with pytest.raises(ValueError, match="periods \\(of the transient from rest\\) must be an integer >= 1"):
+        Shooting(scheme, Casing(), steps=4000).from_rest(2 * 1220.0, 0)
     with pytest.raises(ValueError, match="exceeds the scheme's stability limit"):
         Shooting(scheme, Casing(), steps=10).scheme_at(100.0)

@@ -4,12 +4,12 @@ arc-length continuation (``harmonic_balance``); Coulomb friction with sticking, 
 monodromy (``shooting``); a tuned disk's travelling-wave response on one sector, its Hill stability per nodal
 diameter (``travelling_wave``). Pure NumPy/SciPy, on any second-order system whose nonlinear force evaluates a batch of
 states with its Jacobian, as the reduced models' forces do."""
-from .harmonic_balance import (Branch, Harmonics, HarmonicBalance, PeriodicSolution, continue_branch, model_force,
-    solve_periodic, time_state, backbone, bifurcation_kind)
+from .harmonic_balance import (Branch, Harmonics, HarmonicBalance, PeriodicProblem, PeriodicSolution, continue_branch,
+    model_force, solve_periodic, time_state, backbone, bifurcation_kind)
 from .contact import CoulombFriction, ContactBalance
 from .shooting import Shooting
 from .travelling_wave import TravellingWaveBalance, travelling_excitation
 
-__all__ = ["Branch", "Harmonics", "HarmonicBalance", "PeriodicSolution", "continue_branch", "solve_periodic",
-           "model_force", "time_state", "backbone", "bifurcation_kind", "CoulombFriction", "ContactBalance", "Shooting",
-           "TravellingWaveBalance", "travelling_excitation"]
+__all__ = ["Branch", "Harmonics", "HarmonicBalance", "PeriodicProblem", "PeriodicSolution", "continue_branch",
+           "solve_periodic", "model_force", "time_state", "backbone", "bifurcation_kind", "CoulombFriction",
+           "ContactBalance", "Shooting", "TravellingWaveBalance", "travelling_excitation"]

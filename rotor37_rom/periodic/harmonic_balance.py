@@ -24,13 +24,13 @@ tangent's omega component changes sign; every point carries its stability. Pure 
 from __future__ import annotations
 
 import dataclasses
-from typing import Callable
+from typing import Callable, Protocol, runtime_checkable
 
 import numpy as np
 import scipy.linalg
 
-__all__ = ["Harmonics", "HarmonicBalance", "PeriodicSolution", "Branch", "continue_branch", "solve_periodic",
-           "model_force", "time_state", "backbone", "bifurcation_kind", "hill_eigenvalues",
+__all__ = ["Harmonics", "HarmonicBalance", "PeriodicProblem", "PeriodicSolution", "Branch", "continue_branch",
+           "solve_periodic", "model_force", "time_state", "backbone", "bifurcation_kind", "hill_eigenvalues",
            "hill_exponents", "harmonic_energy"]
 
 
@@ -258,6 +258,29 @@ def hill_exponents(lam: np.ndarray, centre: np.ndarray, omega: float, H: int) ->
     return np.flatnonzero(band | stiff)
 
 
+@runtime_checkable
+class PeriodicProblem(Protocol):
+    """What ``solve_periodic`` and ``continue_branch`` need of a periodic problem (``HarmonicBalance``,
+    ``ContactBalance``, ``Shooting``, ``TravellingWaveBalance`` implement it).
+
+    Members:
+        size: the number of unknowns x.
+        residual(x, omega, jacobian=True, domega=True): R, or (R, dR/dx, dR/domega or None).
+        floquet_exponents(x, omega, J=None): the orbit's Floquet exponents (J: dR/dx at x, if at hand).
+    Optional members (read where present): split(x) -> (X, (L, ...)), the orbit and its contact laws' unknowns
+    (default: x as the (2H + 1, n) coefficients); scales(x), the unknowns' scales of a nonsmooth balance (Newton's
+    step is then halved while it raises the residual, and measured in these scales); smooth, true where Newton may
+    stop at its round-off floor (``_at_floor``).
+    """
+
+    @property
+    def size(self) -> int: ...
+
+    def residual(self, x: np.ndarray, omega: float, jacobian: bool = True, domega: bool = True): ...
+
+    def floquet_exponents(self, x: np.ndarray, omega: float, J: np.ndarray | None = None) -> np.ndarray: ...
+
+
 def _stable(exponents: np.ndarray | None, omega: float) -> bool | None:
     """Every Floquet exponent with a negative real part (round-off: 1e-9 omega); None without exponents."""
     return None if exponents is None else bool(np.all(exponents.real < 1e-9 * omega))
@@ -289,7 +312,7 @@ def _at_floor(hb, norms: list, step: float, size: float) -> bool:
                 and norms[-1] >= 0.5 * min(norms[-4:-1]))
 
 
-def solve_periodic(hb: HarmonicBalance, x0: np.ndarray, omega: float, tol: float = 1e-10, max_iter: int = 30,
+def solve_periodic(hb: PeriodicProblem, x0: np.ndarray, omega: float, tol: float = 1e-10, max_iter: int = 30,
                    stability: bool = True) -> PeriodicSolution:
     """Newton on R(x, omega) = 0 at fixed omega from x0 (relative tolerance ``tol`` on the update, or a smooth
     balance's round-off floor, ``_at_floor``); ValueError where it does not converge."""
@@ -374,7 +397,7 @@ def _tangent(J: np.ndarray, dR_domega: np.ndarray, previous: np.ndarray | None) 
     return t
 
 
-def continue_branch(hb: HarmonicBalance, start: PeriodicSolution, omega_end: float, step: float,
+def continue_branch(hb: PeriodicProblem, start: PeriodicSolution, omega_end: float, step: float,
                     step_min: float | None = None, step_max: float | None = None, max_points: int = 2000,
                     tol: float = 1e-10, max_iter: int = 12, stability: bool = True) -> Branch:
     """Pseudo-arc-length continuation from ``start`` towards ``omega_end`` (the branch ends past it, or where the
