@@ -109,9 +109,7 @@ class Turning:
 
         crossing, _ = iterate_crossing(lambda spin: fem.rotating_modes(self.blade, spin, 3, self.ops, self.M), 4,
                                        self.rest[0] / 4, self.rest[0], lambda w, V: 0, tol=1e-2)
-        K = rotating_tangent(self.blade, self.ops, crossing)
-        _, S = self.frequencies(K, crossing)
-        K.destroy()
+        S = 16 - (self.rest[0] / crossing) ** 2      # the Southwell S of the last update: crossing = w0 / sqrt(16 - S)
         self.M.destroy()
         self.record.update(eo4_crossing_rad_s=float(crossing), eo4_crossing_at_rest_rad_s=float(self.rest[0] / 4),
                            southwell=S)

@@ -382,20 +382,23 @@ def rotating_modes(sector: Sector, spin: float, n_modes: int, ops: SvkOperators 
     return np.asarray(omega), V
 
 
-def reduced_coriolis(sector: Sector, V: np.ndarray, ops: SvkOperators | None = None) -> np.ndarray:
-    """V^T G_1 V (n, n): the Coriolis matrix per unit spin about e_z (``assemble_coriolis``) on the columns of V
-    (this rank's owned entries, e.g. ``rotating_modes``' vectors), summed over ranks and made exactly
-    skew-symmetric. With M-orthonormal modes V of K_T - spin^2 M_P, the turning structure with Coriolis is
-    I u'' + spin (V^T G_1 V) u' + diag(omega^2) u = 0 on their span (``model.campbell.gyroscopic_frequencies``)."""
-    ops = ops or create_svk_operators(sector)
-    G = assemble_coriolis(sector, ops)
+def reduced_coriolis(sector: Sector, V: np.ndarray, ops: SvkOperators | None = None,
+                     G: PETSc.Mat | None = None) -> np.ndarray:
+    """V^T G_1 V (n, n): the Coriolis matrix per unit spin about e_z (``assemble_coriolis``; ``G``: that matrix, if
+    the caller keeps it: it does not depend on the speed) on the columns of V (this rank's owned entries, e.g.
+    ``rotating_modes``' vectors), summed over ranks and made exactly skew-symmetric. With M-orthonormal modes V of
+    K_T - spin^2 M_P, the turning structure with Coriolis is I u'' + spin (V^T G_1 V) u' + diag(omega^2) u = 0 on
+    their span (``model.campbell.gyroscopic_frequencies``)."""
+    own = G is None
+    G = assemble_coriolis(sector, ops or create_svk_operators(sector)) if own else G
     x, y = G.createVecs()
     GV = np.empty_like(V)
     for k in range(V.shape[1]):
         x.array[:] = V[:, k]
         G.mult(x, y)
         GV[:, k] = y.array
-    G.destroy()
+    if own:
+        G.destroy()
     Gr = sector.comm.allreduce(V.T @ GV, op=MPI.SUM)
     return 0.5 * (Gr - Gr.T)
 

@@ -13,7 +13,6 @@ omega_k,0^2) / Omega^2 measured at the current estimate, until it moves by less 
 from __future__ import annotations
 
 import dataclasses
-import json
 import time
 from pathlib import Path
 
@@ -22,6 +21,7 @@ import numpy as np
 from rotor37_rom.checks import before_work
 from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.model.campbell import engine_order_crossings, mac, track_modes
+from rotor37_rom.npz import save_json
 
 __all__ = ["CampbellConfig", "CampbellResult", "iterate_crossing", "run_campbell"]
 
@@ -109,23 +109,26 @@ def run_campbell(config: CampbellConfig, sector=None) -> CampbellResult:
     sector = sector if sector is not None else fem.create_blade_sector(preset=config.preset)
     ops = fem.create_svk_operators(sector)
     M = fem.assemble_mass(sector, ops)
+    G = fem.assemble_coriolis(sector, ops) if config.coriolis else None      # one for every speed
     speeds = config.speed_grid
     freqs, shapes = [], []
     for spin in speeds:
-        w, V = _modes(sector, ops, M, config, float(spin))
+        w, V = _modes(sector, ops, M, G, config, float(spin))
         freqs.append(w)
         shapes.append(V)
     omega, worst = track_modes(freqs, shapes)
     tips = np.stack([shapes[0][sector.tip_dofs.ravel(), k].reshape(-1, 3) for k in range(config.n_modes)])
     labels = classify_blade_modes(tips, sector.tip_nodes)
     crossings = engine_order_crossings(speeds, omega, config.orders)
-    rest = omega[0] if speeds[0] == 0.0 else _modes(sector, ops, M, config, 0.0)[0]
+    rest = omega[0] if speeds[0] == 0.0 else _modes(sector, ops, M, G, config, 0.0)[0]
     for c in crossings:
         c["label"] = labels[c["mode"]]
         c["refined"] = 0
         if config.refine > 0:
-            _refine(sector, ops, M, config, c, rest[c["mode"]], shapes, freqs, omega)
+            _refine(sector, ops, M, G, config, c, rest[c["mode"]], shapes, freqs, omega)
     M.destroy()
+    if G is not None:
+        G.destroy()
     result = CampbellResult(speeds, omega, labels, worst, crossings, time.perf_counter() - t0)
     config.out.mkdir(parents=True, exist_ok=True)
     from rotor37_rom.viz.charts import plot_campbell
@@ -133,12 +136,12 @@ def run_campbell(config: CampbellConfig, sector=None) -> CampbellResult:
     effects = "prestressed, spin softened, " + ("Coriolis" if config.coriolis else "no Coriolis")
     files = [plot_campbell(result, config.orders, config.out / "campbell.png",
                            f"rotor 37 blade ({config.preset}): {effects}")]
-    (config.out / "summary.json").write_text(json.dumps(result.summary(), indent=1))
+    save_json(config.out / "summary.json", result.summary(), indent=1)
     files.append(config.out / "summary.json")
     return dataclasses.replace(result, files=files)
 
 
-def _modes(sector, ops, M, config: CampbellConfig, spin: float) -> tuple[np.ndarray, np.ndarray]:
+def _modes(sector, ops, M, G, config: CampbellConfig, spin: float) -> tuple[np.ndarray, np.ndarray]:
     """(frequencies (n_modes,) rad/s, shapes (n_dofs, n_modes)) at ``spin``: the prestressed, spin-softened modes;
     with Coriolis, the gyroscopic frequencies on 3 n_modes of them, the lowest n_modes, beside the shapes without
     it (the Coriolis force of a blade moves its frequencies by little and keeps their order: the shapes follow
@@ -150,11 +153,11 @@ def _modes(sector, ops, M, config: CampbellConfig, spin: float) -> tuple[np.ndar
     if not config.coriolis or spin == 0.0:
         return fem.rotating_modes(sector, spin, n, ops, M)
     w, V = fem.rotating_modes(sector, spin, 3 * n, ops, M)
-    G = fem.reduced_coriolis(sector, V, ops)
-    return gyroscopic_frequencies(np.diag(w**2), np.eye(len(w)), spin * G)[:n], V[:, :n]
+    Gr = fem.reduced_coriolis(sector, V, ops, G)
+    return gyroscopic_frequencies(np.diag(w**2), np.eye(len(w)), spin * Gr)[:n], V[:, :n]
 
 
-def _refine(sector, ops, M, config: CampbellConfig, crossing: dict, omega0: float, shapes, freqs, omega) -> None:
+def _refine(sector, ops, M, G, config: CampbellConfig, crossing: dict, omega0: float, shapes, freqs, omega) -> None:
     """Iterate one crossing on the blade (``iterate_crossing``), the mode found at each estimate by its shape (largest
     MAC against the bracket's nearer speed's shape); updates ``crossing`` in place."""
     k = crossing["mode"]
@@ -163,7 +166,7 @@ def _refine(sector, ops, M, config: CampbellConfig, crossing: dict, omega0: floa
     near = s0 if abs(crossing["speed"] - grid[s0]) <= abs(crossing["speed"] - grid[s1]) else s1
     column = int(np.flatnonzero(np.isclose(freqs[near], omega[near, k]))[0])
     reference = shapes[near][:, [column]]
-    W, steps = iterate_crossing(lambda spin: _modes(sector, ops, M, config, spin), crossing["order"],
+    W, steps = iterate_crossing(lambda spin: _modes(sector, ops, M, G, config, spin), crossing["order"],
                                 crossing["speed"], omega0, lambda w, V: int(np.argmax(mac(reference, V)[0])),
                                 config.refine)
     crossing.update(speed=W, frequency=crossing["order"] * W, refined=steps)
