@@ -1,5 +1,5 @@
-"""gmsh OpenCASCADE models of cyclic sectors: the rotor 37 bladed-disk sector of the paper's §3 and a plain annular
-plate sector (a verification case with a closed-form reference).
+"""gmsh OpenCASCADE models of cyclic sectors: the rotor 37 bladed-disk sector of the paper's §3, a plain annular
+plate sector and a free thin ring's sector (verification cases with closed-form references).
 
 A sector is the part of a structure of N identical sectors between two cyclic faces, the right face being the left
 one turned by 2 pi / N about e_z. The disk sector's faces are built as one surface and its turned copy, and meshed
@@ -28,7 +28,7 @@ from .parametric import N_TABLE_SECTIONS, BladeLaw
 from .tables import BladeTable
 
 __all__ = ["DiskProfile", "SectorModel", "root_camber_angle", "create_disk_sector_model",
-           "create_annular_sector_model", "DISK_GROUP"]
+           "create_annular_sector_model", "create_ring_sector_model", "DISK_GROUP"]
 
 DISK_GROUP = 11               # physical tag of the disk volume (the blade volume is BladeGroup.BLADE)
 _MM = 1e-3
@@ -102,7 +102,8 @@ class SectorModel:
 
     Attributes:
         source: what was built; volume: CAD volume (m^3); tip_nodes: (n, 3) contact nodes LE -> TE (empty for a
-        plate); preset; n_nodes: mesh nodes; n_sectors: N; blade_volume: CAD volume of the blade part (m^3).
+        plate); preset; n_nodes: mesh nodes; n_sectors: N; blade_volume: CAD volume of the blade part (m^3); free: no
+        clamp (the model has no 'clamp' group by design).
     """
 
     source: str
@@ -112,6 +113,7 @@ class SectorModel:
     n_nodes: int
     n_sectors: int
     blade_volume: float = 0.0
+    free: bool = False
 
 
 def _rotation_affine(angle: float) -> list[float]:
@@ -302,39 +304,24 @@ def create_disk_sector_model(table: BladeTable | None = None, preset: str | Mesh
                        blade_volume=occ.getMass(3, blade_vol))
 
 
-def create_annular_sector_model(inner: float, outer: float, thickness: float, n_sectors: int,
-                                size: float, layers: int = 2) -> SectorModel:
-    """A sector of a flat annular plate (inner radius clamped, outer edge free; mid-plane z = 0) with radial cyclic
-    faces at theta = 0 and 2 pi / N, meshed as a structured grid of about ``size`` (m) in r and along the mid-radius
-    arc and exactly ``layers`` elements through the thickness: each (r, theta, z) cell split into the 6 tetrahedra of
-    its main diagonal (Kuhn's subdivision: the same in every cell, so the mesh is conforming and the right face's
-    triangles are the left face's turned). Groups: volume 'disk', faces 'clamp' (inner edge), 'left', 'right'. For
-    verification against the Kirchhoff plate (``tests/test_disk.py``)."""
+def _structured_annulus(inner: float, outer: float, height: float, n_sectors: int, nr: int, nt: int, nz: int):
+    """A structured grid of the sector inner <= r <= outer, 0 <= theta <= 2 pi / N, |z| <= height / 2 with nr x nt x
+    nz cells, each split into the 6 tetrahedra of its main diagonal (Kuhn's subdivision: the same in every cell, so
+    the mesh is conforming and the right face's triangles are the left face's turned, to round-off). Returns (points,
+    tets (positively oriented), index (nr+1, nt+1, nz+1) of the nodes, volume)."""
     import itertools
 
-    from .mesh_import import ImportedMesh, add_to_gmsh, boundary_facets
-
-    if not (0.0 < inner < outer) or not (0.0 < thickness < outer - inner):
-        raise ValueError("annular sector: need 0 < inner < outer and 0 < thickness < outer - inner")
-    if not (2 <= int(n_sectors) <= 360):
-        raise ValueError(f"n_sectors must be in [2, 360], got {n_sectors}")
-    if not (isinstance(layers, (int, np.integer)) and not isinstance(layers, bool) and 1 <= layers <= 50):
-        raise ValueError(f"layers must be an integer in 1..50 (elements through the thickness), got {layers!r}")
-    if not 0.0 < size <= outer - inner:
-        raise ValueError(f"size must be in (0, outer - inner], got {size}")
     angle = 2 * np.pi / int(n_sectors)
-    nr = max(1, int(np.ceil((outer - inner) / size - 1e-9)))
-    nt = max(1, int(np.ceil(angle * 0.5 * (inner + outer) / size - 1e-9)))     # about size at the mid radius
     r = inner + (outer - inner) * np.arange(nr + 1) / nr
     theta = angle * np.arange(nt + 1) / nt
     theta[-1] = angle                                  # the right face: the left one's nodes turned, exactly
-    z = thickness * (np.arange(layers + 1) / layers - 0.5)
+    z = height * (np.arange(nz + 1) / nz - 0.5)
     R, TH, Z = np.meshgrid(r, theta, z, indexing="ij")
     points = np.column_stack([(R * np.cos(TH)).ravel(), (R * np.sin(TH)).ravel(), Z.ravel()])
-    index = np.arange(len(points)).reshape(nr + 1, nt + 1, layers + 1)
+    index = np.arange(len(points)).reshape(nr + 1, nt + 1, nz + 1)
 
     def corner(d):                                     # the node at offset d of every cell
-        return index[d[0]:nr + d[0], d[1]:nt + d[1], d[2]:layers + d[2]].ravel()
+        return index[d[0]:nr + d[0], d[1]:nt + d[1], d[2]:nz + d[2]].ravel()
 
     tets = []
     for order in itertools.permutations(range(3)):     # 000 -> ... -> 111 along the axes in this order
@@ -346,19 +333,72 @@ def create_annular_sector_model(inner: float, outer: float, thickness: float, n_
     a, b, c, d = (points[tets[:, k]] for k in range(4))
     signed = np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a)
     tets[signed < 0] = tets[signed < 0][:, [0, 2, 1, 3]]
-    facets = boundary_facets(tets)
-    groups = {}
-    for tag, name, nodes in ((BladeGroup.CLAMP, "clamp", index[0]), (BladeGroup.LEFT, "left", index[:, 0]),
-                             (BladeGroup.RIGHT, "right", index[:, -1])):
-        groups[(int(tag), name)] = facets[np.isin(facets, nodes.ravel()).all(axis=1)]
-    mesh = ImportedMesh(points=points, tets=tets, node_sets={}, converted={"tetra": (len(tets), len(tets))},
-                        source="annular plate sector")
+    return points, tets, index, float(np.abs(signed).sum() / 6)
+
+
+def _annulus_to_gmsh(points, tets, index, clamped: bool, source: str) -> None:
+    """The structured annulus into a new gmsh model: volume 'disk', faces 'left', 'right' and (if ``clamped``)
+    'clamp' (the inner edge)."""
     import gmsh
 
+    from .mesh_import import ImportedMesh, add_to_gmsh, boundary_facets
+
+    facets = boundary_facets(tets)
+    faces = ([(BladeGroup.CLAMP, "clamp", index[0])] if clamped else []) + \
+        [(BladeGroup.LEFT, "left", index[:, 0]), (BladeGroup.RIGHT, "right", index[:, -1])]
+    groups = {(int(tag), name): facets[np.isin(facets, nodes.ravel()).all(axis=1)] for tag, name, nodes in faces}
+    mesh = ImportedMesh(points=points, tets=tets, node_sets={}, converted={"tetra": (len(tets), len(tets))},
+                        source=source)
     gmsh.model.add("annular_sector")
     add_to_gmsh(mesh, groups, DISK_GROUP, "disk")
+
+
+def create_annular_sector_model(inner: float, outer: float, thickness: float, n_sectors: int,
+                                size: float, layers: int = 2) -> SectorModel:
+    """A sector of a flat annular plate (inner radius clamped, outer edge free; mid-plane z = 0) with radial cyclic
+    faces at theta = 0 and 2 pi / N, meshed as a structured grid of about ``size`` (m) in r and along the mid-radius
+    arc and exactly ``layers`` elements through the thickness (``_structured_annulus``). Groups: volume 'disk', faces
+    'clamp' (inner edge), 'left', 'right'. For verification against the Kirchhoff plate (``tests/test_disk.py``)."""
+    if not (0.0 < inner < outer) or not (0.0 < thickness < outer - inner):
+        raise ValueError("annular sector: need 0 < inner < outer and 0 < thickness < outer - inner")
+    if not (2 <= int(n_sectors) <= 360):
+        raise ValueError(f"n_sectors must be in [2, 360], got {n_sectors}")
+    if not (isinstance(layers, (int, np.integer)) and not isinstance(layers, bool) and 1 <= layers <= 50):
+        raise ValueError(f"layers must be an integer in 1..50 (elements through the thickness), got {layers!r}")
+    if not 0.0 < size <= outer - inner:
+        raise ValueError(f"size must be in (0, outer - inner], got {size}")
+    angle = 2 * np.pi / int(n_sectors)
+    nr = max(1, int(np.ceil((outer - inner) / size - 1e-9)))
+    nt = max(1, int(np.ceil(angle * 0.5 * (inner + outer) / size - 1e-9)))     # about size at the mid radius
+    points, tets, index, volume = _structured_annulus(inner, outer, thickness, n_sectors, nr, nt, layers)
+    _annulus_to_gmsh(points, tets, index, True, "annular plate sector")
     return SectorModel(source=f"annular(a={outer:g}, b={inner:g}, h={thickness:g}, N={int(n_sectors)}, "
                               f"{nr} x {nt} x {layers} cells)",
-                       volume=float(np.abs(signed).sum() / 6), tip_nodes=np.zeros((0, 3)),
+                       volume=volume, tip_nodes=np.zeros((0, 3)),
                        preset=MeshPreset("plate", size, 0, min(size, thickness / layers)),
                        n_nodes=len(points), n_sectors=int(n_sectors))
+
+
+def create_ring_sector_model(radius: float, radial: float, axial: float, n_sectors: int, size: float
+                             ) -> SectorModel:
+    """A sector of a free thin ring: mean radius ``radius``, rectangular cross-section ``radial`` x ``axial`` (m),
+    a structured grid (``_structured_annulus``) of about ``size`` (m) in every direction (at least 2 cells across
+    the section's sides). Nothing is clamped (a free structure: its rigid-body motions live in the harmonic indices
+    k = 0 and 1). Groups: volume 'disk', faces 'left', 'right'. For Bryan's factor (``tests/test_rotation.py``)."""
+    if not (0.0 < radial < radius) or not (0.0 < axial < radius):
+        raise ValueError("ring sector: need 0 < radial < radius and 0 < axial < radius")
+    if not (4 <= int(n_sectors) <= 360):
+        raise ValueError(f"n_sectors must be in [4, 360], got {n_sectors}")
+    if not 0.0 < size <= radius:
+        raise ValueError(f"size must be in (0, radius], got {size}")
+    nr = max(2, int(np.ceil(radial / size - 1e-9)))
+    nz = max(2, int(np.ceil(axial / size - 1e-9)))
+    nt = max(1, int(np.ceil(2 * np.pi * radius / int(n_sectors) / size - 1e-9)))
+    points, tets, index, volume = _structured_annulus(radius - radial / 2, radius + radial / 2, axial, n_sectors,
+                                                      nr, nt, nz)
+    _annulus_to_gmsh(points, tets, index, False, "ring sector")
+    return SectorModel(source=f"ring(R={radius:g}, {radial:g} x {axial:g}, N={int(n_sectors)}, "
+                              f"{nr} x {nt} x {nz} cells)",
+                       volume=volume, tip_nodes=np.zeros((0, 3)),
+                       preset=MeshPreset("ring", size, 0, size), n_nodes=len(points), n_sectors=int(n_sectors),
+                       free=True)

@@ -30,6 +30,11 @@ CASES = {
                     "numbers": (["--modes", "99"], "--modes")},
     "campbell": {"preset": (["--preset", "huge"], "--preset"), "numbers": (["--speeds", "0", "-5", "3"], "--speeds"),
                  "orders": (["--orders", "0", "4"], "--orders"), "refine": (["--refine", "-1"], "--refine")},
+    "disk_campbell": {"preset": (["--preset", "huge"], "--preset"),
+                      "numbers": (["--speeds", "0", "-5", "3"], "--speeds"),
+                      "families": (["--families", "19"], "--families"), "modes": (["--modes", "0"], "--modes"),
+                      "orders": (["--orders", "0", "4"], "--orders"), "refine": (["--refine", "-1"], "--refine"),
+                      "zzenf": (["--zzenf-speed", "-1"], "--zzenf-speed")},
 }
 
 

@@ -167,13 +167,17 @@ def test_disk_modes_below_the_blade_clamped_on_the_disk(ci_disk):
 @pytest.mark.slow
 def test_cyclic_frequencies_serial_and_mpi_agree(serial_and_mpi):
     """The plate sector's nodal-diameter frequencies under mpirun -n 2 equal the serial ones to 1e-8 (the
-    distributed projection, PtAP and MUMPS differ from serial only by round-off; SLEPc converges to 1e-12)."""
+    distributed projection, PtAP and MUMPS differ from serial only by round-off; SLEPc converges to 1e-12), at rest
+    and turning at 1,000 rad/s (#73: the centrifugal state's Newton on the distributed T_0, then the families of the
+    prestressed tangent)."""
     serial, parallel = serial_and_mpi(f"""
         import sys, numpy as np
         from mpi4py import MPI
         from rotor37_rom import fem
         s = fem.create_annular_sector({PLATE['inner']}, {PLATE['outer']}, {PLATE['thickness']}, 8, 0.012, 1)
         w = np.concatenate([fem.solve_cyclic_modes(s, k, 3).omega for k in range(5)])
+        turning, _ = fem.rotating_cyclic_operators(s, 1000.0)
+        w = np.concatenate([w] + [turning.modes(k, 3).omega for k in range(5)])
         if MPI.COMM_WORLD.rank == 0:
             np.save(sys.argv[1], w)
     """)

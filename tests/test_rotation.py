@@ -209,3 +209,179 @@ def test_coriolis_splits_a_spinning_shaft_by_twice_the_speed():
           f"{omega0.mean() + spin:.4f}; split / Omega {(whirls[1] - whirls[0]) / spin:.5f}")
     np.testing.assert_allclose(whirls, omega0.mean() + np.array([-spin, spin]), rtol=0, atol=2e-3 * omega0.mean())
     assert abs((whirls[1] - whirls[0]) / spin - 2.0) <= 4e-3 / 0.3
+
+
+def test_bryans_factor_of_a_free_ring():
+    """Coriolis on one cyclic sector (``CyclicOperators.reduced_operator``): a free thin steel ring (mean radius R =
+    0.1 m, section 2 x 4 mm radial x axial, h/R = 0.02; 36 sectors, nothing clamped) turning at Omega. Its
+    in-plane inextensional n-wave (harmonic index k = n) seen in the turning frame splits into two travelling waves
+    by exactly 4 n Omega / (n^2 + 1) when only Coriolis acts (thin-ring theory: m A'' - 2 c B' + k A = 0 and
+    m B'' + 2 c A' + k B = 0 with c / m = 2 n Omega / (n^2 + 1); roots omega = sqrt(omega_n^2 + (c/m)^2) +- c/m):
+    its standing pattern precesses against the ring at kappa Omega, Bryan's factor kappa = 2 / (n^2 + 1) (G. H.
+    Bryan, On the beats in the vibrations of a revolving cylinder or bell, Proc. Camb. Phil. Soc. 7 (1890) 101-111).
+    The real cos/sin copies of one index carry both waves: T_k^T diag(G_1, G_1) T_k couples them. The solid departs
+    from the inextensional thin ring by the ratio of the n-wave's bending to membrane stiffness, eps = (h/R)^2 n^2 /
+    12; asserted to 3 eps (measured -1.0e-4, -3.2e-4, -6.2e-4 for n = 2, 3, 4: 4x smaller at h/R = 0.01, 4x larger
+    at 0.04, the same to 4 digits on a mesh twice as fine). The frequency omega_n = sqrt(EI / (rho A R^4))
+    n (n^2 - 1) / sqrt(n^2 + 1) to the same bound (measured -1.6e-4 ... -8.8e-4). Without Coriolis the pair stays
+    one double frequency, to the eigen-solver's tolerance. Broken on purpose: a Coriolis force without its factor 2
+    halves the split (fails by 0.5)."""
+    from rotor37_rom.model.campbell import gyroscopic_frequencies
+
+    R, radial, axial = 0.1, 2e-3, 4e-3
+    ring = fem.create_ring_sector(R, radial, axial, n_sectors=36, size=1e-3)
+    ops = fem.create_svk_operators(ring)
+    cyclic = fem.CyclicOperators(ring, fem.assemble_stiffness(ring, ops), fem.assemble_mass(ring, ops))
+    G = fem.assemble_coriolis(ring, ops)
+    E, rho = ring.material.E, ring.material.rho
+    with pytest.raises(ValueError, match="free .* rigid-body"):
+        cyclic.modes(1, 2)
+    for n in (2, 3, 4):
+        eps = (radial / R) ** 2 * n ** 2 / 12
+        modes = cyclic.modes(n, 4)
+        axial_share = [np.sum(a.x.array.reshape(-1, 3)[:, 2] ** 2) / np.sum(a.x.array ** 2) for a in modes.a]
+        i = 2 * int(np.argmin(axial_share[::2]))               # the in-plane pair (the others bend out of plane)
+        assert axial_share[i] < 1e-2 and axial_share[i + 1] < 1e-2
+        w = modes.omega
+        assert abs(w[i + 1] - w[i]) <= 1e-7 * w[i]                # no Coriolis, no split
+        thin = np.sqrt(E * axial * radial ** 3 / 12 / (rho * radial * axial * R ** 4)) * n * (n ** 2 - 1) / np.sqrt(
+            n ** 2 + 1)
+        Gr = cyclic.reduced_operator(G, modes)
+        np.testing.assert_allclose(Gr, -Gr.T, atol=1e-12 * np.abs(Gr).max())
+        spin = 1e-3 * w[i]
+        f = gyroscopic_frequencies(np.diag(w ** 2), np.eye(w.size), spin * Gr)
+        pair = np.sort(f[np.argsort(np.abs(f - w[i]))[:2]])
+        kappa = (pair[1] - pair[0]) / spin / (2 * n)
+        print(f"n = {n}: omega {w[i]:.3f} rad/s ({w[i] / thin - 1:+.2e} from the thin ring), Bryan's factor "
+              f"{kappa:.6f} against {2 / (n ** 2 + 1):.6f} ({kappa * (n ** 2 + 1) / 2 - 1:+.2e}; "
+              f"3 eps = {3 * eps:.1e})")
+        assert abs(w[i] / thin - 1) <= 3 * eps
+        assert abs(kappa * (n ** 2 + 1) / 2 - 1) <= 3 * eps
+    cyclic.destroy()
+
+
+def test_prestressed_cyclic_families_equal_the_whole_disk():
+    """The turning disk on one sector (``fem.rotating_cyclic_operators``): an annular steel plate (0.1-0.2 m, 4 mm,
+    clamped at the bore, 8 sectors) at 1,000 rad/s. The centrifugal equilibrium is solved once on the sector as a
+    harmonic-index-0 field (``centrifugal_state``: Newton on T_0^T r(T_0 x)); the whole plate assembled from 8 turned
+    copies of the sector (``disk.symmetry.assemble_full_structure``'s numbering, not T_0) is in equilibrium there,
+    to the Newton tolerance (the sector alone, faces free, is 1.6 of the load off: the faces carry the hoop stress).
+    Then every family k = 0 ... 4 of K_T(u_c) - Omega^2 M_P is the whole plate's spectrum of the same operator
+    assembled, to 1e-8 (both solvers to 1e-12; round-off of two assembly orders); the prestress raises the lowest
+    frequency of each family (geometric stiffening beats spin softening for a disk's bending). Broken on purpose:
+    the state taken as the projected vector itself (u = x, the right face left at zero, not T_0 x): Newton stalls
+    at 0.46 of the load (a RuntimeError, no state is returned)."""
+    import ufl
+    from dolfinx import fem as dfem
+    from scipy.sparse import linalg as splinalg
+
+    from rotor37_rom import forms
+    from rotor37_rom.disk.symmetry import assemble_full_structure, harmonic_indices, to_global_frame
+
+    spin, N = 1000.0, 8
+    plate = fem.create_annular_sector(0.1, 0.2, 4e-3, n_sectors=N, size=0.012, layers=1)
+    ops = fem.create_svk_operators(plate)
+    cyclic, u = fem.rotating_cyclic_operators(plate, spin, ops)
+    ops.u.x.array[:] = u.x.array
+    f_int = fem.assemble_vector(ops.f_int).array.copy()
+    f_c = fem.assemble_vector(dfem.form(forms.centrifugal_force(ops.u, ufl.TestFunction(plate.V),
+                                                                ops.constants["rho"],
+                                                                dfem.Constant(plate.mesh, spin)))).array.copy()
+    clamped = plate.clamp_bc.dof_indices()[0]
+    f_int[clamped] = f_c[clamped] = 0.0
+    dofs = np.arange(plate.n_dofs).reshape(-1, 3)
+    K_full, M_full, index = assemble_full_structure(fem.petsc_to_scipy(cyclic.K), fem.petsc_to_scipy(cyclic.M),
+                                                    plate.cyclic, dofs)
+    residual, load = np.zeros(K_full.shape[0]), np.zeros(K_full.shape[0])
+    for s in range(N):
+        np.add.at(residual, index[s], to_global_frame(f_int - f_c, dofs, s * plate.cyclic.angle))
+        np.add.at(load, index[s], to_global_frame(f_c, dofs, s * plate.cyclic.angle))
+    print(f"whole plate: |r| / |f_c| = {np.linalg.norm(residual) / np.linalg.norm(load):.1e}; the sector alone "
+          f"{np.linalg.norm(f_int - f_c) / np.linalg.norm(f_c):.2f}")
+    assert np.linalg.norm(residual) <= 1e-9 * np.linalg.norm(load)
+    families = [cyclic.modes(k, 5).omega for k in harmonic_indices(N)]
+    covered = min(w.max() for w in families)
+    union = np.sort(np.concatenate(families))
+    union = union[union < covered * (1 - 1e-6)]
+    lam = splinalg.eigsh(K_full.tocsc(), union.size + 4, M_full.tocsc(), sigma=0.0, which="LM",
+                         return_eigenvectors=False, tol=1e-12)
+    full = np.sqrt(np.sort(lam))[:union.size]
+    print("cyclic", union[:8], "whole", full[:8])
+    np.testing.assert_allclose(union, full, rtol=1e-8)
+    at_rest, _ = fem.rotating_cyclic_operators(plate, 0.0, ops)
+    for k, w in zip(harmonic_indices(N), families):
+        assert w[0] > at_rest.modes(k, 1).omega[0]
+    for c in (cyclic, at_rest):
+        c.destroy()
+
+
+def test_engine_order_aliasing_closed_form():
+    """``model.campbell.excited_index`` / ``excited_direction`` on 36 sectors: e = 2 excites k = 2 backward (the
+    ground-fixed pattern moves against the rotation in the turning frame), e = 34 = 36 - 2 the same index forward,
+    e = 36 and 18 standing waves of k = 0 and 18, e = 40 k = 4 backward, e = 71 k = 1 forward."""
+    from rotor37_rom.model.campbell import excited_direction, excited_index
+
+    cases = {2: (2, "backward"), 34: (2, "forward"), 36: (0, "standing"), 18: (18, "standing"), 40: (4, "backward"),
+             71: (1, "forward"), 0: (0, "standing")}
+    for e, (k, direction) in cases.items():
+        assert (excited_index(e, 36), excited_direction(e, 36)) == (k, direction)
+    with pytest.raises(ValueError, match="engine order"):
+        excited_index(-1, 36)
+
+
+def test_disk_campbell_on_a_ring(tmp_path):
+    """The disk Campbell study (``run_disk_campbell``) on the free ring of ``test_bryans_factor_of_a_free_ring``,
+    spin softening alone (a free ring has no centrifugal equilibrium to solve on k = 0: its rigid-body motions).
+    Without Coriolis an in-plane mode of the ring is (but for 2e-6 of its mass: the tetrahedra are not
+    mirror-symmetric through the mid-plane) all motion normal to the axis, so K - Omega^2 M_P shifts it by
+    -p Omega^2 with p = phi^T M_P phi, the same shape to O(Omega^4): omega^2 = omega_0^2 - p Omega^2, and the
+    crossings, on the grid (omega^2 linear in Omega^2) and then iterated on the ring (``refine``), are
+    omega_0 / sqrt(e^2 + p), both to 1e-7 (the eigen-solver's accuracy on this free thin ring, stiff in extension
+    and soft in bending: the two members of a double mode differ by 2e-9 of omega^2, two solves of the same
+    operator by 1e-8), each on the index the order excites (EO38 backward and EO34 forward on k = 2). With Coriolis the waves split by 4 n Omega / (n^2 + 1) (inextensional ring with spin
+    softening: omega = sqrt(omega_0^2 - Omega^2 + (c/m)^2) +- c/m), to the 3 eps of the Bryan test, and the
+    backward wave is the higher in the turning frame (the root with z = A + iB ~ e^{-i omega t}: ring theory), which
+    checks the direction each wave is named by. Broken on purpose: ``travelling_direction`` with the sign of its
+    cross term flipped names them the other way (fails at the direction assertion)."""
+    from rotor37_rom.studies.disk_campbell import DiskCampbellConfig, run_disk_campbell
+
+    R, radial = 0.1, 2e-3
+    ring = fem.create_ring_sector(R, radial, 4e-3, n_sectors=36, size=1e-3)
+    plain = run_disk_campbell(DiskCampbellConfig(speeds=(0.0, 80.0, 3), families=(2, 3), n_modes=2,
+                                                 orders=(3, 33, 34, 38), prestress=False, refine=1e-6,
+                                                 out=tmp_path / "a"),
+                              sector=ring)
+    w0 = plain.omega[0, :, 0]
+    cyclic = fem.CyclicOperators(ring)
+    M_P = fem.assemble_spin_softening(ring)
+    share = []                       # phi^T M_P phi: 1 - 2e-6 (the Kuhn tetrahedra are not mirror-symmetric in z)
+    for k in (2, 3):
+        modes = cyclic.modes(k, 2)
+        share.append(cyclic.reduced_operator(M_P, modes)[0, 0])
+    share = np.array(share)
+    assert np.all(np.abs(share - 1) < 1e-4)
+    np.testing.assert_allclose(plain.omega[:, :, 0] ** 2, w0 ** 2 - share * plain.speeds[:, None] ** 2, rtol=1e-7)
+    expected = {(2, 38, "backward"): w0[0] / np.sqrt(38 ** 2 + share[0]),
+                (2, 34, "forward"): w0[0] / np.sqrt(34 ** 2 + share[0]),
+                (3, 33, "forward"): w0[1] / np.sqrt(33 ** 2 + share[1])}
+    found = {(c["family"], c["order"], c["direction"]): c["speed"] for c in plain.crossings if c["mode"] == 1}
+    assert set(expected) <= set(found)
+    for key, speed in expected.items():
+        assert abs(found[key] / speed - 1) <= 1e-7, (key, found[key], speed)
+    assert all(c["refined"] > 0 for c in plain.crossings)      # iterated on the ring (Southwell), settled
+    assert all(c["order"] != 3 for c in plain.crossings)        # EO3 never reaches k = 3 (2,077 rad/s) by 80 rad/s
+    spin = 40.0
+    turning = run_disk_campbell(DiskCampbellConfig(speeds=(0.0, spin, 2), families=(2, 3, 4), n_modes=2,
+                                                   orders=(2,), coriolis=True, prestress=False, out=tmp_path / "b"),
+                                sector=ring)
+    for f, n in enumerate((2, 3, 4)):
+        eps = (radial / R) ** 2 * n ** 2 / 12
+        split = turning.backward[-1, f, 0] - turning.forward[-1, f, 0]
+        print(f"n = {n}: forward {turning.forward[-1, f, 0]:.3f}, backward {turning.backward[-1, f, 0]:.3f} rad/s; "
+              f"split / (4 n Omega / (n^2 + 1)) = {split / (4 * n * spin / (n * n + 1)):.6f}")
+        assert split > 0                                          # the backward wave is the higher
+        assert abs(split / (4 * n * spin / (n * n + 1)) - 1) <= 3 * eps
+    assert (tmp_path / "b" / "zzenf.png").exists() and (tmp_path / "b" / "campbell_disk.png").exists()
+    row = turning.zzenf["orders"][0]
+    assert (row["index"], row["direction"], row["nearest_mode"]) == (2, "backward", 1)
+    np.testing.assert_allclose(row["margin"], turning.backward[-1, 0, 0] / (2 * spin) - 1, rtol=1e-12)

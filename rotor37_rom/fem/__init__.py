@@ -31,7 +31,8 @@ class _QuietCompiler(_logging.Filter):
 if not any(isinstance(f, _QuietCompiler) for f in _logging.getLogger().filters):
     _logging.getLogger().addFilter(_QuietCompiler())
 
-from .cyclic import (CyclicModes, CyclicOperators, assemble_cyclic_operators, create_annular_sector, create_disk_sector,
+from .cyclic import (CyclicModes, CyclicOperators, assemble_cyclic_operators, centrifugal_state, create_annular_sector,
+                     create_disk_sector, create_ring_sector, cyclic_projector, rotating_cyclic_operators,
                      sector_fields, solve_cyclic_modes)
 from .fields import (cell_midpoints, cell_vertices, cells_touching_points, displacement_function, root_junction,
                      von_mises_at_quadrature, von_mises_at_vertices, von_mises_function)
@@ -64,5 +65,6 @@ __all__ = [
     "create_disk_sector", "create_annular_sector", "locate_cyclic_pairs", "assemble_cyclic_operators", "CyclicModes",
     "solve_cyclic_modes", "sector_fields", "clamp_cell_group", "build_on_rank0", "CyclicOperators",
     "RepeatingSectors", "solve_repeating_newmark", "sector_harmonic_load", "write_sector_mesh", "facet_centroid",
-    "patch_load", "static_compliance", "tip_patch_interface",
+    "patch_load", "static_compliance", "tip_patch_interface", "create_ring_sector", "cyclic_projector",
+    "centrifugal_state", "rotating_cyclic_operators",
 ]

@@ -30,7 +30,8 @@ from .operators import MASS_DIAGONAL, SvkOperators, assemble_mass, assemble_stif
 from .sector import Sector, build_on_rank0
 from .solvers import shift_invert_solver, solve_eigenproblem
 
-__all__ = ["create_disk_sector", "create_annular_sector", "CyclicOperators", "assemble_cyclic_operators",
+__all__ = ["create_disk_sector", "create_annular_sector", "create_ring_sector", "cyclic_projector",
+           "centrifugal_state", "rotating_cyclic_operators", "CyclicOperators", "assemble_cyclic_operators",
            "CyclicModes", "solve_cyclic_modes", "sector_fields"]
 
 LOG = logging.getLogger(__name__)
@@ -61,6 +62,16 @@ def create_annular_sector(inner: float, outer: float, thickness: float, n_sector
     return build_on_rank0(
         comm, lambda: disk_geometry.create_annular_sector_model(inner, outer, thickness, n_sectors, size, layers),
         material or Material(), degree, "plate", "the plate sector")
+
+
+def create_ring_sector(radius: float, radial: float, axial: float, n_sectors: int, size: float,
+                       comm: MPI.Comm = MPI.COMM_WORLD, material: Material | None = None, degree: int = 2) -> Sector:
+    """A sector of a free thin ring (``geometry.disk.create_ring_sector_model``): nothing clamped, so that its
+    harmonic indices k = 0 and 1 hold rigid-body motions (their operators are singular: solve them with a shift
+    sigma < 0)."""
+    return build_on_rank0(
+        comm, lambda: disk_geometry.create_ring_sector_model(radius, radial, axial, n_sectors, size),
+        material or Material(), degree, "ring", "the ring sector")
 
 
 def _layout(sector: Sector, m: int) -> tuple[np.ndarray, int, int]:
@@ -120,6 +131,42 @@ def _block_diagonal(A: PETSc.Mat, sector: Sector, m: int, perm: np.ndarray, loca
     return _petsc_from_rows(sector.comm, blocks, perm, local_rows, m * n)
 
 
+def _eliminated_diagonal(sector: Sector, rows: np.ndarray, m: int, value: float) -> PETSc.Mat:
+    """``value`` on the diagonal of the eliminated slots (layout rows), for their empty rows in K_k and M_k."""
+    _, _, local_rows = _layout(sector, m)
+    size = m * sector.n_dofs
+    D = PETSc.Mat().createAIJ(size=((local_rows, size), (local_rows, size)), nnz=1, comm=sector.comm)
+    for r in rows:                                           # one face's slots, not the mesh
+        D.setValue(int(r), int(r), value)
+    D.assemble()
+    return D
+
+
+def _mine(sector: Sector, m: int) -> np.ndarray:
+    """This rank's canonical slots c n + g (its own DOFs g, each copy c) in layout order."""
+    im, bs, n = sector.V.dofmap.index_map, sector.V.dofmap.index_map_bs, sector.n_dofs
+    g0, g1 = im.local_range[0] * bs, im.local_range[1] * bs
+    return np.concatenate([c * n + np.arange(g0, g1) for c in range(m)])
+
+
+def cyclic_projector(sector: Sector, k: int) -> tuple[PETSc.Mat, np.ndarray]:
+    """(T_k, eliminated): the projection of harmonic index k (``disk.symmetry.cyclic_projection``) as a distributed
+    PETSc matrix in the layout where each rank owns the copies of its own DOFs (for k = 0, one copy: its rows are
+    the sector's own DOF numbering, u = T_0 x a sector field), and this rank's rows of the eliminated slots (the
+    right face, constrained axis directions)."""
+    pairs = sector.cyclic
+    if pairs is None:
+        raise ValueError(f"{sector.source} is not a cyclic sector (no paired left/right faces)")
+    k = pairs.check_k(k)
+    m = pairs.n_copies(k)
+    perm, first, local_rows = _layout(sector, m)
+    n = sector.n_dofs
+    T, kept = cyclic_projection(n, pairs, k)
+    mine = _mine(sector, m)
+    T_p = _petsc_from_rows(sector.comm, T[mine], perm, local_rows, m * n)
+    return T_p, first + np.flatnonzero(~kept[mine])
+
+
 class CyclicOperators:
     """A cyclic sector's K and M, their block-diagonal copies (one per number of copies m) and the layout, reused
     over the harmonic indices; nothing is assembled again (pitfall 6 of the cyclic notes: re-assembling per k is
@@ -140,6 +187,7 @@ class CyclicOperators:
             ops = ops or create_svk_operators(sector)
             K, M = assemble_stiffness(sector, ops), assemble_mass(sector, ops)
         self.sector, self.K, self.M = sector, K, M
+        self.free = sector.comm.allreduce(sector.clamp_bc.dof_indices()[0].size, op=MPI.SUM) == 0
         self._blocks: dict = {}
         self._parts = None
         self._work = None
@@ -153,20 +201,10 @@ class CyclicOperators:
         return self._blocks[m]
 
     def _mine(self, m: int) -> np.ndarray:
-        """This rank's canonical slots c n + g (its own DOFs g, each copy c) in layout order."""
-        im, bs, n = self.sector.V.dofmap.index_map, self.sector.V.dofmap.index_map_bs, self.sector.n_dofs
-        g0, g1 = im.local_range[0] * bs, im.local_range[1] * bs
-        return np.concatenate([c * n + np.arange(g0, g1) for c in range(m)])
+        return _mine(self.sector, m)
 
     def _eliminated_diagonal(self, rows: np.ndarray, m: int, value: float) -> PETSc.Mat:
-        """``value`` on the diagonal of the eliminated slots (layout rows), for their empty rows in K_k and M_k."""
-        _, _, _, _, local_rows = self._copies(m)
-        size = m * self.sector.n_dofs
-        D = PETSc.Mat().createAIJ(size=((local_rows, size), (local_rows, size)), nnz=1, comm=self.sector.comm)
-        for r in rows:                                           # one face's slots, not the mesh
-            D.setValue(int(r), int(r), value)
-        D.assemble()
-        return D
+        return _eliminated_diagonal(self.sector, rows, m, value)
 
     def _harmonic_parts(self) -> list:
         """For 0 < k < N/2 without axis nodes: [(K_0, K_c, K_s), (M_0, M_c, M_s), (T_0, T_c, T_s)], each three
@@ -217,22 +255,53 @@ class CyclicOperators:
         """Whether index k is a combination of the k-free parts (0 < k < N/2, no axis nodes)."""
         return self.sector.cyclic.n_copies(k) == 2 and not len(self.sector.cyclic.axis)
 
+    def projector(self, k: int) -> tuple[PETSc.Mat, np.ndarray]:
+        """``cyclic_projector(sector, k)``."""
+        return cyclic_projector(self.sector, k)
+
+    def project_operator(self, A: PETSc.Mat, k: int) -> PETSc.Mat:
+        """T_k^T diag(A, ..., A) T_k: any other operator of the sector (e.g. the Coriolis matrix
+        ``assemble_coriolis``, skew-symmetric) on harmonic index k, in the layout of ``project``'s (K_k, M_k) and
+        ``CyclicModes.x``; the eliminated slots' rows are empty. The real cos/sin copies carry both travelling
+        directions of index k: a skew A couples them (the forward and backward waves)."""
+        m = self.sector.cyclic.n_copies(self.sector.cyclic.check_k(k))
+        _, _, perm, _, local_rows = self._copies(m)
+        T_p, _ = self.projector(k)
+        A2 = _block_diagonal(A, self.sector, m, perm, local_rows)
+        out = A2.PtAP(T_p)
+        A2.destroy()
+        T_p.destroy()
+        return out
+
+    def reduced_operator(self, A: PETSc.Mat, modes: "CyclicModes") -> np.ndarray:
+        """X^T A_k X (n, n) on the projected eigenvectors X of ``modes`` (``CyclicModes.x``, M_k-orthonormal), with
+        A_k = ``project_operator(A, modes.k)``: e.g. the Coriolis matrix per unit spin of the index's modes
+        (``model.campbell.gyroscopic_frequencies`` solves the turning structure on their span)."""
+        if not modes.x:
+            raise ValueError("modes: no projected eigenvectors (CyclicModes.x is empty)")
+        Ak = self.project_operator(A, modes.k)
+        y = Ak.createVecLeft()
+        out = np.empty((len(modes.x), len(modes.x)))
+        for j, xj in enumerate(modes.x):
+            Ak.mult(xj, y)
+            for i, xi in enumerate(modes.x):
+                out[i, j] = xi.dot(y)                    # a global dot product: the same on every rank
+        y.destroy()
+        Ak.destroy()
+        return out
+
     def project(self, k: int) -> tuple[PETSc.Mat, PETSc.Mat, PETSc.Mat]:
         """(K_k, M_k, T_k) for harmonic index k: K_k = T_k^T diag(K, K) T_k and likewise M_k (one copy for k = 0 and
         N/2), with 1 / MASS_DIAGONAL on the eliminated slots' diagonal."""
-        sector, pairs = self.sector, self.sector.cyclic
+        pairs = self.sector.cyclic
         k = pairs.check_k(k)
         m = pairs.n_copies(k)
         if self._by_parts(k):
             out = tuple(A0.duplicate(copy=False) for A0, _, _ in self._harmonic_parts())
             self._combine(k, out)
             return out
-        K2, M2, perm, first, local_rows = self._copies(m)
-        n = sector.n_dofs
-        T, kept = cyclic_projection(n, pairs, k)
-        mine = self._mine(m)
-        T_p = _petsc_from_rows(sector.comm, T[mine], perm, local_rows, m * n)
-        eliminated = first + np.flatnonzero(~kept[mine])
+        K2, M2, *_ = self._copies(m)
+        T_p, eliminated = self.projector(k)
         operators = []
         for A2, diag in ((K2, 1.0), (M2, MASS_DIAGONAL)):
             Ak = A2.PtAP(T_p)
@@ -250,6 +319,9 @@ class CyclicOperators:
         if n_modes < 1:
             raise ValueError(f"n_modes must be >= 1, got {n_modes}")
         m = self.sector.cyclic.n_copies(k)
+        if k in (0, 1) and sigma >= 0.0 and self.free:
+            raise ValueError(f"{self.sector.source} is free (nothing clamped): harmonic index {k} holds rigid-body "
+                             f"motions, its stiffness is singular; pass a shift sigma < 0")
         reuse = self._by_parts(k)
         if reuse:            # one K_k object and one solver for all 0 < k < N/2: MUMPS refactors, no new analysis
             if self._work is None:
@@ -285,6 +357,99 @@ class CyclicOperators:
         for A in self._work or ():
             A.destroy()
         self._parts = self._work = None
+
+
+def centrifugal_state(sector: Sector, spin: float, ops: SvkOperators | None = None, n_steps: int = 2,
+                      rtol: float = 1e-10, max_iterations: int = 25) -> fem.Function:
+    """The whole structure's centrifugal equilibrium at ``spin`` (rad/s) about e_z, on one cyclic sector: the
+    load is the same on every sector, so the state is a harmonic-index-0 field, u = T_0 x (the right face the left
+    one turned). Newton on T_0^T r(T_0 x) = 0 with r = f_int(u) - f_c(u) (SVK, the centrifugal force following the
+    deformed position, ``forms.centrifugal_force``) and its exact tangent T_0^T (K_T(u) - spin^2 M_P) T_0, load steps
+    in spin^2 (as ``solve_static(spin=...)``), to ||T_0^T r|| <= rtol max(||f_c||, ||f_int||). Runs under MPI."""
+    import ufl
+    from dolfinx.fem import petsc as fem_petsc
+
+    from rotor37_rom import forms
+
+    from .operators import JIT_PARAMS, assemble_tangent, assemble_vector
+    from .solvers import _lu_solver
+
+    if not (np.isfinite(spin) and spin >= 0.0):
+        raise ValueError(f"spin must be a finite speed >= 0 rad/s, got {spin}")
+    if not (1 <= n_steps <= 10000):
+        raise ValueError(f"n_steps must be in [1, 10000], got {n_steps}")
+    ops = ops or create_svk_operators(sector)
+    T0, eliminated = cyclic_projector(sector, 0)
+    u = ops.u
+    u.x.array[:] = 0.0
+    if spin == 0.0:
+        T0.destroy()
+        return fem.Function(sector.V, name="u")
+    spin_c = fem.Constant(sector.mesh, PETSc.ScalarType(spin))
+    centrifugal = fem.form(forms.centrifugal_force(u, ufl.TestFunction(sector.V), ops.constants["rho"], spin_c),
+                           jit_params=JIT_PARAMS)
+    D = _eliminated_diagonal(sector, eliminated, 1, 1.0)
+    x, dx = T0.createVecRight(), T0.createVecRight()
+    rhs, du = T0.createVecRight(), T0.createVecLeft()
+    for lam in np.linspace(0.0, 1.0, n_steps + 1)[1:]:
+        spin_c.value = spin * np.sqrt(lam)
+        for it in range(max_iterations + 1):
+            r = assemble_vector(ops.f_int)
+            reference = r.norm()
+            f_c = assemble_vector(centrifugal)
+            reference = max(reference, f_c.norm(), 1e-300)
+            r.axpy(-1.0, f_c)
+            fem_petsc.set_bc(r, [sector.clamp_bc], scale=0.0)
+            T0.multTranspose(r, rhs)
+            res = rhs.norm()
+            for vec in (r, f_c):
+                vec.destroy()
+            LOG.debug("centrifugal state: spin^2 factor %.3f it %d |T0^T r| %.3e ref %.3e", lam, it, res, reference)
+            if res <= rtol * reference:
+                break
+            if it == max_iterations:
+                raise RuntimeError(f"centrifugal state: Newton did not converge at {spin * np.sqrt(lam):.6g} rad/s "
+                                   f"(|r|/ref = {res / reference:.2e} after {it} iterations); use more n_steps")
+            A = assemble_tangent(sector, u.x.array.copy(), ops, spin * np.sqrt(lam))
+            A0 = A.PtAP(T0)
+            A0.axpy(1.0, D, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+            ksp = _lu_solver(sector.comm, A0, "cyclic_static_")
+            rhs.scale(-1.0)
+            ksp.solve(rhs, dx)
+            x.axpy(1.0, dx)
+            T0.mult(x, du)
+            with u.vector.localForm() as local:
+                local.array[:du.getLocalSize()] = du.array
+            u.x.scatter_forward()
+            for obj in (ksp, A0, A):
+                obj.destroy()
+    out = fem.Function(sector.V, name="u")
+    out.x.array[:] = u.x.array
+    for obj in (T0, D, x, dx, rhs, du):
+        obj.destroy()
+    return out
+
+
+def rotating_cyclic_operators(sector: Sector, spin: float, ops: SvkOperators | None = None,
+                              M: PETSc.Mat | None = None, prestress: bool = True, rtol: float = 1e-10
+                              ) -> tuple["CyclicOperators", fem.Function]:
+    """The cyclic operators of the structure turning at ``spin`` (rad/s) about e_z, without Coriolis: K_T(u_c) -
+    spin^2 M_P at the whole structure's centrifugal equilibrium u_c (``centrifugal_state``: one state for every
+    harmonic index, the load being the same on every sector) and M; with ``prestress`` False, K - spin^2 M_P (spin
+    softening alone). Returns (CyclicOperators, u_c). Its modes per index k are the nodal-diameter families of the
+    turning structure (add Coriolis with ``CyclicOperators.reduced_operator(assemble_coriolis(...), modes)``)."""
+    from .operators import assemble_tangent
+
+    if not (np.isfinite(spin) and spin >= 0.0):
+        raise ValueError(f"spin must be a finite speed >= 0 rad/s, got {spin}")
+    ops = ops or create_svk_operators(sector)
+    M = assemble_mass(sector, ops) if M is None else M
+    if spin > 0.0 and prestress:
+        u = centrifugal_state(sector, spin, ops, rtol=rtol)
+    else:
+        u = fem.Function(sector.V, name="u")
+    K = assemble_tangent(sector, u.x.array, ops, spin) if spin > 0.0 else assemble_stiffness(sector, ops)
+    return CyclicOperators(sector, K, M), u
 
 
 def assemble_cyclic_operators(sector: Sector, k: int, K: PETSc.Mat | None = None, M: PETSc.Mat | None = None,

@@ -124,7 +124,8 @@ def create_sector_from_gmsh(comm: MPI.Comm, model_info, material: Material, degr
     mesh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model if comm.rank == 0 else None, comm, 0, gdim=3)
     sector = create_sector_from_mesh(mesh, cell_tags, facet_tags, names, material, degree,
                                      np.asarray(model_info.tip_nodes, dtype=float).reshape(-1, 3),
-                                     float(model_info.volume), model_info.source, preset)
+                                     float(model_info.volume), model_info.source, preset,
+                                     free=bool(getattr(model_info, "free", False)))
     if getattr(model_info, "summary", ""):
         sector = dataclasses.replace(sector, summary=model_info.summary)
     n_sectors = getattr(model_info, "n_sectors", 0)
@@ -135,19 +136,24 @@ def create_sector_from_gmsh(comm: MPI.Comm, model_info, material: Material, degr
 
 def create_sector_from_mesh(mesh, cell_tags, facet_tags, groups: dict, material: Material, degree: int = 2,
                             tip_nodes: np.ndarray | None = None, volume: float = float("nan"), source: str = "mesh",
-                            preset: str = "") -> Sector:
-    """A :class:`Sector` from a distributed dolfinx mesh whose facet tags hold a group named 'clamp'."""
+                            preset: str = "", free: bool = False) -> Sector:
+    """A :class:`Sector` from a distributed dolfinx mesh whose facet tags hold a group named 'clamp' (``free``: a
+    structure held by nothing, e.g. a free ring's cyclic sector, whose clamp condition is empty; its operators are
+    singular where rigid-body motions live: k = 0 and 1 of a cyclic sector)."""
     if not (1 <= degree <= 3):
         raise ValueError(f"degree must be 1, 2 or 3, got {degree}")
     comm = mesh.comm
     V = fem.VectorFunctionSpace(mesh, ("Lagrange", degree))
-    if "clamp" not in groups:
-        raise ValueError(f"the model of {source} has no 'clamp' group; it has {sorted(groups)}")
-    clamp_facets = facet_tags.find(groups["clamp"])
-    if comm.allreduce(clamp_facets.size, op=MPI.SUM) == 0:
-        raise ValueError(f"the clamp group of {source} holds no facets")
     mesh.topology.create_connectivity(mesh.topology.dim - 1, mesh.topology.dim)
-    clamp_dofs = fem.locate_dofs_topological(V, mesh.topology.dim - 1, clamp_facets)
+    if free:
+        clamp_dofs = np.zeros(0, dtype=np.int32)
+    else:
+        if "clamp" not in groups:
+            raise ValueError(f"the model of {source} has no 'clamp' group; it has {sorted(groups)}")
+        clamp_facets = facet_tags.find(groups["clamp"])
+        if comm.allreduce(clamp_facets.size, op=MPI.SUM) == 0:
+            raise ValueError(f"the clamp group of {source} holds no facets")
+        clamp_dofs = fem.locate_dofs_topological(V, mesh.topology.dim - 1, clamp_facets)
     clamp_bc = fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), clamp_dofs, V)
     tip_nodes = np.zeros((0, 3)) if tip_nodes is None else np.asarray(tip_nodes, float).reshape(-1, 3)
     tip_dofs = _locate_point_dofs(V, tip_nodes) if len(tip_nodes) else np.zeros((0, 3), dtype=np.int64)

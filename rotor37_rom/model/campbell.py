@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["mac", "track_modes", "engine_order_crossings", "gyroscopic_frequencies"]
+__all__ = ["mac", "track_modes", "engine_order_crossings", "gyroscopic_frequencies", "gyroscopic_modes",
+           "excited_index", "excited_direction", "travelling_direction", "pair_envelope"]
 
 
 def mac(A: np.ndarray, B: np.ndarray) -> np.ndarray:
@@ -93,3 +94,59 @@ def gyroscopic_frequencies(K: np.ndarray, M: np.ndarray, G: np.ndarray) -> np.nd
                          f"{np.abs(lam.real).max() / scale:.1e} of the largest: K and M must be positive definite and "
                          f"G skew-symmetric")
     return np.sort(lam.imag[lam.imag > 0])
+
+
+def gyroscopic_modes(K: np.ndarray, M: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(omega (n,) rad/s ascending, Z (n, n) complex): the modes of M u'' + G u' + K u = 0 (as
+    ``gyroscopic_frequencies``), u = Re(Z[:, j] e^{i omega_j t}) with omega_j > 0, each column of unit norm."""
+    K, M, G = (np.asarray(A, float) for A in (K, M, G))
+    n = K.shape[0]
+    Minv = np.linalg.inv(M)
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ G]])
+    lam, X = np.linalg.eig(A)
+    scale = np.abs(lam).max()
+    if np.abs(lam.real).max() > 1e-8 * scale:
+        raise ValueError(f"gyroscopic_modes: an eigenvalue leaves the imaginary axis by "
+                         f"{np.abs(lam.real).max() / scale:.1e} of the largest: K and M must be positive definite and "
+                         f"G skew-symmetric")
+    keep = np.flatnonzero(lam.imag > 0)
+    keep = keep[np.argsort(lam.imag[keep])]
+    Z = X[:n, keep]
+    return lam.imag[keep], Z / np.linalg.norm(Z, axis=0)
+
+
+def excited_index(order: int, n_sectors: int) -> int:
+    """The harmonic index (nodal diameter) an engine order e excites on N identical sectors: e aliased by the
+    sampling of the N sectors, k = min(e mod N, N - e mod N) (the zig-zag of the interference diagram)."""
+    if int(order) != order or order < 0 or int(n_sectors) != n_sectors or n_sectors < 1:
+        raise ValueError(f"engine order must be an integer >= 0 and N >= 1, got {order}, {n_sectors}")
+    r = int(order) % int(n_sectors)
+    return min(r, int(n_sectors) - r)
+
+
+def excited_direction(order: int, n_sectors: int) -> str:
+    """Which travelling wave of its index k an engine order excites, seen from the turning structure: a pattern
+    with e lobes fixed to the ground moves against the rotation in the turning frame (e ≡ k mod N: 'backward'); its
+    alias e ≡ -k mod N moves with it ('forward'); 'standing' for k = 0 and N/2 (one copy: no direction)."""
+    k = excited_index(order, n_sectors)
+    if k == 0 or 2 * k == int(n_sectors):
+        return "standing"
+    return "backward" if int(order) % int(n_sectors) == k else "forward"
+
+
+def travelling_direction(z: np.ndarray, aa: np.ndarray, ab: np.ndarray, bb: np.ndarray) -> float:
+    """The direction of the travelling wave u_s(t) = Re[(cos(s k alpha) A - sin(s k alpha) B) e^{i omega t}] (s the
+    sector, omega > 0) with A = sum_j z_j a_j and B = sum_j z_j b_j over cos/sin fields (a_j, b_j): Im(A^H B) /
+    (|A|^2 + |B|^2), from the Gram matrices aa = [a_i . a_j], ab = [a_i . b_j], bb = [b_i . b_j]: +1/2 for a wave
+    moving towards increasing theta (the sense of rotation, 'forward': B = i A), -1/2 backward, 0 standing."""
+    z = np.asarray(z, complex)
+    cross = np.conj(z) @ (np.asarray(ab, float) @ z)
+    energy = np.conj(z) @ ((np.asarray(aa, float) + np.asarray(bb, float)) @ z)
+    return float(cross.imag / energy.real)
+
+
+def pair_envelope(a: np.ndarray, b: np.ndarray | None) -> np.ndarray:
+    """a^2 + b^2, entry by entry: a double mode's shape whatever the mix of its cos and sin members (any rotation
+    (a, b) -> (a cos p - b sin p, a sin p + b cos p) leaves it unchanged), for following it across speeds."""
+    a = np.asarray(a, float)
+    return a * a if b is None else a * a + np.asarray(b, float) ** 2

@@ -23,7 +23,7 @@ from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.model.campbell import engine_order_crossings, mac, track_modes
 from rotor37_rom.npz import save_json
 
-__all__ = ["CampbellConfig", "CampbellResult", "iterate_crossing", "run_campbell"]
+__all__ = ["CampbellConfig", "CampbellResult", "iterate_crossing", "run_campbell", "check_sweep"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -50,26 +50,32 @@ class CampbellConfig:
     out: Path = Path("results/campbell")
 
     def __post_init__(self):
-        if self.preset not in MESH_PRESETS:
-            raise ValueError(f"--preset must be one of {', '.join(MESH_PRESETS)}, got {self.preset!r}")
-        start, stop, n = self.speeds
-        if not (np.isfinite(start) and np.isfinite(stop) and start >= 0 and stop > start):
-            raise ValueError(f"--speeds START STOP N: need 0 <= START < STOP (rad/s), got {start:g} {stop:g}")
-        if int(n) != n or n < 2:
-            raise ValueError(f"--speeds START STOP N: N must be an integer >= 2, got {n}")
+        check_sweep(self, max_order=100)
         if not 1 <= self.n_modes <= 20:
             raise ValueError(f"--modes must be in [1, 20], got {self.n_modes}")
-        if not self.orders or any(int(e) != e or not 1 <= e <= 100 for e in self.orders):
-            raise ValueError(f"--orders must be integers in [1, 100], got {list(self.orders)}")
-        if not (np.isfinite(self.refine) and self.refine >= 0):
-            raise ValueError(f"--refine must be >= 0 rad/s (0: no refinement), got {self.refine}")
-        object.__setattr__(self, "speeds", (float(start), float(stop), int(n)))
-        object.__setattr__(self, "orders", tuple(sorted({int(e) for e in self.orders})))
-        object.__setattr__(self, "out", Path(self.out))
 
     @property
     def speed_grid(self) -> np.ndarray:
         return np.linspace(*self.speeds)
+
+
+def check_sweep(config, max_order: int) -> None:
+    """The options a Campbell study shares, checked and normalised in place on a frozen ``config``: its preset, its
+    speeds (start, stop, n), its engine orders (1..max_order), its refine tolerance, its output folder."""
+    if config.preset not in MESH_PRESETS:
+        raise ValueError(f"--preset must be one of {', '.join(MESH_PRESETS)}, got {config.preset!r}")
+    start, stop, n = config.speeds
+    if not (np.isfinite(start) and np.isfinite(stop) and start >= 0 and stop > start):
+        raise ValueError(f"--speeds START STOP N: need 0 <= START < STOP (rad/s), got {start:g} {stop:g}")
+    if int(n) != n or n < 2:
+        raise ValueError(f"--speeds START STOP N: N must be an integer >= 2, got {n}")
+    if not config.orders or any(int(e) != e or not 1 <= e <= max_order for e in config.orders):
+        raise ValueError(f"--orders must be integers in [1, {max_order}], got {list(config.orders)}")
+    if not (np.isfinite(config.refine) and config.refine >= 0):
+        raise ValueError(f"--refine must be >= 0 rad/s (0: no refinement), got {config.refine}")
+    object.__setattr__(config, "speeds", (float(start), float(stop), int(n)))
+    object.__setattr__(config, "orders", tuple(sorted({int(e) for e in config.orders})))
+    object.__setattr__(config, "out", Path(config.out))
 
 
 @dataclasses.dataclass(frozen=True)

@@ -167,6 +167,14 @@ def plot_periodic_nfrc(branch, path: str | Path, map_curve: tuple | None = None,
     return _save(fig, path)
 
 
+def _engine_order_lines(ax, W: np.ndarray, orders, top: float, ls: str) -> None:
+    """The engine-order lines omega = e Omega over the speeds W, each labelled where it leaves the chart."""
+    for e in orders:
+        ax.plot(W, e * W, color="0.6", lw=0.8, ls=ls)
+        end = min(W[-1], top / e)
+        ax.text(end, e * end, f"EO{e}", fontsize=7, color="0.4", ha="right", va="bottom")
+
+
 def plot_campbell(result, orders, path: str | Path, title: str = "") -> Path:
     """The Campbell diagram (#73): each followed mode's frequency against the speed (rad/s both), the engine-order
     lines omega = e Omega, and the crossings marked and labelled (mode/EO, speed). ``result``: a
@@ -175,10 +183,7 @@ def plot_campbell(result, orders, path: str | Path, title: str = "") -> Path:
     fig, ax = plt.subplots(figsize=(7.5, 5.5))
     W = np.asarray(result.speeds, float)
     top = float(np.max(result.omega)) * 1.08
-    for e in orders:
-        ax.plot(W, e * W, color="0.6", lw=0.8, ls="--")
-        end = min(W[-1], top / e)
-        ax.text(end, e * end, f"EO{e}", fontsize=7, color="0.4", ha="right", va="bottom")
+    _engine_order_lines(ax, W, orders, top, "--")
     for k, label in enumerate(result.labels):
         ax.plot(W, result.omega[:, k], "-o", ms=3, lw=1.4, label=label)
     for c in result.crossings:
@@ -191,6 +196,80 @@ def plot_campbell(result, orders, path: str | Path, title: str = "") -> Path:
     ax.set_ylabel("frequency omega (rad/s)")
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7, loc="upper left")
+    ax.grid(alpha=0.3)
+    return _save(fig, path)
+
+
+def plot_disk_campbell(result, orders, path: str | Path, title: str = "") -> Path:
+    """The bladed disk's Campbell diagram (#73): each nodal-diameter family's modes against the speed (coloured by
+    the index k; with Coriolis the forward waves solid and the backward dashed), the engine-order lines, and each
+    crossing of an order with the family it excites marked (k/EO, speed). ``result``: a
+    ``studies.disk_campbell.DiskCampbellResult``."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7.5, 5.5))
+    W = np.asarray(result.speeds, float)
+    top = float(np.max(result.omega)) * 1.08
+    cmap = plt.get_cmap("viridis")
+    half = max(result.n_sectors // 2, 1)
+    _engine_order_lines(ax, W, orders, top, ":")
+    for f, k in enumerate(result.families):
+        colour = cmap(k / half)
+        if result.forward is None:
+            ax.plot(W, result.omega[:, f], "-", color=colour, lw=1.0)
+        else:
+            ax.plot(W, result.forward[:, f], "-", color=colour, lw=1.0)
+            ax.plot(W, result.backward[:, f], "--", color=colour, lw=1.0)
+    if result.forward is not None:
+        ax.plot([], [], "k-", lw=1.0, label="forward wave")
+        ax.plot([], [], "k--", lw=1.0, label="backward wave")
+        ax.legend(fontsize=7, loc="upper left")
+    bar = fig.colorbar(plt.cm.ScalarMappable(cmap=cmap, norm=plt.Normalize(0, half)), ax=ax, pad=0.02)
+    bar.set_label("nodal diameter k", fontsize=8)
+    for c in result.crossings:
+        ax.plot(c["speed"], c["frequency"], "kx", ms=6)
+        ax.annotate(f"k{c['family']}/EO{c['order']} {c['speed']:.0f}", (c["speed"], c["frequency"]), fontsize=6,
+                    xytext=(3, -9), textcoords="offset points")
+    ax.set_ylim(0, top)
+    ax.set_xlim(W[0], W[-1])
+    ax.set_xlabel("angular speed Omega (rad/s)")
+    ax.set_ylabel("frequency omega (rad/s), turning frame")
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3)
+    return _save(fig, path)
+
+
+def plot_interference(result, path: str | Path, title: str = "") -> Path:
+    """The interference (ZZENF) diagram (#73): at one speed, each mode's frequency against the nodal diameter k
+    (one line per mode number; with Coriolis the forward and backward waves), and the engine orders' zig-zag: order
+    e at its excited index (e aliased by the N sectors) and frequency e Omega, consecutive orders joined; each order
+    labelled with its direction. ``result``: a ``studies.disk_campbell.DiskCampbellResult``."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7.5, 5.0))
+    zz = result.zzenf
+    k = np.asarray(result.families)
+    omega = np.asarray(zz["omega"])
+    for j in range(omega.shape[1]):
+        if "forward" in zz:
+            ax.plot(k, np.asarray(zz["forward"])[:, j], "-o", ms=3, lw=1.0, color=f"C{j}",
+                    label=f"mode {j + 1} forward")
+            ax.plot(k, np.asarray(zz["backward"])[:, j], "--s", ms=3, lw=1.0, color=f"C{j}",
+                    label=f"mode {j + 1} backward")
+        else:
+            ax.plot(k, omega[:, j], "-o", ms=3, lw=1.2, color=f"C{j}", label=f"mode {j + 1}")
+    rows = sorted(zz["orders"], key=lambda r: r["order"])
+    ax.plot([r["index"] for r in rows], [r["frequency"] for r in rows], "k-", lw=0.8)
+    for r in rows:
+        ax.plot(r["index"], r["frequency"], "kD", ms=4)
+        ax.annotate(f"EO{r['order']}" + {"backward": " b", "forward": " f"}.get(r["direction"], ""),
+                    (r["index"], r["frequency"]), fontsize=6, xytext=(3, 3), textcoords="offset points")
+    top = max(float(np.nanmax(omega)), max(r["frequency"] for r in rows)) * 1.08
+    ax.set_ylim(0, top)
+    ax.set_xlim(-0.5, result.n_sectors // 2 + 0.5)
+    ax.xaxis.get_major_locator().set_params(integer=True)
+    ax.set_xlabel("nodal diameter k")
+    ax.set_ylabel("frequency omega (rad/s), turning frame")
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=7, loc="lower right")
     ax.grid(alpha=0.3)
     return _save(fig, path)
 
