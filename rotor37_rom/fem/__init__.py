@@ -47,8 +47,8 @@ from .sector import (Sector, build_on_rank0, clamp_cell_group, create_blade_sect
                      create_sector_from_gmsh, create_sector_from_mesh, locate_cyclic_pairs, tip_node_names,
                      write_sector_mesh)
 from .solvers import (ModalResult, StaticResult, compute_clamped_modes, mumps_solver, reduced_coriolis,
-                      rotating_modes, slepc_eigenpairs, solve_clamped_static, solve_eigenproblem, solve_static,
-                      static_compliance)
+                     reduced_rotation_terms, rotating_modes, slepc_eigenpairs, solve_clamped_static,
+                     solve_eigenproblem, solve_static, static_compliance)
 
 __all__ = [
     "Sector", "SvkOperators", "ModalResult", "StaticResult",
@@ -66,5 +66,5 @@ __all__ = [
     "solve_cyclic_modes", "sector_fields", "clamp_cell_group", "build_on_rank0", "CyclicOperators",
     "RepeatingSectors", "solve_repeating_newmark", "sector_harmonic_load", "write_sector_mesh", "facet_centroid",
     "patch_load", "static_compliance", "tip_patch_interface", "create_ring_sector", "cyclic_projector",
-    "centrifugal_state", "rotating_cyclic_operators",
+    "centrifugal_state", "rotating_cyclic_operators", "reduced_rotation_terms",
 ]

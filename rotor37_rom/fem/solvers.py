@@ -26,7 +26,8 @@ from .sector import Sector
 
 __all__ = ["ModalResult", "StaticResult", "solve_eigenproblem", "compute_clamped_modes",
            "solve_static", "solve_clamped_static", "mumps_solver", "slepc_eigenpairs",
-           "shift_invert_solver", "static_compliance", "rotating_modes", "reduced_coriolis"]
+           "shift_invert_solver", "static_compliance", "rotating_modes", "reduced_coriolis",
+           "reduced_rotation_terms"]
 
 LOG = logging.getLogger(__name__)
 
@@ -187,7 +188,8 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
         force: external load for lambda = 1: a PETSc vector (N) or a function v -> UFL 1-form (e.g. a traction).
         prescribed: displacement control: (local DOF indices, values at lambda = 1) pairs, imposed as lambda*values.
         n_steps: equal load increments (1..10000).
-        rtol: Newton stops when ||r|| <= rtol * max(||lambda f_ext||, ||reaction||) (relative residual).
+        rtol: Newton stops when ||r|| <= rtol * max(||lambda f_ext||, ||reaction||) (relative residual), or at its
+            round-off floor (below 1e-7 of that and no longer halving: ``_at_round_off``).
         linear: solve K u = lambda f (one factorisation) instead.
         spin: the structure turns at this speed (rad/s) about the machine axis e_z: the centrifugal force
             rho spin^2 P (X + u) (``forms.centrifugal_force``, following the deformed position) joins the load, scaled
@@ -261,7 +263,7 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
             res, ref = r.norm(), max(load_norm, reaction, 1e-300)
             LOG.debug("lambda=%.4f it=%d |r|=%.3e ref=%.3e", lam, it, res, ref)
             step_history.append((res, ref))
-            if (res <= rtol * ref or (linear and it == 1)) and lift.norm() == 0.0:
+            if (res <= rtol * ref or (linear and it == 1) or _at_round_off(step_history)) and lift.norm() == 0.0:
                 break
             if it == max_iterations:
                 raise RuntimeError(f"Newton did not converge at load factor {lam:.4g} "
@@ -296,6 +298,20 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
     out.x.array[:] = u.x.array
     return StaticResult(load_factors=lambdas, tip_displacements=np.array(tips), iterations=np.array(its), u=out,
                         residuals=history)
+
+
+ROUND_OFF_FLOOR = 1e-7
+
+
+def _at_round_off(history: list) -> bool:
+    """Newton has reached its round-off floor: the residual is below ROUND_OFF_FLOOR of its reference (where Newton
+    converges quadratically, so the next iterate would be far below the tolerance) and the last iteration did not
+    halve it. A small load (a slowly turning structure) has a floor of ~1e-10 of itself: the internal force is a sum
+    of element contributions far larger than their net."""
+    if len(history) < 2:
+        return False
+    (previous, _), (res, ref) = history[-2], history[-1]
+    return res <= ROUND_OFF_FLOOR * ref and res > 0.5 * previous
 
 
 def solve_clamped_static(sector: Sector, rhs: np.ndarray, ops: SvkOperators | None = None,
@@ -391,16 +407,43 @@ def reduced_coriolis(sector: Sector, V: np.ndarray, ops: SvkOperators | None = N
     their span (``model.campbell.gyroscopic_frequencies``)."""
     own = G is None
     G = assemble_coriolis(sector, ops or create_svk_operators(sector)) if own else G
-    x, y = G.createVecs()
-    GV = np.empty_like(V)
-    for k in range(V.shape[1]):
-        x.array[:] = V[:, k]
-        G.mult(x, y)
-        GV[:, k] = y.array
+    Gr = _project(sector, G, V)
     if own:
         G.destroy()
-    Gr = sector.comm.allreduce(V.T @ GV, op=MPI.SUM)
     return 0.5 * (Gr - Gr.T)
+
+
+def _project(sector: Sector, A: PETSc.Mat, V: np.ndarray) -> np.ndarray:
+    """V^T A V (n, n) for the columns of V (this rank's owned entries), summed over ranks."""
+    x, y = A.createVecs()
+    AV = np.empty_like(V)
+    for k in range(V.shape[1]):
+        x.array[:] = V[:, k]
+        A.mult(x, y)
+        AV[:, k] = y.array
+    return sector.comm.allreduce(V.T @ AV, op=MPI.SUM)
+
+
+def reduced_rotation_terms(sector: Sector, V: np.ndarray, ops: SvkOperators | None = None
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(V^T M_P V, V^T f_c0, V^T G_1 V) on the columns of V (this rank's owned entries, zero on the clamp), summed
+    over ranks: the spin softening per unit spin^2 (``assemble_spin_softening``), the centrifugal load at rest per unit
+    spin^2 (f_c0 = rho P X: ``forms.centrifugal_force`` at u = 0 and spin 1; the force at u is spin^2 (f_c0 + M_P u),
+    linear in u) and the Coriolis matrix per unit spin (skew). A reduced model on V turning at spin about e_z
+    (``model.rotating``) is exactly these three and its model at rest."""
+    ops = ops or create_svk_operators(sector)
+    M_P, G = assemble_spin_softening(sector, ops), assemble_coriolis(sector, ops)
+    Mr, Gr = _project(sector, M_P, V), _project(sector, G, V)
+    for A in (M_P, G):
+        A.destroy()
+    zero = fem.Function(sector.V)
+    one = fem.Constant(sector.mesh, PETSc.ScalarType(1.0))
+    f = assemble_vector(fem.form(forms.centrifugal_force(zero, ufl.TestFunction(sector.V), ops.constants["rho"],
+                                                         one), jit_params=JIT_PARAMS))
+    fem_petsc.set_bc(f, [sector.clamp_bc], scale=0.0)
+    Fr = sector.comm.allreduce(V.T @ f.array, op=MPI.SUM)
+    f.destroy()
+    return 0.5 * (Mr + Mr.T), Fr, 0.5 * (Gr - Gr.T)
 
 
 def mumps_solver(A) -> Callable[[np.ndarray], np.ndarray]:

@@ -17,6 +17,7 @@ from rotor37_rom.forces.protocol import NonlinearForce
 from rotor37_rom.forces.sector import SectorForces
 from rotor37_rom.forces.tensors import PolynomialForces, QuadratureForces
 from rotor37_rom.model.nodes import NodeMap
+from rotor37_rom.model.rotating import RotationTerms
 from rotor37_rom.npz import save_npz
 
 
@@ -41,6 +42,8 @@ class ReducedModel:
         sectors: for a disk model, the per-sector basis that rebuilds each sector's field
         (``model.disk_basis.DiskBasis``);
             None for a blade.
+        rotation: the terms of the model turning about e_z (``model.rotating.RotationTerms``: spin softening,
+            centrifugal load, Coriolis, the speed range), or None (a model at rest).
     """
 
     M: np.ndarray
@@ -54,6 +57,7 @@ class ReducedModel:
     Phi: np.ndarray | None
     metadata: dict
     sectors: DiskBasis | None = None
+    rotation: RotationTerms | None = None
 
     @property
     def r(self) -> int:
@@ -118,6 +122,8 @@ def save_reduced_model(model: ReducedModel, path: str | Path) -> Path:
     arrays.update({"forces": "none"} if model.forces is None else model.forces.arrays())
     if model.sectors is not None:
         arrays.update({f"sectors_{name}": value for name, value in dataclasses.asdict(model.sectors).items()})
+    if model.rotation is not None:
+        arrays.update(model.rotation.arrays())
     return save_npz(path, **arrays)
 
 
@@ -173,7 +179,7 @@ def load_reduced_model(path: str | Path, expected_key: str | None = None) -> Red
     return ReducedModel(M=arrays["M"], C=arrays["C"], K=arrays["K"], forces=forces,
                         boundary_dofs=arrays["boundary_dofs"], nodes=nodes,
                         sizes=info["sizes"], md_pairs=arrays["md_pairs"], Phi=arrays.get("Phi"),
-                        metadata=info["metadata"], sectors=sectors)
+                        metadata=info["metadata"], sectors=sectors, rotation=RotationTerms.from_arrays(arrays))
 
 
 def _load_force(arrays, r: int) -> NonlinearForce | None:

@@ -22,6 +22,7 @@ from rotor37_rom.reduction.craig_bampton import (CraigBamptonBasis, craig_bampto
     fixed_interface_correction, lift_states, modal_damping, select_pairs, selection_weights)
 from rotor37_rom.model.nodes import NodeMap
 from rotor37_rom.model.reduced import ReducedModel, load_reduced_model, reduced_model_key, save_reduced_model
+from rotor37_rom.model.rotating import RotationTerms
 from rotor37_rom.dynamics.newmark import simulate_linear_newmark
 from rotor37_rom.forces.step import identify_step
 
@@ -100,6 +101,55 @@ def boundary_node_map(sector, boundary_dofs: np.ndarray):
     return NodeMap.for_nodes(coords[complete].reshape(-1, 3), q_index, names)
 
 
+SPIN_SNAPSHOT_PAIR = -(10 ** 6)     # md_pairs' row of a centrifugal snapshot (not a pair of modes: never lifted)
+
+
+def _spin_snapshots(sector, ops, basis: CraigBamptonBasis, Z: np.ndarray, M_f, free: np.ndarray, speeds,
+                    n_modes: int = 0) -> tuple[np.ndarray, list]:
+    """The full-order centrifugal states at ``speeds`` (``fem.solve_static(spin=...)``) and the first ``n_modes``
+    modes of the blade turning at the last (the top) speed (``fem.rotating_modes``: K_T(u_c) - Omega^2 M_P, the tip
+    free), each fixed-interface corrected (eq. 20: with the constraint modes they span the mode exactly), each
+    M-orthogonalised against the interior columns already
+    kept (Theta, Z, earlier ones: the span is the same, the reduced mass better conditioned). Returns ((n, s)
+    columns, the remainder of each, |w| / |u| in M-norm after the orthogonalisation); a vector already in the span to
+    1e-8 is dropped (its remainder reported)."""
+    n_full = basis.Psi.shape[0]
+    kept, remainders, out = [basis.Theta, Z], [], []
+
+    def keep(w: np.ndarray) -> None:
+        norm0 = np.sqrt(w[free] @ (M_f @ w[free]))
+        for _ in range(2):                                 # twice: Gram-Schmidt's round-off
+            for A in kept:
+                if A.shape[1]:
+                    MA = M_f @ A[free]
+                    w = w - A @ np.linalg.solve(A[free].T @ MA, MA.T @ w[free])
+        remainders.append(float(np.sqrt(w[free] @ (M_f @ w[free])) / norm0))
+        if remainders[-1] > 1e-8:
+            out.append(w)
+            kept.append(w[:, None])
+
+    for spin in speeds:
+        state = fem.solve_static(sector, spin=float(spin), ops=ops, n_steps=2).u.x.array.copy()
+        keep(fixed_interface_correction(state[:n_full, None], basis.Psi, boundary_dofs=basis.boundary_dofs,
+                                        interface=basis.interface)[:, 0])
+    if n_modes:
+        _, V = fem.rotating_modes(sector, float(speeds[-1]), n_modes, ops)
+        corrected = fixed_interface_correction(V[:n_full], basis.Psi, boundary_dofs=basis.boundary_dofs,
+                                               interface=basis.interface)
+        for j in range(n_modes):
+            keep(corrected[:, j])
+    return (np.column_stack(out) if out else np.zeros((n_full, 0))), remainders
+
+
+def _sizes(basis: CraigBamptonBasis, pairs: np.ndarray) -> dict:
+    """The basis's sizes, its centrifugal snapshots counted apart ('r_spin') from its modal derivatives."""
+    sizes = dict(basis.sizes)
+    n_spin = int(np.sum(pairs[:, 0] == SPIN_SNAPSHOT_PAIR)) if len(pairs) else 0
+    if n_spin:
+        sizes.update(r_md=sizes["r_md"] - n_spin, r_spin=n_spin)
+    return sizes
+
+
 def _m_normalise(Z: np.ndarray, M, free: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     norms = np.sqrt(np.einsum("ij,ij->j", Z[free], M @ Z[free]))
     return Z / norms, norms
@@ -176,6 +226,8 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
     meta_config = dataclasses.asdict(config)
     if not config.contact_patch:          # absent from the point-contact models' keys: their caches stay valid
         del meta_config["contact_patch"]
+    if not config.spin_snapshots:         # likewise for the models at rest
+        del meta_config["spin_snapshots"], meta_config["spin_modes"]
     metadata = {"config": meta_config, "boundary_dofs": boundary_dofs.tolist(),
                 "mesh": mesh_signature(sector), "source": sector.source, "version": __version__}
     cache, cached, report, lap, operators = begin_build(sector, ops, metadata, cache_dir, "rom")
@@ -238,6 +290,11 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
         # the derivatives are of the free blade; remove their boundary part with the constraint modes (eq. 20)
         Z = np.hstack([Z, fixed_interface_correction(xi, basis.Psi, boundary_dofs, basis.interface)])
         pairs = np.vstack([pairs, -1 - gpairs])  # negative: pairs of clamped normal modes
+    if config.spin_snapshots:
+        snapshots, report["spin_snapshot_remainder"] = _spin_snapshots(sector, ops, basis, Z, M_f, free,
+                                                                       config.spin_snapshots, config.spin_modes)
+        Z = np.hstack([Z, snapshots])
+        pairs = np.vstack([pairs, np.full((snapshots.shape[1], 2), SPIN_SNAPSHOT_PAIR)]).astype(pairs.dtype)
     Z, md_scale = _m_normalise(Z, M_f, free) if Z.shape[1] else (Z, np.zeros(0))
     basis = dataclasses.replace(basis, Z=Z, md_pairs=pairs)
     lap("modal_derivatives")
@@ -269,9 +326,14 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
             forces = result.forces
             report["ecsw_cells"], report["ecsw_training_error"] = result.cells.size, result.training_error
         lap("forces")
+    rotation = None
+    if config.spin_snapshots:
+        M_P, F_c, G = fem.reduced_rotation_terms(sector, Phi, ops)
+        rotation = RotationTerms(M_P=M_P, F_c=F_c, G=G, speeds=np.array(config.spin_snapshots))
+        lap("rotation_terms")
     model = ReducedModel(M=M, C=C, K=K, forces=forces, boundary_dofs=boundary_dofs,
-                         nodes=nodes, sizes=basis.sizes, md_pairs=pairs,
-                         Phi=Phi if config.keep_basis else None, metadata=metadata)
+                         nodes=nodes, sizes=_sizes(basis, pairs), md_pairs=pairs,
+                         Phi=Phi if config.keep_basis else None, metadata=metadata, rotation=rotation)
     if cache is not None:
         save_reduced_model(model, cache)
     return model, report

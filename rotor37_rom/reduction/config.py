@@ -39,6 +39,13 @@ class ReductionConfig:
             each contact node's boundary coordinates are the area-mean displacement of the tip facets within it
             (``fem.tip_patch_interface``), so its contact force acts as a uniform traction on that patch and no
             constraint mode or modal derivative carries a point load's singular field (issue #23).
+        spin_snapshots: () (a model at rest), or speeds (rad/s, > 0): the blade's full-order centrifugal states at
+            them (``fem.solve_static(spin=...)``, fixed-interface corrected) join the basis after the modal
+            derivatives, and the model carries its rotation terms (``model.rotating``: spin softening, centrifugal
+            load, Coriolis), valid from 0 to the largest of them (#73).
+        spin_modes: with spin_snapshots, the first n modes of the blade turning at the top snapshot speed
+            (prestressed, spin softened), fixed-interface corrected, join the basis too (a multi-model basis: the
+            modes at rest and at speed; at the top speed these n are then exact), 0 .. r_c.
     """
 
     r_c: int = 15
@@ -55,6 +62,8 @@ class ReductionConfig:
     keep_basis: bool = True
     global_md_modes: int = 0
     contact_patch: float = 0.0
+    spin_snapshots: tuple = ()
+    spin_modes: int = 0
 
     def __post_init__(self):
         whole_number("r_c", self.r_c, 1)
@@ -73,6 +82,15 @@ class ReductionConfig:
         real_number("ecsw_tol", self.ecsw_tol, 0, 1, open_low=True, open_high=True)
         real_number("training_force", self.training_force, 0, open_low=True, unit=" N")
         real_number("training_omega", self.training_omega, 0, open_low=True, unit=" rad/s")
+        if not isinstance(self.spin_snapshots, (tuple, list)) or len(self.spin_snapshots) > 10 or any(
+                not isinstance(w, numbers.Real) or not np.isfinite(w) or not 0 < w <= 1e5
+                for w in self.spin_snapshots):
+            raise ValueError(f"spin_snapshots: at most 10 speeds in (0, 1e5] rad/s, got {self.spin_snapshots!r}")
+        object.__setattr__(self, "spin_snapshots", tuple(sorted({float(w) for w in self.spin_snapshots})))
+        whole_number("spin_modes", self.spin_modes, 0, self.r_c)
+        if self.spin_modes and not self.spin_snapshots:
+            raise ValueError("spin_modes needs spin_snapshots (the modes are the blade's turning at the top "
+                             "snapshot speed)")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -274,6 +274,31 @@ def plot_interference(result, path: str | Path, title: str = "") -> Path:
     return _save(fig, path)
 
 
+def plot_curves(x: np.ndarray, series: dict, path: str | Path, title: str = "", xlabel: str = "",
+                ylabel: str = "", logy: bool = False) -> Path:
+    """Curves y(x), one per entry of ``series`` ({label: (len(x),) values}); a candidate's curves share a line style
+    when labels share their text before ', mode' (the colour is the mode)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    styles, groups = ["-", "--", ":", "-."], []
+    for label, y in series.items():
+        group = label.split(", mode")[0]
+        if group not in groups:
+            groups.append(group)
+        mode = label.split(", mode")[-1].strip() if ", mode" in label else ""
+        colour = f"C{int(mode) - 1}" if mode.isdigit() else None
+        ax.plot(x, y, styles[groups.index(group) % len(styles)], color=colour, marker="o", ms=3, lw=1.0,
+                label=label)
+    if logy:
+        ax.set_yscale("log")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=6, loc="best")
+    ax.grid(alpha=0.3, which="both")
+    return _save(fig, path)
+
+
 def plot_time_history(t: np.ndarray, series: dict, path: str | Path, title: str = "",
                       ylabel: str = "radial displacement (mm)") -> Path:
     """Displacement histories (mm) vs time (ms). series: {label: values (m)}."""
