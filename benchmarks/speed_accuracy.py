@@ -13,6 +13,10 @@ Scenes (the report's settings):
   models against the full-order nonlinear statics; candidates: r_c x modal derivatives (none / 10 constraint-mode
   pairs by MI 2b or at random / the 6 of 1B-1T-2B / those + 10 by MI 2b), and the full-order linear model; held
   out: both modes at 1.5 times the amplitude.
+- ``rotating-modes``: the turning ci blade (#73): its reduced model's frequencies of modes 1-3 and its tip's
+  centrifugal displacement against the full order at 1,200-1,600 rad/s by 100; candidates: r_c 15 with the 6 global
+  modal derivatives and the full-order centrifugal states at 1,000 and/or 2,000 rad/s, with 0, 2 or 4 modes of the
+  blade turning at 2,000 rad/s in the basis; held out: the other speeds of 0-2,000 rad/s by 100.
 - ``map-linear`` / ``map-gnl``: the interaction map's NFRC at node LE, 11 speeds in 1,200-1,600 rad/s x 8
   revolutions from rest, mu = 0, normal e_x (what ``make demo`` runs), GNL off / on; error: the largest of the NFRC
   error on the speeds robust to a 1e-4 force perturbation (relative to the reference's peak), the resonance speed's

@@ -146,7 +146,7 @@ def test_crossings_and_tracking_closed_form():
         assert abs(c["speed"] - W) <= 1e-12 * W and c["frequency"] == c["order"] * c["speed"]
 
 
-def test_campbell_of_the_ci_blade(tmp_path):
+def test_campbell_of_the_ci_blade(ci_blade, tmp_path):
     """The turning ci blade (``run_campbell``): at rest its modes are the clamped ones (the same solve); each 1B
     crossing is where the prestressed blade's 1B, solved again at that speed, equals e Omega, to the iteration's
     0.01 rad/s (the Southwell iteration contracts by S'/(e^2 - S) ~ 0.05 a step: the distance to the fixed point is
@@ -154,7 +154,7 @@ def test_campbell_of_the_ci_blade(tmp_path):
     from rotor37_rom import fem
     from rotor37_rom.studies.campbell import CampbellConfig, run_campbell
 
-    sector = fem.create_blade_sector(preset="ci")
+    sector = ci_blade
     config = CampbellConfig(preset="ci", speeds=(0.0, 2000.0, 3), n_modes=2, orders=(4, 5), out=tmp_path)
     result = run_campbell(config, sector)
     rest = fem.compute_clamped_modes(sector, 2).omega
@@ -348,7 +348,7 @@ def test_disk_campbell_on_a_ring(tmp_path):
 
     R, radial = 0.1, 2e-3
     ring = fem.create_ring_sector(R, radial, 4e-3, n_sectors=36, size=1e-3)
-    plain = run_disk_campbell(DiskCampbellConfig(speeds=(0.0, 80.0, 3), families=(2, 3), n_modes=2,
+    plain = run_disk_campbell(DiskCampbellConfig(speeds=(0.0, 80.0, 2), families=(2, 3), n_modes=2,
                                                  orders=(3, 33, 34, 38), prestress=False, refine=1e-6,
                                                  out=tmp_path / "a"),
                               sector=ring)
@@ -401,17 +401,17 @@ def turning_rom(ci_blade, ci_ops, tmp_path_factory):
 
 
 def test_turning_rom_is_the_full_order_at_its_snapshots(turning_rom, ci_blade, ci_ops, tmp_path):
-    """A reduced model that turns (``model.rotating``; #73): M q'' + (K - Omega^2 M_P) q + g(q) = Omega^2 F_c with
-    M_P = V^T M_P V, F_c = V^T rho P X (the centrifugal force is linear in u: reduced exactly) on a basis holding the
+    """A reduced model that turns (``model.rotating``; #73): M q'' + (K - Omega^2 M_P) q + g(q) = Omega^2 F_c with M_P =
+    V^T M_P V, F_c = V^T rho P X (the centrifugal force is linear in u: reduced exactly) on a basis holding the
     full-order centrifugal states at 1,000 and 2,000 rad/s. Galerkin: where the full-order state is in the span, the
     projected residual vanishes there, so the reduced equilibrium is the full-order one: its tip displacement equals
-    ``fem.solve_static(spin=...)``'s to 1e-8 (both Newtons to 1e-10; measured 2e-10) at both speeds, not between
-    them (measured 1e-5 at 1,500 rad/s). There the reduced tangent K + dg/dq - Omega^2 M_P is V^T (K_T(u_c) -
-    Omega^2 M_P) V exactly, so its frequencies bound the full order's from above (Rayleigh-Ritz; to 1e-9 for the
-    eigen-solvers), and the 2 turning modes in the basis are exact at 2,000 rad/s (1e-8). The rotation terms: M_P
-    symmetric positive semi-definite, G skew; the file keeps them; a speed past the snapshots, a negative one and a
-    model at rest are refused. Broken on purpose: the model without its spin softening (M_P = 0) misses the
-    full-order state at 1,000 rad/s by 1.4e-3 (fails)."""
+    ``fem.solve_static(spin=...)``'s to 1e-8 (both Newtons to 1e-10; measured 2e-10) at both speeds (not between
+    them: 2e-5 at 1,500 rad/s, ``bench_rotating_rom``). There the reduced tangent K + dg/dq - Omega^2 M_P is V^T
+    (K_T(u_c) - Omega^2 M_P) V exactly, so its frequencies bound the full order's from above (Rayleigh-Ritz; to 1e-9
+    for the eigen-solvers), and the 2 turning modes in the basis are exact at 2,000 rad/s (1e-8). The rotation
+    terms: M_P symmetric positive semi-definite, G skew; the file keeps them; a speed past the snapshots, a negative
+    one and a model at rest are refused. Broken on purpose: the model without its spin softening (M_P = 0) misses
+    the full-order state at 1,000 rad/s by 1.4e-3 (fails)."""
     from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model
     from rotor37_rom.model.rotating import centrifugal_equilibrium, check_spin, rotating_modes
 
@@ -422,17 +422,16 @@ def test_turning_rom_is_the_full_order_at_its_snapshots(turning_rom, ci_blade, c
     np.testing.assert_allclose(terms.M_P, terms.M_P.T, atol=1e-14 * np.abs(terms.M_P).max())
     assert np.linalg.eigvalsh(terms.M_P).min() >= -1e-12 * np.abs(terms.M_P).max()
     tip, rows = ci_blade.tip_dofs.ravel(), model.nodes.q_index.ravel()
-    for spin in (1000.0, 1500.0, 2000.0):
-        full = fem.solve_static(ci_blade, spin=spin, n_steps=2, ops=ci_ops).u.x.array[tip]
+    for spin in terms.speeds:
+        state = fem.solve_static(ci_blade, spin=spin, n_steps=2, ops=ci_ops).u.x.array
         q_c = centrifugal_equilibrium(model, spin)
-        error = np.abs(q_c[rows] - full).max() / np.abs(full).max()
-        w_full, _ = fem.rotating_modes(ci_blade, spin, 4, ci_ops)
+        error = np.abs(q_c[rows] - state[tip]).max() / np.abs(state[tip]).max()
+        w_full, _ = fem.rotating_modes(ci_blade, spin, 4, ci_ops, state=state)
         w_rom, _ = rotating_modes(model, spin, q_c=q_c)
         print(f"{spin:.0f} rad/s: tip state {error:.1e} from the full order; frequencies "
               f"{np.array2string(w_rom[:4] / w_full - 1, precision=2)} from it")
-        if spin in terms.speeds:
-            assert error <= 1e-8
-            assert np.all(w_rom[:4] >= w_full * (1 - 1e-9))
+        assert error <= 1e-8
+        assert np.all(w_rom[:4] >= w_full * (1 - 1e-9))
     np.testing.assert_allclose(w_rom[:2], w_full[:2], rtol=1e-8)
     saved = load_reduced_model(save_reduced_model(model, tmp_path / "turning.npz"))
     np.testing.assert_array_equal(saved.rotation.G, terms.G)

@@ -372,21 +372,26 @@ class _MumpsSolve:
 
 
 def rotating_modes(sector: Sector, spin: float, n_modes: int, ops: SvkOperators | None = None,
-                   M: PETSc.Mat | None = None, rtol: float = 1e-10, prestress: bool = True
-                   ) -> tuple[np.ndarray, np.ndarray]:
+                   M: PETSc.Mat | None = None, rtol: float = 1e-10, prestress: bool = True,
+                   state: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The first ``n_modes`` modes of the structure turning at ``spin`` (rad/s) about the machine axis e_z, without
     Coriolis: K_T(u_c) - spin^2 M_P at the centrifugal equilibrium u_c (``solve_static(spin=...)``, nonlinear SVK,
     Newton to ``rtol``) against the mass; at spin 0 the clamped stiffness K; with ``prestress`` False, K - spin^2 M_P
     (spin softening only: a structure on the axis, whose centrifugal load is nil). Returns (omega (n,) rad/s
-    ascending, V (n_dofs, n) with V^T M V = I, this rank's owned entries). ``M``: the mass, if the caller keeps it."""
+    ascending, V (n_dofs, n) with V^T M V = I, this rank's owned entries). ``M``: the mass, if the caller keeps it;
+    ``state``: the centrifugal equilibrium at ``spin`` if the caller has solved it (local values with ghosts, as
+    ``solve_static(spin=...).u.x.array``)."""
     if not (np.isfinite(spin) and spin >= 0.0):
         raise ValueError(f"spin must be a finite speed >= 0 rad/s, got {spin}")
     ops = ops or create_svk_operators(sector)
     own_mass = M is None
     M = assemble_mass(sector, ops) if own_mass else M
     if spin > 0.0:
-        u = (solve_static(sector, spin=spin, n_steps=2, ops=ops, rtol=rtol).u.x.array if prestress else
-             np.zeros(ops.u.x.array.size))
+        if state is not None:
+            u = np.asarray(state, float)
+        else:
+            u = (solve_static(sector, spin=spin, n_steps=2, ops=ops, rtol=rtol).u.x.array if prestress else
+                 np.zeros(ops.u.x.array.size))
         K = assemble_tangent(sector, u, ops, spin)
     else:
         K = assemble_stiffness(sector, ops)

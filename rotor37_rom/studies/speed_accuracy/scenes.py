@@ -10,7 +10,7 @@ from typing import Callable, Iterable
 
 from rotor37_rom.machine import machine_description
 from rotor37_rom.studies.speed_accuracy.blade_maps import held_out_map, scene_map
-from rotor37_rom.studies.speed_accuracy.blade_statics import scene_clearance, scene_modes
+from rotor37_rom.studies.speed_accuracy.blade_statics import scene_clearance, scene_modes, scene_rotating_modes
 from rotor37_rom.studies.speed_accuracy.blade_stress import scene_stability, scene_stress
 from rotor37_rom.studies.speed_accuracy.charts import write_charts
 from rotor37_rom.studies.speed_accuracy.context import COMMAND, PREFIX, TOLERANCES, StudyContext
@@ -41,6 +41,11 @@ def _modes(ctx: StudyContext, study: StudyRecord, t0: float) -> None:
 
 def _clearance(ctx: StudyContext, study: StudyRecord, t0: float) -> None:
     study["scenes"]["clearance"] = scene_clearance()
+
+
+def _rotating_modes(ctx: StudyContext, study: StudyRecord, t0: float) -> None:
+    study["scenes"]["rotating-modes"] = scene_rotating_modes()
+    ctx.fresh.append(f"scene rotating-modes {time.perf_counter() - t0:.0f} s")
 
 
 def _map(gnl: bool, ctx: StudyContext, study: StudyRecord, t0: float) -> None:
@@ -98,6 +103,7 @@ def _disk_forced(gnl: bool, ctx: StudyContext, study: StudyRecord, t0: float) ->
 
 REGISTRY: dict[str, Scene] = {
     "modes": Scene("blade", _modes), "clearance": Scene("blade", _clearance),
+    "rotating-modes": Scene("blade", _rotating_modes),
     "map-linear": Scene("blade", functools.partial(_map, False)),
     "map-gnl": Scene("blade", functools.partial(_map, True)),
     "stability": Scene("blade", _stability), "paper-speedup": Scene("blade", _paper_speedup),
