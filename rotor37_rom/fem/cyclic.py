@@ -368,30 +368,52 @@ def centrifugal_state(sector: Sector, spin: float, ops: SvkOperators | None = No
     in spin^2 (as ``solve_static(spin=...)``), to ||T_0^T r|| <= rtol max(||f_c||, ||f_int||) or its round-off floor
     (``solvers._at_round_off``). Runs under MPI."""
     import ufl
-    from dolfinx.fem import petsc as fem_petsc
 
     from rotor37_rom import forms
 
-    from .operators import JIT_PARAMS, assemble_tangent, assemble_vector
-    from .solvers import _at_round_off, _lu_solver
+    from .operators import JIT_PARAMS
 
     if not (np.isfinite(spin) and spin >= 0.0):
         raise ValueError(f"spin must be a finite speed >= 0 rad/s, got {spin}")
     if not (1 <= n_steps <= 10000):
         raise ValueError(f"n_steps must be in [1, 10000], got {n_steps}")
+    if spin == 0.0:
+        return fem.Function(sector.V, name="u")
+    if sector.comm.allreduce(sector.clamp_bc.dof_indices()[0].size, op=MPI.SUM) == 0:
+        raise ValueError(f"{sector.source} is free (nothing clamped): its harmonic index 0 holds rigid-body motions, "
+                         f"so its centrifugal state is not unique; clamp it, or take spin softening alone "
+                         f"(prestress=False)")
     ops = ops or create_svk_operators(sector)
     T0, eliminated = cyclic_projector(sector, 0)
     u = ops.u
     u.x.array[:] = 0.0
-    if spin == 0.0:
-        T0.destroy()
-        return fem.Function(sector.V, name="u")
     spin_c = fem.Constant(sector.mesh, PETSc.ScalarType(spin))
     centrifugal = fem.form(forms.centrifugal_force(u, ufl.TestFunction(sector.V), ops.constants["rho"], spin_c),
                            jit_params=JIT_PARAMS)
     D = _eliminated_diagonal(sector, eliminated, 1, 1.0)
     x, dx = T0.createVecRight(), T0.createVecRight()
     rhs, du = T0.createVecRight(), T0.createVecLeft()
+    try:
+        _newton_on_index_0(sector, ops, centrifugal, spin_c, spin, T0, D, (x, dx, rhs, du), n_steps, rtol,
+                           max_iterations)
+    finally:
+        for obj in (T0, D, x, dx, rhs, du):
+            obj.destroy()
+    out = fem.Function(sector.V, name="u")
+    out.x.array[:] = u.x.array
+    return out
+
+
+def _newton_on_index_0(sector: Sector, ops: SvkOperators, centrifugal, spin_c, spin: float, T0, D, work,
+                       n_steps: int, rtol: float, max_iterations: int) -> None:
+    """``centrifugal_state``'s load steps and Newton iterations on x (u = T_0 x, left in ``ops.u``)."""
+    from dolfinx.fem import petsc as fem_petsc
+
+    from .operators import assemble_tangent, assemble_vector
+    from .solvers import _at_round_off, _lu_solver
+
+    x, dx, rhs, du = work
+    u = ops.u
     for lam in np.linspace(0.0, 1.0, n_steps + 1)[1:]:
         spin_c.value = spin * np.sqrt(lam)
         history: list = []
@@ -426,11 +448,6 @@ def centrifugal_state(sector: Sector, spin: float, ops: SvkOperators | None = No
             u.x.scatter_forward()
             for obj in (ksp, A0, A):
                 obj.destroy()
-    out = fem.Function(sector.V, name="u")
-    out.x.array[:] = u.x.array
-    for obj in (T0, D, x, dx, rhs, du):
-        obj.destroy()
-    return out
 
 
 def rotating_cyclic_operators(sector: Sector, spin: float, ops: SvkOperators | None = None,

@@ -137,6 +137,7 @@ def run_disk_campbell(config: DiskCampbellConfig, sector=None) -> DiskCampbellRe
 
     before_work({"--out": config.out})
     t0 = time.perf_counter()
+    name = f"rotor 37 bladed disk ({config.preset}" if sector is None else f"{sector.source} ("
     sector = sector if sector is not None else fem.create_disk_sector(preset=config.preset)
     N = sector.cyclic.n_sectors
     if max(config.families) > N // 2:
@@ -198,9 +199,9 @@ def run_disk_campbell(config: DiskCampbellConfig, sector=None) -> DiskCampbellRe
     effects = ("prestressed, spin softened" if config.prestress else "spin softened, no prestress") + \
         (", Coriolis" if config.coriolis else ", no Coriolis")
     files = [plot_disk_campbell(result, config.orders, config.out / "campbell_disk.png",
-                                f"rotor 37 bladed disk ({config.preset}, {N} sectors): {effects}"),
+                                f"{name}, {N} sectors): {effects}"),
              plot_interference(result, config.out / "zzenf.png",
-                               f"interference diagram at {zz_speed:.0f} rad/s ({config.preset}): {effects}")]
+                               f"interference diagram at {zz_speed:.0f} rad/s, {name}): {effects}")]
     save_json(config.out / "summary.json", result.summary(), indent=1)
     files.append(config.out / "summary.json")
     return dataclasses.replace(result, files=files)

@@ -100,9 +100,9 @@ def run_rotating_rom(config: RotatingRomConfig, sector=None, ops=None) -> Rotati
     full, states = [], []
     t0 = time.perf_counter()
     for spin in speeds:
-        states.append(fem.solve_static(sector, spin=float(spin), n_steps=2, ops=ops).u.x.array[tip] if spin
-                      else np.zeros(tip.size))
-        full.append(fem.rotating_modes(sector, float(spin), config.n_modes, ops)[0])
+        state = fem.solve_static(sector, spin=float(spin), n_steps=2, ops=ops).u.x.array if spin else None
+        states.append(np.zeros(tip.size) if state is None else state[tip])
+        full.append(fem.rotating_modes(sector, float(spin), config.n_modes, ops, state=state)[0])
     full_per_speed = (time.perf_counter() - t0) / len(speeds)
     full = np.array(full)
     rows = []
