@@ -428,7 +428,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
              progress: Callable[[int], None] | None = None, on_finish: Callable[[int, dict], None] | None = None,
              state: LoopState | None = None, checkpoint: Callable[[LoopState], None] | None = None,
              checkpoint_seconds: float = 60.0, phase: float | Sequence[float] = 0.0,
-             monitor: Sequence[int] | None = None) -> SimulationResult:
+             monitor: Sequence[int] | None = None, rotation: bool = False) -> SimulationResult:
     """Run P simulations of the reduced model together with central differences and casing contact.
 
     Args:
@@ -444,6 +444,13 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
             (record 0 holds that of (Q_0, Q_-1)), the damping's share of the balance and the running works.
         phase: angle (rad) the rotor has turned through before t = 0 (continuation: the casing must not jump).
         monitor: rows of the model's node map whose normal displacement is recorded in ``u_r`` (default: all).
+        rotation: the model turns at each simulation's ``omega`` about e_z (``model.rotating``: the model's
+            ``rotation`` terms, each speed within their range): Omega^2 (F_c + M_P q) joins the force of every
+            step, explicitly, as g does. The spin softening lowers the model's frequencies; the prestress stiffens
+            them through g (1B by a third at 2,000 rad/s on the ci blade), as GNL does at large amplitude: give
+            the step the margin a GNL run needs. Coriolis is left out (on a blade it moves the frequencies by
+            < 1 rad/s). Start it from the centrifugal state (``initial``: ``centrifugal_equilibrium`` per speed),
+            or it rises from rest.
         on_blowup: 'raise' (SimulationDiverged naming the step) or 'flag' (stop that simulation, mark it).
         blowup_limit: largest admissible boundary displacement (m) before a run counts as blown up.
         progress: called with the simulation-steps done since the last call (steps x running simulations: the
@@ -467,6 +474,12 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
     run_length = steps * h if duration is None else np.broadcast_to(np.asarray(duration, float), (P,))
     casings = per_simulation_casings(casing, P)
     phase = np.broadcast_to(np.asarray(phase, float), (P,)).copy()
+    spin2 = None
+    if rotation:
+        from rotor37_rom.model.rotating import check_spin
+
+        spin2 = np.array([check_spin(scheme.model, w) for w in omega]) ** 2
+        terms = scheme.model.rotation
     contact = ContactStep(scheme, casings, run_length)
     nodes = scheme.model.nodes
     monitor = np.arange(len(nodes)) if monitor is None else np.asarray(monitor, dtype=np.int64).ravel()
@@ -478,7 +491,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
     if energy and scheme.nonlinear and not energy_forces.has_potential:
         raise ValueError("energy=True with nonlinear forces needs the polynomial (intrusive) tensors")
     if st.work is None:                        # also a checkpoint written before the works were kept: from its step on
-        _start_works(st, scheme, energy_forces, energy, forcing is not None, steps, record_every)
+        _start_works(st, scheme, energy_forces, energy, forcing is not None or rotation, steps, record_every)
     Q, Qp, work = st.Q, st.Qp, st.work
 
     with np.errstate(over="ignore", invalid="ignore"), \
@@ -497,6 +510,9 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
             if forcing is not None:
                 F = np.asarray(forcing(n * h), float)
                 F = F if F.ndim == 1 else F.reshape(r, -1)[:, active]
+            if spin2 is not None:
+                F_rot = (terms.F_c[:, None] + terms.M_P @ Qa) * spin2[active]
+                F = F_rot if F is None else F_rot + (F[:, None] if F.ndim == 1 else F)
             Qn = scheme.predict(Qa, Qpa, F)
             lam_now[:, active] = 0.0
             if casings is not None:
