@@ -149,6 +149,12 @@ def _mine(sector: Sector, m: int) -> np.ndarray:
     return np.concatenate([c * n + np.arange(g0, g1) for c in range(m)])
 
 
+def is_free(sector: Sector) -> bool:
+    """Whether nothing of ``sector`` is clamped (on any rank): its harmonic indices 0 and 1 hold rigid-body
+    motions."""
+    return sector.comm.allreduce(sector.clamp_bc.dof_indices()[0].size, op=MPI.SUM) == 0
+
+
 def cyclic_projector(sector: Sector, k: int) -> tuple[PETSc.Mat, np.ndarray]:
     """(T_k, eliminated): the projection of harmonic index k (``disk.symmetry.cyclic_projection``) as a distributed
     PETSc matrix in the layout where each rank owns the copies of its own DOFs (for k = 0, one copy: its rows are
@@ -187,7 +193,7 @@ class CyclicOperators:
             ops = ops or create_svk_operators(sector)
             K, M = assemble_stiffness(sector, ops), assemble_mass(sector, ops)
         self.sector, self.K, self.M = sector, K, M
-        self.free = sector.comm.allreduce(sector.clamp_bc.dof_indices()[0].size, op=MPI.SUM) == 0
+        self.free = is_free(sector)
         self._blocks: dict = {}
         self._parts = None
         self._work = None
@@ -200,11 +206,6 @@ class CyclicOperators:
                                _block_diagonal(self.M, self.sector, m, perm, local_rows), perm, first, local_rows)
         return self._blocks[m]
 
-    def _mine(self, m: int) -> np.ndarray:
-        return _mine(self.sector, m)
-
-    def _eliminated_diagonal(self, rows: np.ndarray, m: int, value: float) -> PETSc.Mat:
-        return _eliminated_diagonal(self.sector, rows, m, value)
 
     def _harmonic_parts(self) -> list:
         """For 0 < k < N/2 without axis nodes: [(K_0, K_c, K_s), (M_0, M_c, M_s), (T_0, T_c, T_s)], each three
@@ -214,7 +215,7 @@ class CyclicOperators:
         if self._parts is None:
             sector, pairs = self.sector, self.sector.cyclic
             K2, M2, perm, first, local_rows = self._copies(2)
-            n, mine, SAME = sector.n_dofs, self._mine(2), PETSc.Mat.Structure.SAME_NONZERO_PATTERN
+            n, mine, SAME = sector.n_dofs, _mine(sector, 2), PETSc.Mat.Structure.SAME_NONZERO_PATTERN
 
             def petsc(A):
                 return _petsc_from_rows(sector.comm, A.tocsr()[mine], perm, local_rows, 2 * n)
@@ -225,7 +226,7 @@ class CyclicOperators:
             for A2, diag in ((K2, 1.0), (M2, MASS_DIAGONAL)):
                 plus, minus, sine = (A2.PtAP(P) for P in (petsc(T0 + Tc), petsc(T0 - Tc), petsc(T0 + Ts)))
                 plus, minus, sine, D = _same_pattern([plus, minus, sine,
-                                                      self._eliminated_diagonal(eliminated, 2, diag)])
+                                                      _eliminated_diagonal(sector, eliminated, 2, diag)])
                 A0 = plus.duplicate(copy=True)                   # (T0 + Tc)^T A2 (T0 + Tc) = B0 + Bc, minus: B0 - Bc
                 A0.axpy(1.0, minus, SAME)
                 A0.scale(0.5)
@@ -306,7 +307,7 @@ class CyclicOperators:
         for A2, diag in ((K2, 1.0), (M2, MASS_DIAGONAL)):
             Ak = A2.PtAP(T_p)
             # the eliminated slots' empty rows get a diagonal: one merge of patterns (not one insertion per entry)
-            D = self._eliminated_diagonal(eliminated, m, diag)
+            D = _eliminated_diagonal(self.sector, eliminated, m, diag)
             Ak.axpy(1.0, D, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
             D.destroy()
             operators.append(Ak)
@@ -379,7 +380,7 @@ def centrifugal_state(sector: Sector, spin: float, ops: SvkOperators | None = No
         raise ValueError(f"n_steps must be in [1, 10000], got {n_steps}")
     if spin == 0.0:
         return fem.Function(sector.V, name="u")
-    if sector.comm.allreduce(sector.clamp_bc.dof_indices()[0].size, op=MPI.SUM) == 0:
+    if is_free(sector):
         raise ValueError(f"{sector.source} is free (nothing clamped): its harmonic index 0 holds rigid-body motions, "
                          f"so its centrifugal state is not unique; clamp it, or take spin softening alone "
                          f"(prestress=False)")

@@ -132,8 +132,8 @@ def _spin_snapshots(sector, ops, basis: CraigBamptonBasis, Z: np.ndarray, M_f, f
         state = fem.solve_static(sector, spin=float(spin), ops=ops, n_steps=2).u.x.array.copy()
         keep(fixed_interface_correction(state[:n_full, None], basis.Psi, boundary_dofs=basis.boundary_dofs,
                                         interface=basis.interface)[:, 0])
-    if n_modes:
-        _, V = fem.rotating_modes(sector, float(speeds[-1]), n_modes, ops)
+    if n_modes:                          # the top speed's state, solved above
+        _, V = fem.rotating_modes(sector, float(speeds[-1]), n_modes, ops, state=state)
         corrected = fixed_interface_correction(V[:n_full], basis.Psi, boundary_dofs=basis.boundary_dofs,
                                                interface=basis.interface)
         for j in range(n_modes):

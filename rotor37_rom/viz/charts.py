@@ -175,6 +175,19 @@ def _engine_order_lines(ax, W: np.ndarray, orders, top: float, ls: str) -> None:
         ax.text(end, e * end, f"EO{e}", fontsize=7, color="0.4", ha="right", va="bottom")
 
 
+def _crossings_and_axes(ax, crossings, name, W: np.ndarray, top: float, ylabel: str, title: str) -> None:
+    """A Campbell diagram's crossings marked and labelled (``name(crossing)``/EO, speed), its limits and labels."""
+    for c in crossings:
+        ax.plot(c["speed"], c["frequency"], "kx", ms=6)
+        ax.annotate(f"{name(c)}/EO{c['order']} {c['speed']:.0f}", (c["speed"], c["frequency"]), fontsize=6,
+                    xytext=(3, -9), textcoords="offset points")
+    ax.set_ylim(0, top)
+    ax.set_xlim(W[0], W[-1])
+    ax.set_xlabel("angular speed Omega (rad/s)")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=9)
+
+
 def plot_campbell(result, orders, path: str | Path, title: str = "") -> Path:
     """The Campbell diagram (#73): each followed mode's frequency against the speed (rad/s both), the engine-order
     lines omega = e Omega, and the crossings marked and labelled (mode/EO, speed). ``result``: a
@@ -186,15 +199,7 @@ def plot_campbell(result, orders, path: str | Path, title: str = "") -> Path:
     _engine_order_lines(ax, W, orders, top, "--")
     for k, label in enumerate(result.labels):
         ax.plot(W, result.omega[:, k], "-o", ms=3, lw=1.4, label=label)
-    for c in result.crossings:
-        ax.plot(c["speed"], c["frequency"], "kx", ms=6)
-        ax.annotate(f"{c['label']}/EO{c['order']} {c['speed']:.0f}", (c["speed"], c["frequency"]), fontsize=6,
-                    xytext=(3, -9), textcoords="offset points")
-    ax.set_ylim(0, top)
-    ax.set_xlim(W[0], W[-1])
-    ax.set_xlabel("angular speed Omega (rad/s)")
-    ax.set_ylabel("frequency omega (rad/s)")
-    ax.set_title(title, fontsize=9)
+    _crossings_and_axes(ax, result.crossings, lambda c: c["label"], W, top, "frequency omega (rad/s)", title)
     ax.legend(fontsize=7, loc="upper left")
     ax.grid(alpha=0.3)
     return _save(fig, path)
@@ -225,15 +230,8 @@ def plot_disk_campbell(result, orders, path: str | Path, title: str = "") -> Pat
         ax.legend(fontsize=7, loc="upper left")
     bar = fig.colorbar(plt.cm.ScalarMappable(cmap=cmap, norm=plt.Normalize(0, half)), ax=ax, pad=0.02)
     bar.set_label("nodal diameter k", fontsize=8)
-    for c in result.crossings:
-        ax.plot(c["speed"], c["frequency"], "kx", ms=6)
-        ax.annotate(f"k{c['family']}/EO{c['order']} {c['speed']:.0f}", (c["speed"], c["frequency"]), fontsize=6,
-                    xytext=(3, -9), textcoords="offset points")
-    ax.set_ylim(0, top)
-    ax.set_xlim(W[0], W[-1])
-    ax.set_xlabel("angular speed Omega (rad/s)")
-    ax.set_ylabel("frequency omega (rad/s), turning frame")
-    ax.set_title(title, fontsize=9)
+    _crossings_and_axes(ax, result.crossings, lambda c: f"k{c['family']}", W, top,
+                        "frequency omega (rad/s), turning frame", title)
     ax.grid(alpha=0.3)
     return _save(fig, path)
 
