@@ -5,6 +5,25 @@ import pytest
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
+class Killed(Exception):
+    """A run stopped on purpose just after a checkpoint (``killed_after``)."""
+
+
+def killed_after(simulate, kill_at: int, **overrides):
+    """``simulate`` (the integrator, as a study module imports it) that saves each checkpoint, then raises Killed
+    once the loop has reached step ``kill_at``: a run killed right after a save. ``overrides``: keyword arguments
+    forced on every call (e.g. checkpoint_seconds=0.0)."""
+    def killed(*args, checkpoint=None, **kwargs):
+        def save_then_die(st):
+            checkpoint(st)
+            if st.n >= kill_at:
+                raise Killed
+
+        return simulate(*args, checkpoint=save_then_die, **{**kwargs, **overrides})
+
+    return killed
+
+
 FE_FIXTURES = {"ci_blade", "ci_ops", "ci_rom", "table_path", "ci_disk", "ci_disk_ops", "disk_model"}
 
 

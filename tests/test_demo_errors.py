@@ -23,7 +23,9 @@ CASES = {
                     "numbers": (["--revolutions", "-1"], "--revolutions"),
                     "patch": (["--contact-patch", "0.05"], "--contact-patch"),
                     "step outliers": (["--step-outliers", "drop"], "--step-outliers"),   # needs --frequency-cap
-                    "perturbation": (["--perturbation", "0.02"], "--perturbation")},
+                    "perturbation": (["--perturbation", "0.02"], "--perturbation"),
+                    "rotation": (["--rotation", "running", "--disk"], "--rotation")},
+    "turning_map": {"cubature": (["--gnl", "on", "--cubature", "1e-4"], "--rotation")},
     "report": {"preset": (["--preset", "huge"], "--preset"), "model file": (["--table", "{text}"], "--table"),
                "numbers": (["--speeds", "1600", "1200", "5"], "--speeds")},
     "bladed_disk": {"preset": (["--preset", "huge"], "--preset"), "model file": (["--table", "{text}"], "--table"),

@@ -17,6 +17,7 @@ rho Omega^2 L^2 / (2 E) = 1.3e-4 changing the geometry, and by its discretisatio
 """
 
 import dataclasses
+import os
 
 import numpy as np
 import pytest
@@ -446,8 +447,8 @@ def test_turning_rom_is_the_full_order_at_its_snapshots(turning_rom, ci_blade, c
 
 
 def test_the_integrator_turns_the_reduced_model(turning_rom):
-    """``simulate(..., rotation=True)``: Omega^2 (F_c + M_P q) joins each step's force (explicitly, as g). Started at
-    the model's centrifugal state at 2,000 rad/s (no casing, no damping) the run stays there: to 1e-8 of the state
+    """A turning scheme (``CentralDifference(rotation=Rotation())``): Omega^2 (F_c + M_P q) joins each step's force
+    (explicitly, as g). Started by default at the model's centrifugal state at 2,000 rad/s (no casing, no damping) the run stays there: to 1e-8 of the state
     over 4,000 steps (the state's Newton residual is 1e-10 of the load; measured 2e-10). Started there plus a small
     displacement eps along the first mode of the turning tangent K + dg/dq(q_c) - Omega^2 M_P, its modal
     coordinate follows the central-difference oscillator of that mode exactly, cos(omega_h t) with omega_h =
@@ -455,13 +456,14 @@ def test_the_integrator_turns_the_reduced_model(turning_rom):
     (measured 3e-6) and doubling with eps (ratio in [1.5, 2.5]). Broken on purpose: the hook without its spin
     softening (F_c alone) leaves the state by 1.5e-2 (fails at the first assertion)."""
     from rotor37_rom.dynamics.explicit import CentralDifference, simulate
+    from rotor37_rom.dynamics.turning import Rotation
     from rotor37_rom.model.rotating import centrifugal_equilibrium, rotating_stiffness
 
     model, spin, n = turning_rom, 2000.0, 4000
     q_c = centrifugal_equilibrium(model, spin)
-    scheme = CentralDifference(model, nonlinear=True, safety=0.5, damping=False)
+    scheme = CentralDifference(model, nonlinear=True, safety=0.5, damping=False, rotation=Rotation())
     h = scheme.h
-    rest = simulate(scheme, [spin], None, n_steps=n, initial=(q_c, q_c), record_q=True, rotation=True)
+    rest = simulate(scheme, [spin], None, n_steps=n, record_q=True)           # from its centrifugal state
     drift = np.abs(rest.records_q[0] - q_c[:, None]).max() / np.abs(q_c).max()
     M = 0.5 * (model.M + model.M.T)
     w2, V = linalg.eigh(rotating_stiffness(model, spin, q_c), M)
@@ -471,7 +473,7 @@ def test_the_integrator_turns_the_reduced_model(turning_rom):
     for scale in (1.0, 2.0):
         eps = scale * 1e-6 / np.abs(phi[model.nodes.q_index.ravel()]).max()
         start = (q_c + eps * phi, q_c + eps * phi * np.cos(omega_h * h))    # the discrete oscillator's two steps
-        Q = simulate(scheme, [spin], None, n_steps=n, initial=start, record_q=True, rotation=True).records_q[0]
+        Q = simulate(scheme, [spin], None, n_steps=n, initial=start, record_q=True).records_q[0]
         y = phi @ M @ (Q - q_c[:, None]) / eps
         errors.append(np.abs(y - np.cos(omega_h * h * np.arange(Q.shape[1]))).max())
     print(f"drift {drift:.1e}; first mode {np.sqrt(w2[0]):.2f} rad/s, modal coordinate off the oscillator by "
@@ -479,4 +481,194 @@ def test_the_integrator_turns_the_reduced_model(turning_rom):
     assert drift <= 1e-8
     assert errors[0] <= 1e-4 and 1.5 <= errors[1] / errors[0] <= 2.5
     with pytest.raises(ValueError, match="outside this reduced model's range"):
-        simulate(scheme, [2500.0], None, n_steps=2, rotation=True)
+        simulate(scheme, [2500.0], None, n_steps=2)
+
+
+def test_a_turning_linear_scheme_is_the_prestressed_central_difference(turning_rom):
+    """Without GNL a turning scheme is the blade linearised about its centrifugal state (``dynamics.turning``): the
+    step's force Omega^2 (F_c + M_P q) - g(q_c) - J_c (q - q_c) makes the explicit scheme the central difference of
+    M y'' + (K + J_c - Omega^2 M_P) y = 0, y = q - q_c, exactly. So (no damping, 2,000 rad/s) the run started by
+    default at q_c stays there, and a displacement eps along the first prestressed mode follows the discrete
+    oscillator cos(omega_h t), omega_h = (2/h) asin(omega_1 h / 2), to round-off: the only error is q_c's Newton
+    residual (1e-10 of the load, i.e. ~1e-10 |q_c| / eps of the mode: 2e-9 at eps = 10 microns) and the 4,000 steps'
+    rounding; 1e-7 allows both. The scheme's step limit is the prestressed tangent's at the model's top speed (its
+    1B is a third stiffer than at rest). Broken on purpose: the force without - J_c (q - q_c) (the spin softening
+    alone: no stiffening) follows the mode at rest and fails by O(1)."""
+    from rotor37_rom.dynamics.explicit import CentralDifference, highest_frequency, simulate
+    from rotor37_rom.dynamics.turning import Rotation
+    from rotor37_rom.model.rotating import centrifugal_equilibrium, rotating_stiffness
+
+    model, spin, n = turning_rom, 2000.0, 4000
+    scheme = CentralDifference(model, nonlinear=False, safety=0.5, damping=False, rotation=Rotation())
+    K_T = rotating_stiffness(model, spin)
+    assert scheme.omega_max == pytest.approx(max(highest_frequency(model.M, model.K),
+                                                 highest_frequency(model.M, K_T)), rel=1e-12)
+    q_c = centrifugal_equilibrium(model, spin)
+    still = simulate(scheme, [spin], None, n_steps=n, record_q=True).records_q[0]
+    drift = np.abs(still - q_c[:, None]).max() / np.abs(q_c).max()
+    M = 0.5 * (model.M + model.M.T)
+    w2, V = linalg.eigh(K_T, M)
+    phi, h = V[:, 0], scheme.h
+    omega_h = 2.0 / h * np.arcsin(np.sqrt(w2[0]) * h / 2.0)
+    eps = 1e-5 / np.abs(phi[model.nodes.q_index.ravel()]).max()
+    start = (q_c + eps * phi, q_c + eps * phi * np.cos(omega_h * h))
+    Q = simulate(scheme, [spin], None, n_steps=n, initial=start, record_q=True).records_q[0]
+    error = np.abs(phi @ M @ (Q - q_c[:, None]) / eps - np.cos(omega_h * h * np.arange(Q.shape[1]))).max()
+    w_rest = np.sqrt(linalg.eigh(model.K, M, eigvals_only=True)[0])
+    print(f"drift {drift:.1e}; first prestressed mode {np.sqrt(w2[0]):.1f} rad/s (at rest {w_rest:.1f}), off the "
+          f"discrete oscillator by {error:.1e}")
+    assert drift <= 1e-8
+    assert error <= 1e-7
+
+
+def test_the_running_clearance_is_measured_from_the_centrifugal_state(turning_rom):
+    """The clearance's reference (``Rotation.clearance``), on a round casing (no bumps, no friction, radial normals)
+    at 2,000 rad/s, the blade linearised about its centrifugal state q_c: 'running' measures c0 and the records from
+    the running blade, so a run started at q_c never touches a casing c0 away and records 0 (to the round-off of q_c's
+    equilibrium); 'rest' measures both from the blade at rest, so a casing at half the tip's smallest radial growth
+    (N q_c) is met at the first step: the records start at N q_c exactly, the pushed nodes are on the casing after
+    it, u_r = c0, and no record passes it (the active set's gaps closed to 1e-14 m) while the blade rebounds. Broken on purpose: without the
+    records' offset the running run records N q_c (fails at the first assertion)."""
+    from rotor37_rom.dynamics.casing import Casing, contact_matrices
+    from rotor37_rom.dynamics.explicit import CentralDifference, simulate
+    from rotor37_rom.dynamics.turning import Rotation
+    from rotor37_rom.model.rotating import centrifugal_equilibrium
+
+    model, spin, n = turning_rom, 2000.0, 400
+    q_c = centrifugal_equilibrium(model, spin)
+    N = contact_matrices(model.nodes, model.r, Casing(direction="radial"))[0]
+    growth = N @ q_c
+    assert growth.min() > 0                                   # the tip grows outwards
+    c0 = 0.5 * growth.min()
+    casing = Casing(c0=c0, h_b=0.0, mu=0.0, direction="radial")
+    runs = {}
+    for clearance in ("running", "rest"):
+        scheme = CentralDifference(model, nonlinear=False, safety=0.5, damping=False,
+                                   rotation=Rotation(clearance=clearance))
+        runs[clearance] = simulate(scheme, [spin], casing, n_steps=n)
+    running, rest = runs["running"], runs["rest"]
+    print(f"tip growth {1e6 * growth.min():.1f} - {1e6 * growth.max():.1f} um; running: {running.contact_steps[0]} "
+          f"contact steps, |u_r| <= {np.abs(running.u_r[0]).max():.1e} m; rest: {rest.contact_steps[0]} of {n} steps "
+          f"in contact, u_r after the first {rest.u_r[0][:, 1].max():.6e} (c0 {c0:.6e})")
+    assert np.abs(running.u_r[0]).max() <= 1e-9 * growth.max() and running.contact_steps[0] == 0
+    np.testing.assert_allclose(rest.u_r[0][:, 0], growth, rtol=1e-14, atol=0)
+    assert (rest.lam[0][:, 1] > 0).any() and rest.u_r[0][:, 1].max() == pytest.approx(c0, rel=1e-9)
+    assert rest.u_r[0][:, 1:].max() <= c0 + 1e-14 and rest.max_penetration[0] <= 1e-14
+
+
+def test_a_turning_sweep_resumes_bit_identically_in_its_own_folder(turning_rom, tmp_path, monkeypatch):
+    """A turning map's sweep (``run_sweep`` with a turning scheme, the casing's bumps and friction, each speed from
+    its centrifugal state) killed halfway resumes from its checkpoint and gives the uninterrupted sweep bit for bit
+    (the centrifugal states are solved again, the same operations); its folder is not the same blade at rest's, nor
+    the other clearance's (the key holds the rotation), and each speed starts at its centrifugal state (records from
+    0 with the running clearance)."""
+    from conftest import Killed, killed_after
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.dynamics.explicit import CentralDifference
+    from rotor37_rom.dynamics.turning import Rotation
+    from rotor37_rom.studies import sweep as sweep_mod
+    from rotor37_rom.studies.sweep import SweepSpec, load_sweep, run_sweep
+
+    cap = 2 * np.pi * 60e3
+    schemes = {c: CentralDifference(turning_rom, nonlinear=False, safety=0.9, frequency_cap=cap,
+                                    rotation=Rotation(clearance=c)) for c in ("running", "rest")}
+    still = CentralDifference(turning_rom, nonlinear=False, safety=0.9, frequency_cap=cap)
+    spec = SweepSpec(revolutions=0.5, casing=Casing(), record_dt=2e-6)
+    speeds = np.array([1500.0, 1800.0])
+    scheme = schemes["running"]
+    kill_at = int(0.25 * 2 * np.pi / speeds.max() / scheme.h)
+    real = sweep_mod.simulate
+    monkeypatch.setattr(sweep_mod, "simulate", killed_after(real, kill_at))
+    with pytest.raises(Killed):
+        run_sweep(scheme, speeds, spec, tmp_path / "a", progress=False, checkpoint_seconds=0.0)
+    monkeypatch.setattr(sweep_mod, "simulate", real)
+    resumed = load_sweep(run_sweep(scheme, speeds, spec, tmp_path / "a", progress=False))
+    whole = load_sweep(run_sweep(scheme, speeds, spec, tmp_path / "b", progress=False))
+    for got, ref in zip(resumed, whole):
+        np.testing.assert_array_equal(got["u_r"], ref["u_r"])
+        np.testing.assert_array_equal(got["lam"], ref["lam"])
+        assert np.abs(got["u_r"][:, 0]).max() <= 1e-15                  # from the running blade
+    assert (resumed[0]["lam"] > 0).any()                                  # the bumps were met
+    names = {run_sweep(s, speeds[:1], spec, tmp_path / "c", progress=False).name
+             for s in (schemes["running"], schemes["rest"], still)}
+    assert len(names) == 3
+
+
+@pytest.mark.slow
+@pytest.mark.mpi
+def test_turning_map_under_mpi_equals_the_serial_sweep(turning_rom, tmp_path):
+    """``demos/contact_map.py --rotation running`` under mpirun -n 2 (the speeds split over the ranks, each rank
+    solving its speeds' centrifugal states) writes the serial turning sweep's folder with the same records, to the
+    1e-8 that a batch's BLAS rounding allows (the at-rest map's MPI test)."""
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.dynamics.explicit import CentralDifference
+    from rotor37_rom.dynamics.turning import Rotation
+    from rotor37_rom.model.reduced import save_reduced_model
+    from rotor37_rom.studies.contact_config import ContactMapConfig
+    from rotor37_rom.studies.sweep import SweepSpec, load_sweep, run_sweep
+
+    path = save_reduced_model(turning_rom, tmp_path / "turning.npz")
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg", OPENBLAS_NUM_THREADS="1")
+    demo = Path(__file__).resolve().parents[1] / "demos" / "contact_map.py"
+    cmd = ["mpirun", "-n", "2", sys.executable, str(demo), "--model", str(path), "--rotation", "running",
+           "--speeds", "1500", "1800", "4", "--revolutions", "0.5", "--gnl", "off", "--safety", "0.9",
+           "--frequency-cap", "60", "--out", str(tmp_path / "mpi"), "--quiet"]
+    run = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    cap = ContactMapConfig.from_options(frequency_cap=60.0).scheme.frequency_cap_rad_s
+    scheme = CentralDifference(turning_rom, nonlinear=False, safety=0.9, frequency_cap=cap, rotation=Rotation())
+    serial = run_sweep(scheme, np.linspace(1500.0, 1800.0, 4), SweepSpec(revolutions=0.5, casing=Casing()),
+                       tmp_path / "serial", progress=False)
+    got, ref = load_sweep(tmp_path / "mpi" / "sweeps" / serial.name), load_sweep(serial)
+    assert len(got) == len(ref) == 4
+    for a, b in zip(got, ref):
+        assert float(a["omega"]) == float(b["omega"])
+        assert np.abs(a["u_r"] - b["u_r"]).max() <= 1e-8 * np.abs(b["u_r"]).max()
+    summary = json.loads((tmp_path / "mpi" / "summary.json").read_text())
+    assert summary["runs"]["no GNL, cap 60 kHz, turning, running clearance"]["rotation"]["clearance"] == "running"
+
+
+def test_a_turning_map_refuses_a_model_that_cannot_turn_there(turning_rom, tmp_path):
+    """``--rotation`` on a saved model: a model built at rest, and a map reaching past the model's centrifugal
+    snapshots (2,000 rad/s here), are each one line naming --rotation and the range, exit status 2, once the model is
+    read and before any run."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from rotor37_rom.model.reduced import save_reduced_model
+
+    turning = save_reduced_model(turning_rom, tmp_path / "turning.npz")
+    still = save_reduced_model(dataclasses.replace(turning_rom, rotation=None), tmp_path / "still.npz")
+    demo = Path(__file__).resolve().parents[1] / "demos" / "contact_map.py"
+    for model, speeds, words in ((still, ["1500", "1800", "2"], "built at rest"),
+                                 (turning, ["1500", "2500", "2"], "outside this reduced model's range 0 ... 2000")):
+        run = subprocess.run([sys.executable, str(demo), "--model", str(model), "--rotation", "running", "--speeds",
+                              *speeds, "--gnl", "off", "--out", str(tmp_path / "out"), "--quiet"],
+                             capture_output=True, text=True, timeout=120, env=dict(os.environ, MPLBACKEND="Agg"))
+        lines = run.stderr.strip().splitlines()
+        assert run.returncode == 2 and len(lines) == 1 and lines[0].startswith("error: --rotation"), run.stderr
+        assert words in lines[0] and not list((tmp_path / "out").glob("sweeps/*/omega_*"))
+
+
+@pytest.mark.parametrize("options, words", [
+    ({"rotation": "spinning"}, "--rotation must be one of running, rest"),
+    ({"rotation": "running", "disk": True}, "the disk's turning reduced model is not built yet"),
+    ({"rotation": "running", "gnl": "on", "cubature": 1e-4}, "not with --cubature"),
+    ({"rotation": "rest", "periodic": 0.05}, "not with --periodic"),
+    ({"rotation": "running", "tolerance": 0.05}, "not with --tolerance")])
+def test_a_turning_map_configuration_refuses_what_it_cannot_turn(options, words):
+    """What a turning map does not take is refused by its configuration, one ValueError naming --rotation, before
+    any work (the command line prints it as one line: tests/test_demo_errors.py)."""
+    from rotor37_rom.studies.contact_config import ContactMapConfig
+
+    with pytest.raises(ValueError, match="^--rotation") as error:
+        ContactMapConfig.from_options(**options)
+    assert words in str(error.value)

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import Killed, killed_after
 from rotor37_rom.studies import sweep as sweep_mod
 from rotor37_rom.dynamics.casing import Casing
 from rotor37_rom.dynamics.explicit import CentralDifference
@@ -25,27 +26,14 @@ SPEEDS = np.array([1300.0, 1600.0])
 CAP = 2 * np.pi * 60e3
 
 
-class _Killed(Exception):
-    pass
-
-
 def test_killed_sweep_resumes(ci_rom, tmp_path, monkeypatch, capsys):
     scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.9)
     spec = SweepSpec(revolutions=0.25, casing=Casing(), record_dt=2e-6)
     steps = np.ceil(0.25 * 2 * np.pi / SPEEDS / scheme.h).astype(int)     # 1600 rad/s finishes first
     kill_at = (steps.min() + steps.max()) // 2
     real = sweep_mod.simulate
-
-    def killed_simulate(*args, checkpoint=None, **kwargs):
-        def save_then_die(st):
-            checkpoint(st)
-            if st.n >= kill_at:
-                raise _Killed
-
-        return real(*args, checkpoint=save_then_die, **kwargs)
-
-    monkeypatch.setattr(sweep_mod, "simulate", killed_simulate)
-    with pytest.raises(_Killed):
+    monkeypatch.setattr(sweep_mod, "simulate", killed_after(real, kill_at))
+    with pytest.raises(Killed):
         run_sweep(scheme, SPEEDS, spec, tmp_path / "a", progress=False, checkpoint_seconds=0.0)
     folder = next((tmp_path / "a").iterdir())
     assert [float(r["omega"]) for r in load_sweep(folder)] == [1600.0]      # the finished speed was kept
@@ -122,7 +110,7 @@ def test_killed_training_runs_resume(ci_rom, tmp_path, monkeypatch):
         def save_then_die(st):
             if st.n >= kill_at:
                 checkpoint(st)
-                raise _Killed
+                raise Killed
 
         return real(*args, checkpoint=save_then_die, **{**kwargs, "checkpoint_seconds": 0.0})
 
@@ -136,7 +124,7 @@ def test_killed_training_runs_resume(ci_rom, tmp_path, monkeypatch):
         """Kill the runs at SPEEDS with ``scheme``, then run ``speeds`` with ``resumer`` on that checkpoint."""
         monkeypatch.setattr(integrator, "simulate", killed_simulate)
         ckpt.unlink(missing_ok=True)
-        with pytest.raises(_Killed):
+        with pytest.raises(Killed):
             integrator.contact_training_states(scheme, SPEEDS, casing, 0.25, checkpoint=ckpt)
         monkeypatch.setattr(integrator, "simulate", spy)
         return integrator.contact_training_states(resumer, speeds, casing, 0.25, checkpoint=ckpt)
@@ -491,7 +479,7 @@ def test_sector_rows_and_maxima_follow_the_sector_index():
 
 
 class _Calls(list):
-    """The first speed of each ``studies.sweep.simulate`` call; the call numbered ``kill_at`` (from 1) raises _Killed."""
+    """The first speed of each ``studies.sweep.simulate`` call; the call numbered ``kill_at`` (from 1) raises Killed."""
     kill_at = 0
 
 
@@ -502,7 +490,7 @@ def _counted_simulate(monkeypatch) -> _Calls:
     def counted(*a, **k):
         calls.append(float(np.atleast_1d(a[1])[0]))
         if len(calls) == calls.kill_at:
-            raise _Killed
+            raise Killed
         return real(*a, **k)
 
     monkeypatch.setattr(sweep_mod, "simulate", counted)
@@ -520,7 +508,7 @@ def test_killed_continuation_resumes_where_it_stopped(ci_rom, tmp_path, monkeypa
     whole = sweep.continuation(scheme, 1200.0, 1275.0, 25.0, **kwargs)
     n_whole, calls[:] = len(calls), []
     calls.kill_at = 3
-    with pytest.raises(_Killed):
+    with pytest.raises(Killed):
         sweep.continuation(scheme, 1200.0, 1275.0, 25.0, out=tmp_path, **kwargs)
     calls.kill_at, calls[:] = 0, []
     resumed = sweep.continuation(scheme, 1200.0, 1275.0, 25.0, out=tmp_path, **kwargs)

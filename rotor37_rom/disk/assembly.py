@@ -116,29 +116,51 @@ def interface_modes(s: SectorMatrices, n_sectors: int, r_cyclic: int, per_k: int
     return Pi, np.array(omega), np.array(ks)
 
 
+def assemble_disk_operator(s: SectorMatrices, A: np.ndarray, Pi: np.ndarray, n_sectors: int,
+                           scales: np.ndarray | None = None) -> np.ndarray:
+    """The disk's reduced operator (r, r), r = N r_s + r_cyclic, of one sector's matrix A on [q; u_L; u_L of the
+    next sector] (square, any symmetry: a stiffness, a mass, the Coriolis matrix's skew part): every sector's copy
+    on its q^n and on its faces' interface coordinates, u_L = Pi eta (eqs. 48-52), times its factor ``scales`` (N,)
+    (mistuning; 1 if None)."""
+    N, rs, nL = n_sectors, s.r_s, s.n_L
+    scales = np.ones(N) if scales is None else np.asarray(scales, float)
+    r = N * rs + Pi.shape[1]
+    X = np.zeros((r, r))
+    Aqq = s.part(A, "q", "q")
+    Aqc, Acq = np.hstack([s.part(A, "q", "L"), s.part(A, "q", "R")]), np.vstack([s.part(A, "L", "q"),
+                                                                                 s.part(A, "R", "q")])
+    Acc = np.block([[s.part(A, "L", "L"), s.part(A, "L", "R")], [s.part(A, "R", "L"), s.part(A, "R", "R")]])
+    for n in range(N):                             # N sector blocks (dense products of the sector's size)
+        q = slice(n * rs, (n + 1) * rs)
+        Pn = np.vstack([Pi[n * nL:(n + 1) * nL], Pi[((n + 1) % N) * nL:((n + 1) % N + 1) * nL]])
+        X[q, q] += scales[n] * Aqq
+        X[q, N * rs:] += scales[n] * (Aqc @ Pn)
+        X[N * rs:, q] += scales[n] * (Pn.T @ Acq)
+        X[N * rs:, N * rs:] += scales[n] * (Pn.T @ Acc @ Pn)
+    return X
+
+
+def assemble_disk_vector(s: SectorMatrices, f: np.ndarray, Pi: np.ndarray, n_sectors: int) -> np.ndarray:
+    """The disk's reduced load (r,) of the same load f on every sector, given on the sector's [q; u_L; u_L of the
+    next sector] (e.g. the centrifugal load at rest, the same in each sector's frame): f_q on every q^n, the faces'
+    parts on eta through Pi."""
+    N, rs, nL = n_sectors, s.r_s, s.n_L
+    faces = np.asarray(f[rs:], float)
+    out = np.zeros(N * rs + Pi.shape[1])
+    out[:N * rs] = np.tile(np.asarray(f[:rs], float), N)
+    for n in range(N):
+        out[N * rs:] += np.vstack([Pi[n * nL:(n + 1) * nL], Pi[((n + 1) % N) * nL:((n + 1) % N + 1) * nL]]).T @ faces
+    return out
+
+
 def assemble_disk_matrices(s: SectorMatrices, Pi: np.ndarray, n_sectors: int,
                            scales: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """K and M of the disk's reduced model (eqs. 48-52): q = [q^0 .. q^{N-1}, eta_cyclic], u_L = Pi eta_cyclic.
-    ``scales`` (N,): each sector's stiffness factor (mistuning), 1 if None. Returns (K, M), dense (r, r)."""
-    N, rs, nL = n_sectors, s.r_s, s.n_L
-    scales = np.ones(N) if scales is None else np.asarray(scales, float)
-    rc = Pi.shape[1]
-    r = N * rs + rc
-    out = []
-    for A, factor in ((s.K, scales), (s.M, np.ones(N))):
-        X = np.zeros((r, r))
-        Aqq, Aqc = s.part(A, "q", "q"), np.hstack([s.part(A, "q", "L"), s.part(A, "q", "R")])
-        Acc = np.block([[s.part(A, "L", "L"), s.part(A, "L", "R")], [s.part(A, "R", "L"), s.part(A, "R", "R")]])
-        for n in range(N):                         # N sector blocks (dense products of the sector's size)
-            q = slice(n * rs, (n + 1) * rs)
-            Pn = np.vstack([Pi[n * nL:(n + 1) * nL], Pi[((n + 1) % N) * nL:((n + 1) % N + 1) * nL]])
-            X[q, q] += factor[n] * Aqq
-            coupling = factor[n] * (Aqc @ Pn)
-            X[q, N * rs:] += coupling
-            X[N * rs:, q] += coupling.T
-            X[N * rs:, N * rs:] += factor[n] * (Pn.T @ Acc @ Pn)
-        out.append(0.5 * (X + X.T))
-    return out[0], out[1]
+    ``scales`` (N,): each sector's stiffness factor (mistuning), 1 if None. Returns (K, M), dense (r, r),
+    symmetric."""
+    K = assemble_disk_operator(s, s.K, Pi, n_sectors, scales)
+    M = assemble_disk_operator(s, s.M, Pi, n_sectors)
+    return 0.5 * (K + K.T), 0.5 * (M + M.T)
 
 
 def disk_node_map(sector_nodes, n_sectors: int, r_s: int):

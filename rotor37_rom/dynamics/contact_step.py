@@ -46,15 +46,19 @@ class ContactStep:
     u_n = N q at the contact nodes (rows ``rows`` of the node map), S q along the sliding; a unit normal multiplier
     moves q by WN, a unit friction multiplier by WT (W = X0, the reduced operator); the multipliers of one run solve
     D lambda = g* on the active set (``ContactSolver``). ``run_length`` (P,) sets the ovalisation ramp (eq. 38).
+    ``reference`` (r, P): the states the clearance is measured from (a turning blade's running state,
+    ``dynamics.turning``); None: rest.
     """
 
-    def __init__(self, scheme, casings: list[Casing] | None, run_length: np.ndarray):
+    def __init__(self, scheme, casings: list[Casing] | None, run_length: np.ndarray,
+                 reference: np.ndarray | None = None):
         nodes = scheme.model.nodes
         N, S, self.theta0, self.rows = contact_matrices(nodes, scheme.r, None if casings is None else casings[0])
         self.N, self.S = row_operator(N), row_operator(S)
         self.casings = casings
         if casings is None:
             return
+        self.shift = None if reference is None else np.asarray(self.N @ reference)      # (nc, P)
         self.c0 = np.array([c.c0 for c in casings])
         self.mu = np.array([c.mu for c in casings])
         self.p0 = np.array([c.p0 for c in casings])
@@ -78,6 +82,8 @@ class ContactStep:
         N, S, mu, work = self.N, self.S, self.mu, st.work
         om = omega[active]
         ur = N @ Qn
+        if self.shift is not None:
+            ur = ur - self.shift[:, active]
         theta = node_angles(self.theta0[:, None], om[None, :], t1, self.sense, phase[active][None, :])
         g = casing_clearance(theta, t1, self.c0[active], self.p0[active], self.alpha[active], self.width) - ur
         # a run already past the blow-up limit gets no contact solve (it is stopped at the next check)

@@ -144,11 +144,12 @@ def gnl_step_report(model, states: np.ndarray, frequency_cap: float | None = Non
 
 
 def probe_states(model, speeds, casing, revolutions: float = 4.0, n: int = 24, safety: float = 0.5,
-                 duration: float | None = None) -> np.ndarray:
+                 duration: float | None = None, rotation=None) -> np.ndarray:
     """The n reduced states (r, n) of largest tip motion in a short unscaled GNL run at ``speeds`` with ``casing``
-    (``duration`` in s instead of ``revolutions``: the same ramp as a capped run of that length). The probe has to
-    reach the amplitudes of the run it stands for: states that are too small give a step that blows up (flagged)."""
-    scheme = CentralDifference(model, nonlinear=True, safety=safety)
+    (``duration`` in s instead of ``revolutions``: the same ramp as a capped run of that length; ``rotation``: the
+    blade turning, ``dynamics.turning``). The probe has to reach the amplitudes of the run it stands for: states that
+    are too small give a step that blows up (flagged)."""
+    scheme = CentralDifference(model, nonlinear=True, safety=safety, rotation=rotation)
     length = {"revolutions": revolutions} if duration is None else {"n_steps": int(np.ceil(duration / scheme.h)),
                                                                    "duration": duration}
     res = simulate(scheme, speeds, casing, record_every=max(1, int(2e-5 / scheme.h)), record_q=True,
@@ -236,11 +237,15 @@ class CentralDifference:
         frequency_cap: spectral mass scaling (rad/s): the modes of (K~, M~) above this frequency get the mass that
             brings them down to it, the modes below keep their frequency and shape exactly (see ``capped_mass``);
             the stability limit becomes ~2 / frequency_cap. None: the model's own mass.
+        rotation: the model turns at each run's speed (``dynamics.turning.Rotation``: the model's ``rotation``
+            terms, the clearance's reference); omega_max is then the larger of the model's at rest and of its
+            prestressed tangent at the top of its speed range (about the centrifugal state: GNL amplitudes stiffen
+            it further, as at rest). None: the model at rest, the paper's.
     """
 
     def __init__(self, model, h: float | None = None, nonlinear: bool = True, safety: float = 0.9,
                  force: bool = False, damping: bool = True, massless_boundary: bool = False,
-                 frequency_cap: float | None = None):
+                 frequency_cap: float | None = None, rotation=None):
         missing = [name for name in ("r", "M", "K", "C", "nodes", "forces") if not hasattr(model, name)]
         if missing:
             raise TypeError(f"model must be a reduced model (model.reduced.ReducedModel), got {type(model).__name__}"
@@ -252,6 +257,17 @@ class CentralDifference:
             real_number("frequency_cap", frequency_cap, 0, open_low=True, unit=" rad/s")
         self.model = model
         self.r = model.r
+        self.forced = bool(force)
+        self.rotation = rotation
+        if rotation is not None:
+            from rotor37_rom.dynamics.turning import Rotation
+            from rotor37_rom.model.rotating import check_spin
+
+            if not isinstance(rotation, Rotation):
+                raise TypeError(f"rotation must be a dynamics.turning.Rotation or None, got {rotation!r}")
+            check_spin(model, 0.0)                                  # the model has rotation terms
+            if massless_boundary:
+                raise ValueError("rotation: not with massless_boundary (its boundary carries no centrifugal force)")
         self.boundary_rows = np.asarray(model.nodes.boundary_rows, dtype=np.int64)   # node displacements in q
         self.nonlinear = bool(nonlinear and model.forces is not None)
         self.massless = bool(massless_boundary)
@@ -275,6 +291,11 @@ class CentralDifference:
             self.omega_max = highest_frequency(M[np.ix_(i, i)], Kc)
         else:
             self.omega_max = highest_frequency(M, K)
+            if rotation is not None:
+                from rotor37_rom.dynamics.turning import prestressed_highest_frequency
+
+                self.omega_max = max(self.omega_max, prestressed_highest_frequency(model, model.rotation.top_speed,
+                                                                                   M))
         self.h_crit = 2.0 / self.omega_max
         if h is None:
             h = safety * self.h_crit
@@ -293,6 +314,7 @@ class CentralDifference:
             raise ValueError(f"time step h must be > 0, got {h}")
         other = copy.copy(self)
         other.h = float(h)
+        other.forced = True
         other._build()
         return other
 
@@ -428,7 +450,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
              progress: Callable[[int], None] | None = None, on_finish: Callable[[int, dict], None] | None = None,
              state: LoopState | None = None, checkpoint: Callable[[LoopState], None] | None = None,
              checkpoint_seconds: float = 60.0, phase: float | Sequence[float] = 0.0,
-             monitor: Sequence[int] | None = None, rotation: bool = False) -> SimulationResult:
+             monitor: Sequence[int] | None = None) -> SimulationResult:
     """Run P simulations of the reduced model together with central differences and casing contact.
 
     Args:
@@ -439,18 +461,13 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
         n_steps: number of steps (one for all or one per simulation).
         duration: the run length (s) that sets the ovalization ramp (eq. 38); default: each simulation's own.
         forcing: f(t) -> (r,) or (r, P) reduced external force (N).
-        initial: (Q_0, Q_-1), each (r,) or (r, P); default: rest.
+        initial: (Q_0, Q_-1), each (r,) or (r, P); default: rest, or with a turning scheme each run's centrifugal
+            state (``dynamics.turning``: the scheme's ``rotation`` adds each run's rotation force to every step and
+            sets where the clearance and the recorded displacements are measured from).
         record_every: record every this many steps; record_q: also keep full states; energy: discrete energy
             (record 0 holds that of (Q_0, Q_-1)), the damping's share of the balance and the running works.
         phase: angle (rad) the rotor has turned through before t = 0 (continuation: the casing must not jump).
         monitor: rows of the model's node map whose normal displacement is recorded in ``u_r`` (default: all).
-        rotation: the model turns at each simulation's ``omega`` about e_z (``model.rotating``: the model's
-            ``rotation`` terms, each speed within their range): Omega^2 (F_c + M_P q) joins the force of every
-            step, explicitly, as g does. The spin softening lowers the model's frequencies; the prestress stiffens
-            them through g (1B by a third at 2,000 rad/s on the ci blade), as GNL does at large amplitude: give
-            the step the margin a GNL run needs. Coriolis is left out (on a blade it moves the frequencies by
-            < 1 rad/s). Start it from the centrifugal state (``initial``: ``centrifugal_equilibrium`` per speed),
-            or it rises from rest.
         on_blowup: 'raise' (SimulationDiverged naming the step) or 'flag' (stop that simulation, mark it).
         blowup_limit: largest admissible boundary displacement (m) before a run counts as blown up.
         progress: called with the simulation-steps done since the last call (steps x running simulations: the
@@ -474,24 +491,27 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
     run_length = steps * h if duration is None else np.broadcast_to(np.asarray(duration, float), (P,))
     casings = per_simulation_casings(casing, P)
     phase = np.broadcast_to(np.asarray(phase, float), (P,)).copy()
-    spin2 = None
-    if rotation:
-        from rotor37_rom.model.rotating import check_spin
+    turning = None
+    if scheme.rotation is not None:
+        from rotor37_rom.dynamics.turning import TurningRuns
 
-        spin2 = np.array([check_spin(scheme.model, w) for w in omega]) ** 2
-        terms = scheme.model.rotation
-    contact = ContactStep(scheme, casings, run_length)
+        turning = TurningRuns(scheme, omega)
+        if initial is None:
+            initial = (turning.q_c, turning.q_c)
+    reference = None if turning is None else turning.reference
+    contact = ContactStep(scheme, casings, run_length, reference)
     nodes = scheme.model.nodes
     monitor = np.arange(len(nodes)) if monitor is None else np.asarray(monitor, dtype=np.int64).ravel()
     Nm = row_operator(contact_matrices(nodes, r, None if casings is None else casings[0], rows=monitor)[0])
     rec = Recorder(Nm, tuple(nodes.labels[k] for k in monitor), steps, h, record_every, omega, contact.n_contact,
-                   record_q, energy)
+                   record_q, energy, None if reference is None else np.asarray(Nm @ reference))
     st = rec.fresh(r, initial) if state is None else rec.check_resumable(state)
     energy_forces = scheme.model.forces if (energy and scheme.nonlinear) else None
     if energy and scheme.nonlinear and not energy_forces.has_potential:
         raise ValueError("energy=True with nonlinear forces needs the polynomial (intrusive) tensors")
     if st.work is None:                        # also a checkpoint written before the works were kept: from its step on
-        _start_works(st, scheme, energy_forces, energy, forcing is not None or rotation, steps, record_every)
+        _start_works(st, scheme, energy_forces, energy, forcing is not None or turning is not None, steps,
+                     record_every)
     Q, Qp, work = st.Q, st.Qp, st.work
 
     with np.errstate(over="ignore", invalid="ignore"), \
@@ -510,8 +530,8 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
             if forcing is not None:
                 F = np.asarray(forcing(n * h), float)
                 F = F if F.ndim == 1 else F.reshape(r, -1)[:, active]
-            if spin2 is not None:
-                F_rot = (terms.F_c[:, None] + terms.M_P @ Qa) * spin2[active]
+            if turning is not None:
+                F_rot = turning.force(Qa, active)
                 F = F_rot if F is None else F_rot + (F[:, None] if F.ndim == 1 else F)
             Qn = scheme.predict(Qa, Qpa, F)
             lam_now[:, active] = 0.0

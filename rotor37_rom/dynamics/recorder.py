@@ -50,11 +50,13 @@ class LoopState:
 class Recorder:
     """The records of P runs: the monitored nodes' normal displacements (``Nm`` q, ``labels``), the contact forces,
     and on request the full states and discrete energies, every ``record_every`` steps; ``steps`` (P,) is each run's
-    length (a run's records stop at its end)."""
+    length (a run's records stop at its end). ``offset`` (n_m, P): the normal displacements the records are measured
+    from (a turning blade's running state, ``dynamics.turning``); None: rest. The full states are kept as they are.
+    """
 
     def __init__(self, Nm, labels: tuple, steps: np.ndarray, h: float, record_every: int, omega: np.ndarray,
-                 n_contact: int, record_q: bool, energy: bool):
-        self.Nm, self.labels, self.steps, self.h = Nm, labels, steps, h
+                 n_contact: int, record_q: bool, energy: bool, offset: np.ndarray | None = None):
+        self.Nm, self.labels, self.steps, self.h, self.offset = Nm, labels, steps, h, offset
         self.every, self.omega, self.nc = record_every, omega, n_contact
         self.record_q, self.energy = record_q, energy
 
@@ -75,7 +77,7 @@ class Recorder:
                        max_pen=np.full(P, -np.inf), min_lam=np.full(P, np.inf), fric_pow=np.full(P, -np.inf),
                        contact_steps=np.zeros(P, np.int64), diverged=np.full(P, -1, np.int64))
         for p in range(P):
-            st.u_r[p][:, 0] = self.Nm @ Q[:, p]
+            st.u_r[p][:, 0] = self.Nm @ Q[:, p] - (0.0 if self.offset is None else self.offset[:, p])
             if self.record_q:
                 st.q_rec[p][:, 0] = Q[:, p]
         return st
@@ -93,6 +95,8 @@ class Recorder:
         n = st.n
         i = n // self.every
         ur_all = self.Nm @ Qn
+        if self.offset is not None:
+            ur_all = ur_all - self.offset[:, active]
         for j, p in enumerate(active):
             if n <= self.steps[p]:
                 st.u_r[p][:, i] = ur_all[:, j]

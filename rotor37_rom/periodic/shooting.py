@@ -43,6 +43,9 @@ class Shooting:
                  jacobian_every: int = 1):
         if getattr(scheme, "harmonic", None) is not None or getattr(scheme, "massless", False):
             raise ValueError("shooting takes a blade's scheme (not a tuned disk's or the massless variant)")
+        if getattr(scheme, "rotation", None) is not None:
+            raise ValueError("shooting takes a blade at rest: the periodic orbits of a turning scheme are not "
+                             "implemented (its maps and continuation are)")
         if not (isinstance(m, (int, np.integer)) and m >= 1):
             raise ValueError(f"m (the period in bump passings, m pi / Omega) must be an integer >= 1, got {m!r}")
         if not (isinstance(steps, (int, np.integer)) and steps >= 2):

@@ -105,8 +105,9 @@ SPIN_SNAPSHOT_PAIR = -(10 ** 6)     # md_pairs' row of a centrifugal snapshot (n
 
 
 def _spin_snapshots(sector, ops, basis: CraigBamptonBasis, Z: np.ndarray, M_f, free: np.ndarray, speeds,
-                    n_modes: int = 0) -> tuple[np.ndarray, list]:
-    """The full-order centrifugal states at ``speeds`` (``fem.solve_static(spin=...)``) and the first ``n_modes``
+                    n_modes: int = 0, states: list | None = None) -> tuple[np.ndarray, list]:
+    """The full-order centrifugal states at ``speeds`` (``fem.solve_static(spin=...)``, or ``states``: one full DOF
+    vector per speed, e.g. a cyclic sector's index-0 states, ``fem.centrifugal_state``) and the first ``n_modes``
     modes of the blade turning at the last (the top) speed (``fem.rotating_modes``: K_T(u_c) - Omega^2 M_P, the tip
     free), each fixed-interface corrected (eq. 20: with the constraint modes they span the mode exactly), each
     M-orthogonalised against the interior columns already
@@ -128,8 +129,9 @@ def _spin_snapshots(sector, ops, basis: CraigBamptonBasis, Z: np.ndarray, M_f, f
             out.append(w)
             kept.append(w[:, None])
 
-    for spin in speeds:
-        state = fem.solve_static(sector, spin=float(spin), ops=ops, n_steps=2).u.x.array.copy()
+    for k, spin in enumerate(speeds):
+        state = fem.solve_static(sector, spin=float(spin), ops=ops, n_steps=2).u.x.array.copy() if states is None \
+            else np.asarray(states[k], float)
         keep(fixed_interface_correction(state[:n_full, None], basis.Psi, boundary_dofs=basis.boundary_dofs,
                                         interface=basis.interface)[:, 0])
     if n_modes:                          # the top speed's state, solved above

@@ -82,15 +82,19 @@ class ReductionConfig:
         real_number("ecsw_tol", self.ecsw_tol, 0, 1, open_low=True, open_high=True)
         real_number("training_force", self.training_force, 0, open_low=True, unit=" N")
         real_number("training_omega", self.training_omega, 0, open_low=True, unit=" rad/s")
-        if not isinstance(self.spin_snapshots, (tuple, list)) or len(self.spin_snapshots) > 10 or any(
-                not isinstance(w, numbers.Real) or not np.isfinite(w) or not 0 < w <= 1e5
-                for w in self.spin_snapshots):
-            raise ValueError(f"spin_snapshots: at most 10 speeds in (0, 1e5] rad/s, got {self.spin_snapshots!r}")
-        object.__setattr__(self, "spin_snapshots", tuple(sorted({float(w) for w in self.spin_snapshots})))
+        object.__setattr__(self, "spin_snapshots", _spin_snapshots(self.spin_snapshots))
         whole_number("spin_modes", self.spin_modes, 0, self.r_c)
         if self.spin_modes and not self.spin_snapshots:
             raise ValueError("spin_modes needs spin_snapshots (the modes are the blade's turning at the top "
                              "snapshot speed)")
+
+
+def _spin_snapshots(speeds) -> tuple:
+    """The centrifugal snapshots' speeds, checked (at most 10 in (0, 1e5] rad/s), sorted and distinct."""
+    if not isinstance(speeds, (tuple, list)) or len(speeds) > 10 or any(
+            not isinstance(w, numbers.Real) or not np.isfinite(w) or not 0 < w <= 1e5 for w in speeds):
+        raise ValueError(f"spin_snapshots: at most 10 speeds in (0, 1e5] rad/s, got {speeds!r}")
+    return tuple(sorted({float(w) for w in speeds}))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -120,6 +124,11 @@ class DiskReductionConfig:
             n_f >= 1: the force acts on the sector's whole field with each face on n_f shapes
             (``disk.assembly.face_shapes``), r_s + 2 n_f force coordinates per sector. The faces' constraint modes carry
             part of the blade's motion: eq. 61 caps the GNL forced response's accuracy (docs/results.md).
+        spin_snapshots: () (a disk at rest), or speeds (rad/s): the whole disk's centrifugal states there, each a
+            harmonic-index-0 field solved on the sector (``fem.centrifugal_state``), put in the basis: its faces'
+            shape as an index-0 interface mode, its part with the tip and faces held as a column of every sector's
+            basis; the model then turns (``model.rotating``: the rotation terms reduced exactly), over 0 ... the top
+            snapshot's speed.
     """
 
     tip_nodes: str = "all"
@@ -135,8 +144,15 @@ class DiskReductionConfig:
     seed: int = 0
     load_patch: float = 0.0
     face_shapes: int = 0
+    spin_snapshots: tuple = ()
+    spin_modes: int = 0
 
     def __post_init__(self):
+        object.__setattr__(self, "spin_snapshots", _spin_snapshots(self.spin_snapshots))
+        whole_number("spin_modes", self.spin_modes, 0, self.r_c)
+        if self.spin_modes and not self.spin_snapshots:
+            raise ValueError("spin_modes needs spin_snapshots (the modes are the sector's turning at the top "
+                             "snapshot speed)")
         if self.tip_nodes not in ("all", "LE"):
             raise ValueError(f"tip_nodes must be 'all' or 'LE', got {self.tip_nodes!r}")
         whole_number("r_c", self.r_c, 1)

@@ -17,11 +17,11 @@ import numpy as np
 
 from rotor37_rom import __version__, fem
 from rotor37_rom.reduction.config import DiskReductionConfig
-from rotor37_rom.reduction.builder import (_m_normalise, begin_build, boundary_node_map, compute_modal_derivatives,
-    mesh_signature)
+from rotor37_rom.reduction.builder import (SPIN_SNAPSHOT_PAIR, _m_normalise, _spin_snapshots, begin_build,
+    boundary_node_map, compute_modal_derivatives, mesh_signature)
 from rotor37_rom.disk.symmetry import rotation_z
-from rotor37_rom.disk.assembly import (SectorMatrices, assemble_disk_matrices, disk_node_map, face_shapes,
-    interface_modes)
+from rotor37_rom.disk.assembly import (SectorMatrices, assemble_disk_matrices, assemble_disk_operator,
+    assemble_disk_vector, disk_node_map, face_shapes, interface_modes)
 from rotor37_rom.model.disk_basis import DiskBasis
 from rotor37_rom.forces.sector import SectorForces
 from rotor37_rom.forces.tensors import QuadratureForces, compute_polynomial_forces
@@ -29,6 +29,7 @@ from rotor37_rom.npz import load_npz, save_npz
 from rotor37_rom.reduction.craig_bampton import (CraigBamptonBasis, craig_bampton, modal_damping,
     select_pairs, selection_weights)
 from rotor37_rom.model.reduced import ReducedModel, reduced_model_key, save_reduced_model
+from rotor37_rom.model.rotating import RotationTerms
 from rotor37_rom.dynamics.newmark import simulate_linear_newmark
 
 __all__ = ["DiskReductionConfig", "build_disk_model"]
@@ -85,6 +86,9 @@ def _disk_metadata(sector, config: DiskReductionConfig) -> dict:
     config_meta = dataclasses.asdict(config)
     if not config.face_shapes:                     # eq. 61's models keep the keys they were cached under
         config_meta.pop("face_shapes")
+    if not config.spin_snapshots:                  # likewise the models at rest
+        config_meta.pop("spin_snapshots")
+        config_meta.pop("spin_modes")
     metadata = {"config": config_meta, "mesh": mesh_signature(sector), "source": sector.source,
                 "version": __version__, "kind": "disk", "n_sectors": sector.cyclic.n_sectors,
                 "damping": "5e-4 on the 3 N lowest modes"}
@@ -128,14 +132,32 @@ def _sector_craig_bampton(sector, config: DiskReductionConfig, K_f, M_f, free: n
     return Psi_f, Theta_f, omega_c
 
 
+def _force_faces(Pi: np.ndarray, omega_pi: np.ndarray, N: int, count: int, centrifugal: list
+                 ) -> tuple[np.ndarray, np.ndarray] | None:
+    """The face shapes L the force sees and every sector's face coordinates (``face_shapes``'s pair): the
+    centrifugal states' faces (so that the force is exact on those states) and ``count`` shapes of the interface
+    modes, orthonormalised together; None for neither (eq. 61)."""
+    if not count and not centrifugal:
+        return None
+    nL = Pi.shape[0] // N
+    L = np.zeros((nL, 0)) if not count else face_shapes(Pi, omega_pi, N, count)[0]
+    if centrifugal:
+        Q, R = np.linalg.qr(np.column_stack([np.column_stack(centrifugal), L]))
+        L = Q[:, np.abs(np.diag(R)) > 1e-10 * np.abs(np.diag(R)).max()]
+    P = np.einsum("lf,nlc->nfc", L, Pi.reshape(N, nL, -1))
+    return L, np.concatenate([P, np.roll(P, -1, axis=0)], axis=1)
+
+
 def _sector_forces(sector, config: DiskReductionConfig, Phi_s, Psi_L, Psi_Rr, Pi, omega_pi, free, blocks, r: int,
-                   scales) -> SectorForces:
-    """The disk's nonlinear force: the sector's exact quadrature (or its tensors) on Phi_s, with ``face_shapes`` also
-    on the faces' shapes [Phi_s, Psi_L L, Psi_R' L], applied to every sector (eq. 61)."""
+                   scales, centrifugal: list) -> SectorForces:
+    """The disk's nonlinear force: the sector's exact quadrature (or its tensors) on Phi_s, with ``face_shapes`` (or
+    the centrifugal states' faces) also on the faces' shapes [Phi_s, Psi_L L, Psi_R' L], applied to every sector
+    (eq. 61)."""
     N, r_s, n_full = blocks.shape[0], Phi_s.shape[1], Phi_s.shape[0]
     Phi_nl, faces = Phi_s, None
-    if config.face_shapes:               # the faces in the force, on a few shapes: [Phi_s, Psi_L L, Psi_R' L]
-        L, faces = face_shapes(Pi, omega_pi, N, config.face_shapes)
+    shapes = _force_faces(Pi, omega_pi, N, config.face_shapes, centrifugal)
+    if shapes is not None:               # the faces in the force, on a few shapes: [Phi_s, Psi_L L, Psi_R' L]
+        L, faces = shapes
         Phi_nl = np.zeros((n_full, r_s + 2 * L.shape[1]))
         Phi_nl[:, :r_s] = Phi_s
         Phi_nl[free, r_s:] = np.hstack([Psi_L @ L, Psi_Rr @ L])
@@ -143,6 +165,31 @@ def _sector_forces(sector, config: DiskReductionConfig, Phi_s, Psi_L, Psi_Rr, Pi
     exact = QuadratureForces(H, w, *sector.material.lame)
     sector_forces = compute_polynomial_forces(exact) if config.forces == "intrusive" else exact
     return SectorForces(sector_forces, blocks, r, scales, faces)
+
+
+def _with_index0_faces(s: SectorMatrices, Pi: np.ndarray, omega: np.ndarray, k: np.ndarray, faces: list,
+                       n_sectors: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The interface modes with the centrifugal states' face shapes added: each a harmonic-index-0 column (the same
+    left face a in every sector: tiled), less its part in the columns already there (a tiled column stays tiled: the
+    other indices' columns are orthogonal to it), scaled to a unit interface mass; dropped where that part leaves
+    less than 1e-8 of it. Its frequency is its Rayleigh quotient on the faces' blocks."""
+    cols, omegas = [Pi], [omega]
+    for a in faces:
+        t = np.tile(np.asarray(a, float), n_sectors)
+        size = np.linalg.norm(t)
+        for _ in range(2):                                    # twice: Gram-Schmidt's round-off
+            basis = np.hstack(cols)
+            t = t - basis @ np.linalg.lstsq(basis, t, rcond=None)[0]
+        if not np.linalg.norm(t) > 1e-8 * size:
+            continue
+        face = np.concatenate([t[:s.n_L], t[:s.n_L]])          # [u_L; u_L of the next sector]: the same a
+        blocks = [np.block([[s.part(A, "L", "L"), s.part(A, "L", "R")], [s.part(A, "R", "L"), s.part(A, "R", "R")]])
+                  for A in (s.K, s.M)]
+        stiffness, mass = (face @ B @ face for B in blocks)
+        cols.append((t / np.sqrt(n_sectors * mass))[:, None])
+        omegas.append(np.array([np.sqrt(max(stiffness, 0.0) / mass)]))
+    added = len(cols) - 1
+    return np.hstack(cols), np.concatenate(omegas), np.concatenate([k, np.zeros(added, dtype=k.dtype)])
 
 
 def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig(), ops=None,
@@ -223,6 +270,18 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     index = np.r_[np.arange(nb), Psi_f.shape[1] + np.arange(Theta_full.shape[1])]   # lin's columns in basis.linear
     Z = compute_modal_derivatives(sector, ops, basis, index[chosen] if len(chosen) else chosen, "exact",
                                   solve=fem.mumps_solver(K_f))
+    chosen = np.asarray(chosen, dtype=np.int64).reshape(-1, 2)
+    faces_c = []                             # the centrifugal states' left faces (each an index-0 interface shape)
+    if config.spin_snapshots:
+        states = [fem.centrifugal_state(sector, w, ops).x.array.copy() for w in config.spin_snapshots]
+        snapshots, report["spin_snapshot_remainder"] = _spin_snapshots(sector, ops, basis, Z, M_f, free,
+                                                                       config.spin_snapshots, config.spin_modes,
+                                                                       states=states)
+        Z = np.hstack([Z, snapshots])
+        chosen = np.vstack([chosen, np.full((snapshots.shape[1], 2), SPIN_SNAPSHOT_PAIR, dtype=np.int64)])
+        faces_c = [u[left] for u in states]
+        ops.u.x.array[:] = 0.0                # centrifugal_state leaves its last state in the operators' u
+        lap("centrifugal_states")
     Z, md_scale = _m_normalise(Z, M_f, free) if Z.shape[1] else (Z, np.zeros(0))
     Phi_s = np.hstack([Psi_full[:, :nb], Theta_full, Z])                 # Theta_full ends with S
     r_s = Phi_s.shape[1]
@@ -231,6 +290,8 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     s = SectorMatrices(K=_with_derivatives(K_B, K_f, B, n_lin, r_s), M=_with_derivatives(M_B, M_f, B, n_lin, r_s),
                        r_s=r_s, n_L=nL, omega_c=omega_c)
     Pi, omega_pi, k_pi = interface_modes(s, N, config.r_cyclic, selection=config.interface)
+    if faces_c:
+        Pi, omega_pi, k_pi = _with_index0_faces(s, Pi, omega_pi, k_pi, faces_c, N)
     scales = np.ones(N) if config.mistuning is None else np.asarray(config.mistuning, float)
     K, M = assemble_disk_matrices(s, Pi, N, scales)
     C, omega = modal_damping(K, M, n_low=3 * N)             # the blade's 1B, 1T, 2B ratio for those families
@@ -240,17 +301,26 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
     blocks = np.arange(N * r_s).reshape(N, r_s)
     forces = None
     if config.forces != "none":
-        forces = _sector_forces(sector, config, Phi_s, Psi_L, Psi_Rr, Pi, omega_pi, free, blocks, K.shape[0], scales)
+        forces = _sector_forces(sector, config, Phi_s, Psi_L, Psi_Rr, Pi, omega_pi, free, blocks, K.shape[0], scales,
+                                faces_c)
         lap("forces")
     sector_nodes = boundary_node_map(sector, tip_dofs)
     Psi_L_full, Psi_Rr_full = np.zeros((n_full, nL)), np.zeros((n_full, nL))
     Psi_L_full[free], Psi_Rr_full[free] = Psi_L, Psi_Rr
+    rotation = None
+    if config.spin_snapshots:                # exact on the basis: M_P, F_c and G are linear in u
+        MP_B, F_B, G_B = fem.reduced_rotation_terms(sector, np.hstack([Phi_s, Psi_L_full, Psi_Rr_full]), ops)
+        M_P, G = assemble_disk_operator(s, MP_B, Pi, N), assemble_disk_operator(s, G_B, Pi, N)
+        rotation = RotationTerms(M_P=0.5 * (M_P + M_P.T), F_c=assemble_disk_vector(s, F_B, Pi, N),
+                                 G=0.5 * (G - G.T), speeds=np.array(config.spin_snapshots))
+        lap("rotation_terms")
+    n_spin = len(faces_c) and int(np.sum(chosen[:, 0] == SPIN_SNAPSHOT_PAIR))
     model = ReducedModel(M=M, C=C, K=K, forces=forces, boundary_dofs=tip_dofs,
                          nodes=disk_node_map(sector_nodes, N, r_s),
-                         sizes={"r_b": nb, "r_c": config.r_c, "r_load": S_f.shape[1], "r_md": Z.shape[1],
-                                "n_sectors": N, "r_cyclic": Pi.shape[1]},
+                         sizes={"r_b": nb, "r_c": config.r_c, "r_load": S_f.shape[1], "r_md": Z.shape[1] - n_spin,
+                                "n_sectors": N, "r_cyclic": Pi.shape[1], **({"r_spin": n_spin} if n_spin else {})},
                          md_pairs=chosen, Phi=None, metadata=metadata,
-                         sectors=DiskBasis(Phi_s, Psi_L_full, Psi_Rr_full, Pi, blocks, N))
+                         sectors=DiskBasis(Phi_s, Psi_L_full, Psi_Rr_full, Pi, blocks, N), rotation=rotation)
     if cache is not None:
         save_reduced_model(model, cache)
     LOG.info("disk model r = %d (N = %d x r_s = %d + r_cyclic = %d)", model.r, N, r_s, Pi.shape[1])

@@ -22,6 +22,7 @@ import numpy as np
 
 from rotor37_rom.checks import fits_in_memory, flagged, real_number, whole_number
 from rotor37_rom.cli import ArgumentParser
+from rotor37_rom.dynamics.turning import CLEARANCES
 from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.model.reduced import ReducedModel
 from rotor37_rom.reduction.config import DiskReductionConfig, ReductionConfig
@@ -201,6 +202,12 @@ class MapScheme:
             (the modal derivatives of 10 clamped modes, r = 104); the cubature is then trained on the capped
             dynamics the map runs. False: unscaled training runs (the headline maps').
         retry_diverged: runs that blew up run again with the step halved, up to this many times (0..4).
+        rotation: the blade turns at each speed (``dynamics.turning``: centrifugal prestress and spin softening, each
+            run from its centrifugal state; GNL off, the blade linearised about that state): 'running' (the casing's
+            c0 and the map's displacements measured from the running blade) or 'rest' (from the blade at rest: the
+            tip's centrifugal growth eats the clearance). None: the blade at rest, the paper's. The model built
+            then holds the centrifugal states at STOP / 2 and STOP and the first 4 modes turning at STOP (STOP: the
+            top of the map's and the continuation's speeds; ``ReductionConfig.spin_snapshots``).
     """
 
     safety: float = 0.5
@@ -214,9 +221,17 @@ class MapScheme:
     cubature_speeds: tuple[float, ...] | None = None
     capped_training: bool = False
     retry_diverged: int = 0
+    rotation: str | None = None
 
     def __post_init__(self):
         _real("safety", self.safety, 0, 1, open_low=True)
+        if self.rotation is not None:
+            if self.rotation not in CLEARANCES:
+                raise ValueError(f"--rotation must be one of {', '.join(CLEARANCES)} (where the clearance is "
+                                 f"measured from), got {self.rotation!r}")
+            if self.cubature is not None:
+                raise ValueError("--rotation: not with --cubature (the cubature is trained on runs at rest; give the "
+                                 "exact GNL forces)")
         if self.h is not None:
             _real("h", self.h, 0, 1, open_low=True, unit=" s")
         if self.frequency_cap is not None:
@@ -433,6 +448,12 @@ class ContactMapConfig:
         if self.continuation.periodic > 0 and self.rom.disk:
             raise ValueError("--periodic: periodic orbits by shooting take a blade (not --disk; a tuned disk's "
                              "travelling wave is periodic.TravellingWaveBalance)")
+        if self.scheme.rotation is not None and self.rom.disk:
+            raise ValueError("--rotation: the disk's turning reduced model is not built yet (a blade's is; the "
+                             "disk's turning Campbell and ZZENF diagrams are demos/disk_campbell.py)")
+        if self.scheme.rotation is not None and self.continuation.periodic > 0:
+            raise ValueError("--rotation: not with --periodic (the periodic orbits of a turning blade are not "
+                             "implemented; its map and continuation are)")
         half = continued_revolutions(self.sweep.revolutions) / 2
         if not self.continuation.steady_window <= half:
             raise ValueError(f"--steady-window must be in 1..{int(half)} revolutions (half of a continued run), got "
@@ -442,6 +463,9 @@ class ContactMapConfig:
         """With ``tolerance``: in (0, 1), and none of the options it chooses given."""
         if self.tolerance is None:
             return
+        if self.scheme.rotation is not None:
+            raise ValueError("--rotation: not with --tolerance (the speed-accuracy study measured maps of the blade at "
+                             "rest; give the options)")
         if self.scheme.capped_training:
             raise ValueError("--capped-training: not with --tolerance (the study measured the chosen models trained "
                              "unscaled)")
@@ -528,6 +552,17 @@ class ContactMapConfig:
         """The map's angular speeds (rad/s)."""
         start, stop, n = self.speeds
         return np.linspace(start, stop, n)
+
+    @property
+    def top_speed(self) -> float:
+        """The highest speed a run of this configuration turns at (rad/s): the map's or the continuation's."""
+        return float(max(self.speeds[1], self.continuation_span[1]))
+
+    @property
+    def spin_snapshots(self) -> tuple[float, ...]:
+        """The centrifugal snapshots of a turning model built here (``MapScheme.rotation``): STOP / 2 and STOP (the
+        ``top_speed``); () for a blade at rest."""
+        return () if self.scheme.rotation is None else (self.top_speed / 2, self.top_speed)
 
     @property
     def continuation_span(self) -> tuple[float, float]:
@@ -640,6 +675,12 @@ def build_parser() -> ArgumentParser:
     parser.add_argument("--rotation-sense", type=int, choices=[-1, 1],
                         help="the rotor turns about +z towards -theta (-1, rotor 37's, the default) or +theta (+1); a "
                              "sense that turns the blade with its trailing edge ahead (a mirrored blade) is refused")
+    parser.add_argument("--rotation", choices=list(CLEARANCES),
+                        help="the blade turns at each speed: centrifugal prestress and spin softening, each run from "
+                             "its centrifugal state (GNL off: linearised about it), the clearance --c0 measured from "
+                             "the running blade (running) or from the blade at rest (rest: the tip's centrifugal "
+                             "growth eats it); the model built holds the centrifugal states at STOP/2 and STOP. "
+                             "Default: at rest, the paper's")
     parser.add_argument("--batch", type=int, help="speeds integrated together (default 16)")
     parser.add_argument("--continuation", type=float,
                         help="speed step (rad/s) of a continuation up and down over the map's range (0: none, the "

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 import scipy.linalg
 
-from rotor37_rom.checks import before_work
+from rotor37_rom.checks import before_work, flagged
 from rotor37_rom.disk.assembly import mistuning_factors
 from rotor37_rom.disk.harmonics import sector_harmonics
 from rotor37_rom.dynamics.casing import Casing, check_hand, contact_matrices
@@ -187,8 +187,10 @@ def build_model(config: ContactMapConfig) -> ReducedModel:
     else:
         from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
 
+        spin = config.spin_snapshots                     # a turning map's centrifugal snapshots, () at rest
         reduction = ReductionConfig(r_c=r_c, r_md=r_md, global_md_modes=config.rom.global_md, forces="intrusive",
-                                    contact_patch=config.rom.contact_patch)
+                                    contact_patch=config.rom.contact_patch, spin_snapshots=spin,
+                                    spin_modes=min(4, r_c) if spin else 0)
         model, _ = build_reduced_model(sector, reduction, cache_dir=config.cache_dir)
     what = f"{config.rom.mesh.path.name}" if config.rom.mesh is not None else f"{config.rom.preset} preset"
     print(f"reduced model: {what} ({sector.n_dofs} DOF) -> r = {model.r} {model.sizes} "
@@ -211,15 +213,36 @@ def eo4_frequency(model: ReducedModel) -> float:
     return float(np.sqrt(lam[k == 4].min())) if (k == 4).any() else float(np.sqrt(lam[0]))
 
 
-def sprag_slip_onsets(model: ReducedModel, casing: Casing, sector: int = 0) -> dict:
+def sprag_slip_onsets(model: ReducedModel, casing: Casing, sector: int = 0, spin: float | None = None) -> dict:
     """Friction coefficients at which sustained sliding on the casing diverges (rotor37_rom.dynamics.friction): per
-    contact node of ``sector`` (a tuned disk's sectors are alike) and for all contact nodes together."""
+    contact node of ``sector`` (a tuned disk's sectors are alike) and for all contact nodes together; ``spin``
+    (rad/s): of the blade turning there (its prestressed tangent, ``model.rotating``), None: at rest."""
+    from rotor37_rom.model.rotating import rotating_stiffness
+
     N, S, _, rows = contact_matrices(model.nodes, model.r, casing)
     mine = [k for k, row in enumerate(rows) if model.nodes.sector[row] == sector]
-    G = np.linalg.inv(model.K)                          # once, not per node (r = 1,728 on the disk)
-    single = [sprag_slip_friction(model.K, N, S, [k], compliance=G) for k in mine]
+    K = model.K if spin is None else rotating_stiffness(model, spin)
+    G = np.linalg.inv(K)                                # once, not per node (r = 1,728 on the disk)
+    single = [sprag_slip_friction(K, N, S, [k], compliance=G) for k in mine]
     return {"weakest_node": min(single), "per_node": single,
-            "all_nodes": sprag_slip_friction(model.K, N, S, compliance=G)}
+            "all_nodes": sprag_slip_friction(K, N, S, compliance=G)}
+
+
+def turning_resonance(model: ReducedModel, top: float, order: int = 4) -> float | None:
+    """Where the turning blade's first mode meets engine order ``order`` (rad/s): Southwell's iteration
+    (``studies.campbell.iterate_crossing``) on the reduced model's prestressed, spin-softened modes
+    (``model.rotating.rotating_modes``, to 0.01 rad/s); None where it lies above ``top`` or the model's range."""
+    from rotor37_rom.model.rotating import rotating_modes
+    from rotor37_rom.studies.campbell import iterate_crossing
+
+    omega0 = float(eigenfrequencies(model)[0])
+    limit = min(top, model.rotation.top_speed)
+    try:
+        speed, iterations = iterate_crossing(lambda w: (rotating_modes(model, min(w, limit))[0], None), order,
+                                             omega0 / order, omega0, lambda w, V: 0)
+    except ValueError:
+        return None
+    return speed if iterations > 0 and speed <= limit else None
 
 
 def _finite(x: float) -> float | None:
@@ -450,9 +473,10 @@ def print_map(result: MapResult, linear_resonance: float) -> None:
     for name, branch in result.branches.items():
         best = branch.peak
         unsteady = [f"{p.omega:.0f}" for p in branch.points if not p.steady]
-        print(f"         continuation {name} (h = {branch.h:.3g} s, {branch.wall_s:.0f} s): largest response at "
-              f"{best.omega:.0f} rad/s ({best.amplitude * 1e3:.3f} mm); {len(branch.points)} speeds, not steady at "
-              f"{', '.join(unsteady) or 'none'}")
+        largest = (f"largest response at {best.omega:.0f} rad/s ({best.amplitude * 1e3:.3f} mm)"
+                   if np.isfinite(best.amplitude) else f"every run blew up (from {best.omega:.0f} rad/s)")
+        print(f"         continuation {name} (h = {branch.h:.3g} s, {branch.wall_s:.0f} s): {largest}; "
+              f"{len(branch.points)} speeds, not steady at {', '.join(unsteady) or 'none'}")
     if result.periodic is not None:
         print(f"         {result.periodic.describe()}")
         for name, comparison in result.periodic.continuation.items():
@@ -511,8 +535,19 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
     first = model.nodes.coordinates[model.nodes.sector == 0]
     stagger = check_hand(first, casing.rotation_sense)              # a mirrored blade: refused, naming the option
     omega = eigenfrequencies(model)
-    onset = sprag_slip_onsets(model, config.sweep.casing, config.sector)
+    turning = config.scheme.rotation is not None
+    if turning:
+        from rotor37_rom.model.rotating import check_spin
+
+        flagged("--rotation", lambda: check_spin(model, config.top_speed))      # the model turns up to the top speed
+    onset = sprag_slip_onsets(model, config.sweep.casing, config.sector, config.top_speed if turning else None)
     summary = model_summary(config, model, omega, onset)
+    rotation = None if not turning else {
+        "clearance": config.scheme.rotation, "sprag_slip_at": config.top_speed,
+        "resonance_1B_EO4": turning_resonance(model, config.top_speed),
+        "model_speeds": np.asarray(model.rotation.speeds, float).tolist()}
+    resonance = rotation["resonance_1B_EO4"] if turning else None
+    resonance = summary["linear_resonance"] if resonance is None else resonance
     summary["frame"] = {"axis": "+z", "file_axis": "+z" if config.rom.mesh is None else config.rom.mesh.axis,
                         "rotation_sense": casing.rotation_sense, "contact_normal": casing.direction,
                         "tip_stagger_deg": float(np.degrees(stagger))}
@@ -521,9 +556,15 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
               f"{'-' if casing.rotation_sense < 0 else '+'}theta), contact normal {casing.direction}; the tip's "
               f"trailing edge {abs(np.degrees(stagger)):.1f} deg behind its leading edge")
     if rank == 0 and not config.quiet:
-        print(f"sustained sliding diverges (sprag-slip) from mu = {onset['weakest_node']:.3f} on one contact node, "
-              f"{onset['all_nodes']:.3f} on all of them; this run: mu = {config.sweep.casing.mu:g} (growth can start "
-              f"below: docs/results.md, 'Friction')")
+        where = f" turning at {config.top_speed:g} rad/s" if turning else ""
+        print(f"sustained sliding{where} diverges (sprag-slip) from mu = {onset['weakest_node']:.3f} on one contact "
+              f"node, {onset['all_nodes']:.3f} on all of them; this run: mu = {config.sweep.casing.mu:g} (growth can "
+              f"start below: docs/results.md, 'Friction')")
+        if turning:
+            crossing = rotation["resonance_1B_EO4"]
+            print(f"turning blade ({config.scheme.rotation} clearance): 1B meets EO4 at "
+                  + (f"{crossing:.1f} rad/s" if crossing is not None else f"no speed up to {config.top_speed:g} "
+                     f"rad/s") + f" (at rest: {summary['linear_resonance']:.1f} rad/s)")
     runs, mesh = {}, None
     for gnl in GNL_SETTINGS[config.gnl]:
         setting = config.setting(gnl)
@@ -542,14 +583,16 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
                     if setting.continuation.periodic > 0 else None)
         runs[label] = result = MapResult(label, tag, folder, interaction_map(records, config.node), scheme.h,
                                          scheme.h_crit, retried, wall, branches, periodic)
-        files += chart_map(setting, result, records, omega, model.r, summary["linear_resonance"])
+        files += chart_map(setting, result, records, omega, model.r, resonance)
         summary["runs"][label] = summary_entry(setting, scheme, result, records)
+        if turning:                                       # the turning blade's crossing and clearance, per run
+            summary["runs"][label]["rotation"] = rotation
         if config.tolerance is not None:
             choice = config.choice(gnl)
             summary["runs"][label]["chosen"] = dict(tolerance=config.tolerance, model=choice.name,
                                                     options=choice.options, expected_error=choice.error,
                                                     run_on_larger_model=config.model_beyond_choice(gnl))
-        print_map(result, summary["linear_resonance"])
+        print_map(result, resonance)
         if gnl and setting.scheme.step_outliers == "drop" and result.imap.diverged.any():
             print(f"         {int(result.imap.diverged.sum())} speeds still blew up with --step-outliers drop (their "
                   f"retries halve a step above the one from every state): run them with --step-outliers keep before "

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rotor37_rom.dynamics.turning import Rotation
 from rotor37_rom.dynamics.explicit import (CentralDifference, gnl_step_report, largest_states, probe_states, simulate,
     training_speeds)
 from rotor37_rom.model.reduced import (ReducedModel, load_reduced_model, perturbed_model, save_reduced_model,
@@ -28,7 +29,7 @@ from rotor37_rom.studies.sweep import idle_barrier
 if TYPE_CHECKING:
     from mpi4py import MPI
 
-__all__ = ["time_scheme", "setting_names", "cubature_model", "capped_probe", "capped_gnl_step", "capped_probe_states",
+__all__ = ["time_scheme", "turning", "setting_names", "cubature_model", "capped_probe", "capped_gnl_step", "capped_probe_states",
            "print_step_outliers"]
 
 
@@ -130,7 +131,8 @@ def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: Re
             kind = f"capped (h = {h_probe:.3g} s)"
         else:
             probe = config.speed_grid[:: max(1, config.speeds[2] // 16)]
-            states = probe_states(model, probe, config.sweep.casing, revolutions=revolutions)
+            states = probe_states(model, probe, config.sweep.casing, revolutions=revolutions,
+                                  rotation=turning(config))
             kind = "unscaled"
         if verbose:
             print(f"GNL step from the tangent limit on a {revolutions:g}-revolution {kind} probe at {len(probe)} "
@@ -209,11 +211,16 @@ def time_scheme(config: ContactMapConfig, model: ReducedModel, gnl: bool, comm: 
     if gnl and config.scheme.frequency_cap is not None and h is None:
         h = capped_gnl_step(config, model, run_model, states, verbose=comm is None or comm.rank == 0)
     scheme = CentralDifference(run_model, nonlinear=gnl, h=h, safety=config.scheme.safety,
-                               frequency_cap=config.scheme.frequency_cap_rad_s)
+                               frequency_cap=config.scheme.frequency_cap_rad_s, rotation=turning(config))
     if not config.scheme.perturbation:
         return scheme
     return CentralDifference(perturbed_model(run_model, config.scheme.perturbation), nonlinear=gnl, h=scheme.h,
-                             frequency_cap=config.scheme.frequency_cap_rad_s)
+                             frequency_cap=config.scheme.frequency_cap_rad_s, rotation=turning(config))
+
+
+def turning(config: ContactMapConfig) -> Rotation | None:
+    """The rotation of the map's scheme (``dynamics.turning.Rotation``; None: the blade at rest)."""
+    return None if config.scheme.rotation is None else Rotation(clearance=config.scheme.rotation)
 
 
 def setting_names(config: ContactMapConfig, gnl: bool) -> tuple[str, str]:
@@ -227,4 +234,6 @@ def setting_names(config: ContactMapConfig, gnl: bool) -> tuple[str, str]:
         parts.append((f"cap {config.scheme.frequency_cap:g} kHz", f"cap{config.scheme.frequency_cap:g}k"))
     if config.scheme.perturbation:
         parts.append((f"x (1 + {config.scheme.perturbation:g})", f"pert{config.scheme.perturbation:g}"))
+    if config.scheme.rotation is not None:
+        parts.append((f"turning, {config.scheme.rotation} clearance", f"turning_{config.scheme.rotation}"))
     return ", ".join(p[0] for p in parts), "_".join(p[1] for p in parts)

@@ -60,6 +60,8 @@ def _key(scheme: CentralDifference, spec: SweepSpec, h: float | None = None) -> 
             "spec": dataclasses.asdict(spec) | {"batch_size": None}}
     if scheme.frequency_cap is not None:                 # absent from older keys: their results stay valid
         info["frequency_cap"] = scheme.frequency_cap
+    if scheme.rotation is not None:                      # a turning blade's runs (dynamics.turning)
+        info["rotation"] = dataclasses.asdict(scheme.rotation)
     return hashlib.sha256(json.dumps(info, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
@@ -152,7 +154,8 @@ def idle_barrier(comm, poll: float = 0.05) -> None:
 
 def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpec, out: str | Path,
               comm=None, progress: bool = True, checkpoint_seconds: float = 60.0) -> Path:
-    """Simulate every speed from rest (paper §2.3.1) in batches; return the folder of per-speed results.
+    """Simulate every speed from rest (paper §2.3.1; a turning scheme's from its centrifugal state) in batches;
+    return the folder of per-speed results.
 
     With ``comm`` (an mpi4py communicator) the speeds still to do are dealt round-robin to the ranks; every rank
     writes its own files, and all ranks return once the folder is complete."""
@@ -165,7 +168,9 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
         folder.mkdir(parents=True, exist_ok=True)
         if not (folder / "spec.json").exists():          # a folder found by round-off keeps its own step
             save_json(folder / "spec.json", {"h": scheme.h, "nonlinear": scheme.nonlinear, "model": scheme.model.key,
-                                             "r": scheme.r, "spec": dataclasses.asdict(spec)}, default=str, indent=1)
+                                             "r": scheme.r, "spec": dataclasses.asdict(spec),
+                                             "rotation": None if scheme.rotation is None
+                                             else dataclasses.asdict(scheme.rotation)}, default=str, indent=1)
     if comm is not None:
         idle_barrier(comm)
     # batches interrupted earlier resume first (their speeds stay together); then the speeds not done yet

@@ -188,10 +188,11 @@ def _crossings_and_axes(ax, crossings, name, W: np.ndarray, top: float, ylabel: 
     ax.set_title(title, fontsize=9)
 
 
-def plot_campbell(result, orders, path: str | Path, title: str = "") -> Path:
+def plot_campbell(result, orders, path: str | Path, title: str = "", peaks: dict | None = None) -> Path:
     """The Campbell diagram (#73): each followed mode's frequency against the speed (rad/s both), the engine-order
     lines omega = e Omega, and the crossings marked and labelled (mode/EO, speed). ``result``: a
-    ``studies.campbell.CampbellResult``."""
+    ``studies.campbell.CampbellResult``; ``peaks``: {label: (speed, frequency)} drawn over it (a map's largest
+    response, the engine-order point of a contact-stiffened resonance)."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7.5, 5.5))
     W = np.asarray(result.speeds, float)
@@ -199,6 +200,9 @@ def plot_campbell(result, orders, path: str | Path, title: str = "") -> Path:
     _engine_order_lines(ax, W, orders, top, "--")
     for k, label in enumerate(result.labels):
         ax.plot(W, result.omega[:, k], "-o", ms=3, lw=1.4, label=label)
+    for (label, (speed, frequency)), marker in zip((peaks or {}).items(), "sD^vP*"):
+        if np.isfinite(speed):
+            ax.plot(speed, frequency, marker, ms=7, mfc="none", mew=1.4, label=f"largest response: {label}")
     _crossings_and_axes(ax, result.crossings, lambda c: c["label"], W, top, "frequency omega (rad/s)", title)
     ax.legend(fontsize=7, loc="upper left")
     ax.grid(alpha=0.3)
