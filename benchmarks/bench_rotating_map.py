@@ -7,6 +7,10 @@ One turning reduced model of the ci blade (r_c = 15, 3 global modal derivatives,
 from the running blade) and at rest, 60 kHz frequency cap, the paper's casing (c0 = 0.5 mm, h_b = 0.625 mm, mu = 0.15).
 
     python benchmarks/bench_rotating_map.py [--speeds 1300 1900 25] [--revolutions 20] [--out results/bench_rotating_map]
+    python benchmarks/bench_rotating_map.py --disk --r-c 4 --r-md 2 --r-cyclic 36 --speeds 1750 1850 3 --revolutions 2
+
+With --disk: the 36-sector bladed disk (GNL on, the casing cone's normal; its centrifugal states and 4 turning
+modes in the basis; ``DiskReductionConfig(spin_snapshots=...)``).
 
 Results: results/bench_rotating_map.json (machine stated), and the comparison's charts, summary.json and
 turning_comparison.json in --out.
@@ -18,7 +22,7 @@ from pathlib import Path
 
 from rotor37_rom.machine import write_results
 from rotor37_rom.studies.contact_map import ContactMapConfig
-from rotor37_rom.studies.turning_map import run_turning_comparison
+from rotor37_rom.studies.turning_map import engine_order_crossing, run_turning_comparison
 
 
 def main(argv=None) -> int:
@@ -26,16 +30,23 @@ def main(argv=None) -> int:
     parser.add_argument("--speeds", type=float, nargs=3, default=(1300.0, 1900.0, 25), metavar=("START", "STOP", "N"))
     parser.add_argument("--revolutions", type=float, default=20.0)
     parser.add_argument("--gnl", choices=["off", "on", "both"], default="both")
-    parser.add_argument("--out", type=Path, default=Path("results/bench_rotating_map"))
+    parser.add_argument("--out", type=Path, default=None, help="default results/bench_rotating_map[_disk]")
+    parser.add_argument("--disk", action="store_true", help="the bladed disk (GNL on, cone normal)")
+    parser.add_argument("--r-c", type=int, default=None)
+    parser.add_argument("--r-md", type=int, default=None)
+    parser.add_argument("--r-cyclic", type=int, default=144)
     args = parser.parse_args(argv)
+    disk = {"disk": True, "gnl": "on", "direction": "cone", "r_cyclic": args.r_cyclic} if args.disk else {}
+    out = args.out or Path("results/bench_rotating_map" + ("_disk" if args.disk else ""))
     try:
-        config = ContactMapConfig.from_options(rotation="running", speeds=tuple(args.speeds),
-                                               revolutions=args.revolutions, gnl=args.gnl, frequency_cap=60.0,
-                                               out=args.out, quiet=True)
+        config = ContactMapConfig.from_options(**{"rotation": "running", "speeds": tuple(args.speeds),
+                                                  "revolutions": args.revolutions, "gnl": args.gnl,
+                                                  "frequency_cap": 60.0, "out": out, "quiet": True,
+                                                  "r_c": args.r_c, "r_md": args.r_md, **disk})
     except ValueError as exc:
         parser.exit(2, f"error: {exc}\n")
     result = run_turning_comparison(config)
-    crossing = next((c["speed"] for c in result.campbell.crossings if c["mode"] == 0 and c["order"] == 4), None)
+    crossing = engine_order_crossing(result.campbell)
     rows = []
     for label, (speed, _) in result.peaks.items():
         run = {**result.rest.summary["runs"], **result.turning.summary["runs"]}[label]

@@ -10,6 +10,8 @@
 #     python demos/turning_map.py --speeds 1400 1900 11 --revolutions 20 --frequency-cap 60      # ~10 min
 #     python demos/turning_map.py --rotation rest --c0 5e-4 --gnl off --speeds 1400 1900 11
 #     mpirun -n 2 python demos/turning_map.py --model results/turning_map/rom.npz --speeds 1400 1900 21
+#     python demos/turning_map.py --disk --gnl on --direction cone --frequency-cap 60 --speeds 1750 1850 3 \
+#         --revolutions 2 --out results/turning_map_disk       # the bladed disk (its prestress from its GNL forces)
 #
 # The options are the contact map's (`python demos/contact_map.py --help`); the study is one library function,
 # `run_turning_comparison(ContactMapConfig)` of `rotor37_rom.studies.turning_map`. Outputs in `--out` (default
@@ -27,13 +29,13 @@ from typing import Sequence
 
 from rotor37_rom.cli import run_main
 from rotor37_rom.studies.contact_map import ContactMapConfig, parse_options, world_comm
-from rotor37_rom.studies.turning_map import TurningComparison, run_turning_comparison
+from rotor37_rom.studies.turning_map import TurningComparison, engine_order_crossing, run_turning_comparison
 # -
 
 
 def print_report(result: TurningComparison) -> None:
     """The crossing, each map's peak and the cost ratio."""
-    crossing = next((c["speed"] for c in result.campbell.crossings if c["mode"] == 0 and c["order"] == 4), None)
+    crossing = engine_order_crossing(result.campbell)
     print("1B meets EO4 at " + (f"{crossing:.0f} rad/s turning" if crossing else "no speed of the model's range"))
     for label, (speed, _) in result.peaks.items():
         print(f"  largest response {speed:.0f} rad/s: {label}")

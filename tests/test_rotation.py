@@ -660,7 +660,8 @@ def test_a_turning_map_refuses_a_model_that_cannot_turn_there(turning_rom, tmp_p
 
 @pytest.mark.parametrize("options, words", [
     ({"rotation": "spinning"}, "--rotation must be one of running, rest"),
-    ({"rotation": "running", "disk": True}, "the disk's turning reduced model is not built yet"),
+    ({"rotation": "running", "disk": True}, "takes --gnl on"),
+    ({"rotation": "running", "disk": True, "gnl": "on", "mistuning": 0.05}, "not with --mistuning"),
     ({"rotation": "running", "gnl": "on", "cubature": 1e-4}, "not with --cubature"),
     ({"rotation": "rest", "periodic": 0.05}, "not with --periodic"),
     ({"rotation": "running", "tolerance": 0.05}, "not with --tolerance")])

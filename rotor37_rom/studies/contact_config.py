@@ -207,7 +207,8 @@ class MapScheme:
             c0 and the map's displacements measured from the running blade) or 'rest' (from the blade at rest: the
             tip's centrifugal growth eats the clearance). None: the blade at rest, the paper's. The model built
             then holds the centrifugal states at STOP / 2 and STOP and the first 4 modes turning at STOP (STOP: the
-            top of the map's and the continuation's speeds; ``ReductionConfig.spin_snapshots``).
+            top of the map's and the continuation's speeds; ``ReductionConfig.spin_snapshots``; a disk's:
+            ``DiskReductionConfig.spin_snapshots``, GNL on only, tuned).
     """
 
     safety: float = 0.5
@@ -448,9 +449,12 @@ class ContactMapConfig:
         if self.continuation.periodic > 0 and self.rom.disk:
             raise ValueError("--periodic: periodic orbits by shooting take a blade (not --disk; a tuned disk's "
                              "travelling wave is periodic.TravellingWaveBalance)")
-        if self.scheme.rotation is not None and self.rom.disk:
-            raise ValueError("--rotation: the disk's turning reduced model is not built yet (a blade's is; the "
-                             "disk's turning Campbell and ZZENF diagrams are demos/disk_campbell.py)")
+        if self.scheme.rotation is not None and self.rom.disk and self.gnl != "on":
+            raise ValueError("--rotation with --disk takes --gnl on (the disk's prestress comes from its GNL forces; "
+                             "its linearised turning scheme is not implemented)")
+        if self.scheme.rotation is not None and self.rom.disk and self.rom.mistuning > 0:
+            raise ValueError("--rotation: not with --mistuning (the turning disk's centrifugal state is the tuned "
+                             "disk's)")
         if self.scheme.rotation is not None and self.continuation.periodic > 0:
             raise ValueError("--rotation: not with --periodic (the periodic orbits of a turning blade are not "
                              "implemented; its map and continuation are)")

@@ -180,9 +180,11 @@ def build_model(config: ContactMapConfig) -> ReducedModel:
         factors = None if config.rom.mistuning == 0 else tuple(mistuning_factors(n, config.rom.mistuning,
                                                                               config.rom.seed).tolist())
         # without GNL no sector force is evaluated: the exact tensors (most of a build) are not built
+        spin = config.spin_snapshots                     # a turning map's centrifugal snapshots, () at rest
         reduction = DiskReductionConfig(tip_nodes="all", r_c=r_c, r_md=r_md, criterion="MI2b",
                                         r_cyclic=min(config.interface_modes, n * sector.cyclic.left.size),
-                                        mistuning=factors, forces="none" if config.gnl == "off" else "intrusive")
+                                        mistuning=factors, forces="none" if config.gnl == "off" else "intrusive",
+                                        spin_snapshots=spin, spin_modes=min(4, r_c) if spin else 0)
         model, _ = build_disk_model(sector, reduction, cache_dir=config.cache_dir)
     else:
         from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
@@ -229,18 +231,30 @@ def sprag_slip_onsets(model: ReducedModel, casing: Casing, sector: int = 0, spin
 
 
 def turning_resonance(model: ReducedModel, top: float, order: int = 4) -> float | None:
-    """Where the turning blade's first mode meets engine order ``order`` (rad/s): Southwell's iteration
+    """Where the turning blade's first mode (a tuned disk's: its lowest mode of ``order`` nodal diameters, which the
+    two-lobe casing excites through that order) meets engine order ``order`` (rad/s): Southwell's iteration
     (``studies.campbell.iterate_crossing``) on the reduced model's prestressed, spin-softened modes
-    (``model.rotating.rotating_modes``, to 0.01 rad/s); None where it lies above ``top`` or the model's range."""
-    from rotor37_rom.model.rotating import rotating_modes
+    (``model.rotating``, to 0.01 rad/s); None where it lies above ``top`` or the model's range."""
+    from rotor37_rom.model.rotating import rotating_modes, rotating_stiffness
     from rotor37_rom.studies.campbell import iterate_crossing
 
-    omega0 = float(eigenfrequencies(model)[0])
     limit = min(top, model.rotation.top_speed)
+    if model.sectors is None:
+        def modes(w):
+            return rotating_modes(model, min(w, limit))[0], None
+        omega0 = float(eigenfrequencies(model)[0])
+    else:                                   # a tuned disk: the lowest family of ``order`` nodal diameters
+        def modes(w):
+            w = min(w, limit)
+            K_T = rotating_stiffness(model, w)
+            lam, V = scipy.linalg.eigh(K_T, 0.5 * (model.M + model.M.T),
+                                       subset_by_index=[0, 3 * model.nodes.n_sectors - 1])
+            k = sector_harmonics(V, model.sectors.blocks)
+            return np.sqrt(np.maximum(lam[k == order % model.nodes.n_sectors], 0.0)), None
+        omega0 = eo4_frequency(model) if order == 4 else float(modes(0.0)[0][0])
     try:
-        speed, iterations = iterate_crossing(lambda w: (rotating_modes(model, min(w, limit))[0], None), order,
-                                             omega0 / order, omega0, lambda w, V: 0)
-    except ValueError:
+        speed, iterations = iterate_crossing(modes, order, omega0 / order, omega0, lambda w, V: 0)
+    except (ValueError, IndexError):
         return None
     return speed if iterations > 0 and speed <= limit else None
 
@@ -540,6 +554,9 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
         from rotor37_rom.model.rotating import check_spin
 
         flagged("--rotation", lambda: check_spin(model, config.top_speed))      # the model turns up to the top speed
+        if model.sectors is not None and config.gnl != "on":
+            raise ValueError("--rotation with a disk model takes --gnl on (the disk's prestress comes from its GNL "
+                             "forces; its linearised turning scheme is not implemented)")
     onset = sprag_slip_onsets(model, config.sweep.casing, config.sector, config.top_speed if turning else None)
     summary = model_summary(config, model, omega, onset)
     rotation = None if not turning else {
@@ -562,7 +579,8 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
               f"start below: docs/results.md, 'Friction')")
         if turning:
             crossing = rotation["resonance_1B_EO4"]
-            print(f"turning blade ({config.scheme.rotation} clearance): 1B meets EO4 at "
+            what = "disk: its k = 4 1B family" if model.sectors is not None else "blade: 1B"
+            print(f"turning {what} ({config.scheme.rotation} clearance) meets EO4 at "
                   + (f"{crossing:.1f} rad/s" if crossing is not None else f"no speed up to {config.top_speed:g} "
                      f"rad/s") + f" (at rest: {summary['linear_resonance']:.1f} rad/s)")
     runs, mesh = {}, None

@@ -175,9 +175,10 @@ def capped_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np
     halved until no speed blows up (the capped modes stiffen with the amplitude), and that step. Cached in
     ``config.cache_dir`` (a resumed map does not probe again; every rank computes or reads the same)."""
     scheme = CentralDifference(model, nonlinear=True, safety=config.scheme.safety,
-                               frequency_cap=config.scheme.frequency_cap_rad_s)
+                               frequency_cap=config.scheme.frequency_cap_rad_s, rotation=turning(config))
     key = json.dumps([model.key, probe.tolist(), revolutions, scheme.h, scheme.frequency_cap, vars(config.sweep.casing),
-                      "8 largest states"], sort_keys=True, default=str)
+                      "8 largest states"] + ([] if scheme.rotation is None else [vars(scheme.rotation)]),
+                     sort_keys=True, default=str)
     cache = config.cache_dir / f"gnl_probe_{hashlib.sha256(key.encode()).hexdigest()[:16]}.npz"
     cached = load_npz(cache, ("states", "h"), what="probe")
     if cached is not None:

@@ -22,7 +22,18 @@ from rotor37_rom.checks import before_work
 from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.npz import save_json
 
-__all__ = ["RotatingRomConfig", "RotatingRomResult", "run_rotating_rom"]
+__all__ = ["RotatingRomConfig", "RotatingRomResult", "run_rotating_rom", "check_speed_grid"]
+
+
+def check_speed_grid(preset: str, speeds: tuple) -> float:
+    """A turning model's comparison grid checked: the mesh ``preset`` known, ``speeds`` = (start, stop, n) with
+    0 <= start < stop (rad/s) and an integer n >= 2; returns stop. One ValueError naming the field otherwise."""
+    if preset not in MESH_PRESETS:
+        raise ValueError(f"preset must be one of {', '.join(MESH_PRESETS)}, got {preset!r}")
+    start, stop, n = speeds
+    if not (np.isfinite(start) and np.isfinite(stop) and 0 <= start < stop) or int(n) != n or n < 2:
+        raise ValueError(f"speeds: need 0 <= start < stop (rad/s) and n >= 2, got {speeds}")
+    return float(stop)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,11 +59,7 @@ class RotatingRomConfig:
     out: Path = Path("results/rotating_rom")
 
     def __post_init__(self):
-        if self.preset not in MESH_PRESETS:
-            raise ValueError(f"preset must be one of {', '.join(MESH_PRESETS)}, got {self.preset!r}")
-        start, stop, n = self.speeds
-        if not (np.isfinite(start) and np.isfinite(stop) and 0 <= start < stop) or int(n) != n or n < 2:
-            raise ValueError(f"speeds: need 0 <= start < stop (rad/s) and n >= 2, got {self.speeds}")
+        stop = check_speed_grid(self.preset, self.speeds)
         if not 1 <= self.n_modes <= 10:
             raise ValueError(f"n_modes must be in [1, 10], got {self.n_modes}")
         for label, snapshots, modes in self.candidates:

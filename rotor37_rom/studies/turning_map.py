@@ -25,13 +25,13 @@ from rotor37_rom.model.reduced import ReducedModel, load_reduced_model
 from rotor37_rom.model.rotating import centrifugal_equilibrium, rotating_stiffness
 from rotor37_rom.npz import save_json
 from rotor37_rom.studies.campbell import CampbellResult
-from rotor37_rom.studies.contact_map import ContactMapConfig, ContactMapResult, run_contact_map
+from rotor37_rom.studies.contact_map import ContactMapConfig, ContactMapResult, eo4_frequency, run_contact_map
 from rotor37_rom.viz.charts import plot_campbell
 
 if TYPE_CHECKING:
     from mpi4py import MPI
 
-__all__ = ["TurningComparison", "run_turning_comparison", "reduced_campbell", "ENGINE_ORDER"]
+__all__ = ["TurningComparison", "run_turning_comparison", "reduced_campbell", "engine_order_crossing", "ENGINE_ORDER"]
 
 ENGINE_ORDER = 4          # the two-lobe casing's bumps pass a blade twice a revolution: 1B meets EO4 in the maps
 
@@ -61,20 +61,45 @@ class TurningComparison:
 def reduced_campbell(model: ReducedModel, n_speeds: int = 21, n_modes: int = 3, orders=range(1, 9)) -> CampbellResult:
     """The turning reduced model's Campbell diagram: at each of ``n_speeds`` speeds over 0 ... its top speed, the
     modes of the prestressed, spin-softened tangent K + dg/dq(q_c) - Omega^2 M_P about the centrifugal state
-    (``model.rotating``), followed by shape (``model.campbell.track_modes``), their crossings with ``orders``
-    interpolated on the grid (``engine_order_crossings``)."""
+    (``model.rotating``). A blade's first ``n_modes``, followed by shape (``model.campbell.track_modes``), crossing
+    every order; a tuned disk's lowest mode of each nodal diameter k = e of the orders (its 1B family; named by the
+    harmonic index carrying it, ``disk.harmonics.sector_harmonics``), each crossing the order that excites it
+    (e = k: the orders up to N/2 alias on nothing). Crossings interpolated on the grid
+    (``model.campbell.engine_order_crossings``)."""
+    from rotor37_rom.disk.harmonics import sector_harmonics
+
+    orders = list(orders)
     speeds = np.linspace(0.0, model.rotation.top_speed, n_speeds)
     M = 0.5 * (model.M + model.M.T)
+    disk = model.sectors is not None
+    count = 3 * model.nodes.n_sectors if disk else n_modes
     frequencies, shapes = [], []
     for w in speeds:
         lam, V = scipy.linalg.eigh(rotating_stiffness(model, w, centrifugal_equilibrium(model, w)), M,
-                                   subset_by_index=[0, n_modes - 1])
-        frequencies.append(np.sqrt(np.maximum(lam, 0.0)))
+                                   subset_by_index=[0, count - 1])
+        lam = np.sqrt(np.maximum(lam, 0.0))
+        if disk:
+            k = sector_harmonics(V, model.sectors.blocks)
+            lam = np.array([lam[k == e].min() if (k == e).any() else np.nan for e in orders])
+        frequencies.append(lam)
         shapes.append(V)
-    omega, macs = track_modes(frequencies, shapes)
-    labels = [f"mode {k + 1}" for k in range(n_modes)]
-    crossings = [dict(c, label=labels[c["mode"]]) for c in engine_order_crossings(speeds, omega, list(orders))]
+    if disk:
+        omega, macs = np.array(frequencies), np.ones(n_speeds)
+        labels = [f"k = {e}" for e in orders]
+        crossings = [c for c in engine_order_crossings(speeds, omega, orders) if orders[c["mode"]] == c["order"]]
+    else:
+        omega, macs = track_modes(frequencies, shapes)
+        labels = [f"mode {k + 1}" for k in range(n_modes)]
+        crossings = engine_order_crossings(speeds, omega, orders)
+    crossings = [dict(c, label=labels[c["mode"]]) for c in crossings]
     return CampbellResult(speeds=speeds, omega=omega, labels=labels, mac=macs, crossings=crossings, wall_s=0.0)
+
+
+def engine_order_crossing(campbell: CampbellResult, order: int = ENGINE_ORDER) -> float | None:
+    """The speed (rad/s) where the 1B line the order excites (a blade's first mode, a disk's k = ``order``) meets
+    it on ``reduced_campbell``'s diagram; None if it does not."""
+    wanted = {f"k = {order}", campbell.labels[0]} if campbell.labels[0] == "mode 1" else {f"k = {order}"}
+    return next((c["speed"] for c in campbell.crossings if c["label"] in wanted and c["order"] == order), None)
 
 
 def _cost(rest: dict, turning: dict) -> dict:
@@ -106,13 +131,12 @@ def run_turning_comparison(config: ContactMapConfig, comm: MPI.Comm | None = Non
     for label_t in turning.runs:
         label_r = next(label for label in rest.runs if label_t.startswith(label + ", turning"))
         cost[label_r.split(",")[0]] = _cost(runs[label_r], runs[label_t])
-    crossing = next((c for c in campbell.crossings if c["mode"] == 0 and c["order"] == ENGINE_ORDER), None)
+    crossing = engine_order_crossing(campbell)
     chart = plot_campbell(campbell, range(1, 9), config.out / "campbell_maps.png",
                           title=f"turning reduced model (r = {model.r}): modes, engine orders and the maps' largest "
                                 f"responses (EO4)", peaks=peaks)
-    numbers = {"crossing_1B_EO4": None if crossing is None else crossing["speed"],
-               "crossing_1B_EO4_at_rest": float(np.sqrt(scipy.linalg.eigh(model.K, model.M, eigvals_only=True,
-                                                                           subset_by_index=[0, 0])[0]) / ENGINE_ORDER),
+    numbers = {"crossing_1B_EO4": crossing,
+               "crossing_1B_EO4_at_rest": eo4_frequency(model) / ENGINE_ORDER,
                "peaks": {k: v[0] for k, v in peaks.items()}, "cost_per_speed": cost,
                "clearance": config.scheme.rotation, "campbell": campbell.summary()}
     files = [chart, save_json(config.out / "turning_comparison.json", numbers, indent=1, default=float)]
