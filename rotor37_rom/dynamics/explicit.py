@@ -266,6 +266,9 @@ class CentralDifference:
             if not isinstance(rotation, Rotation):
                 raise TypeError(f"rotation must be a dynamics.turning.Rotation or None, got {rotation!r}")
             check_spin(model, 0.0)                                  # the model has rotation terms
+            if model.forces is None:
+                raise ValueError("rotation: this model has no nonlinear forces, and its prestress (the centrifugal "
+                                 "stiffening) comes from them; build it with forces (ReductionConfig.forces)")
             if massless_boundary:
                 raise ValueError("rotation: not with massless_boundary (its boundary carries no centrifugal force)")
         self.boundary_rows = np.asarray(model.nodes.boundary_rows, dtype=np.int64)   # node displacements in q
