@@ -33,8 +33,8 @@ def main(argv=None) -> int:
     rows = []
     for i, spin in enumerate(result.speeds):
         worst = np.nanmax(np.abs(result.error[i]))
-        print(f"{spin:6.0f} rad/s: lowest per family {', '.join(f'k{k} {w:.0f}' for k, w in zip(result.families, result.full[i]))}"
-              f" rad/s; the model within {worst:.1e}")
+        lowest = ", ".join(f"k{k} {w:.0f}" for k, w in zip(result.families, result.full[i]))
+        print(f"{spin:6.0f} rad/s: lowest per family {lowest} rad/s; the model within {worst:.1e}")
         rows.append({"speed": float(spin), "full_rad_s": result.full[i].tolist(),
                      "reduced_rad_s": result.reduced[i].tolist(), "max_error": float(worst)})
     print(f"r = {result.r} (built in {result.build_s:.0f} s); a speed: {result.reduced_s:.2f} s reduced against "

@@ -6,13 +6,13 @@ One turning reduced model of the ci blade (r_c = 15, 3 global modal derivatives,
 1,900 rad/s and the first 4 modes turning at 1,900 rad/s: r = 51) runs the map GNL off and on, turning (the clearance
 from the running blade) and at rest, 60 kHz frequency cap, the paper's casing (c0 = 0.5 mm, h_b = 0.625 mm, mu = 0.15).
 
-    python benchmarks/bench_rotating_map.py [--speeds 1300 1900 25] [--revolutions 20] [--out results/bench_rotating_map]
+    python benchmarks/bench_rotating_map.py [--speeds 1300 1900 25] [--revolutions 20] [--out OUT]
     python benchmarks/bench_rotating_map.py --disk --r-c 4 --r-md 2 --r-cyclic 36 --speeds 1750 1850 3 --revolutions 2
 
 With --disk: the 36-sector bladed disk (GNL on, the casing cone's normal; its centrifugal states and 4 turning
 modes in the basis; ``DiskReductionConfig(spin_snapshots=...)``).
 
-Results: results/bench_rotating_map.json (machine stated), and the comparison's charts, summary.json and
+Results: results/bench_rotating_map[_disk].json (machine stated), and the comparison's charts, summary.json and
 turning_comparison.json in --out.
 """
 from __future__ import annotations
@@ -57,7 +57,8 @@ def main(argv=None) -> int:
     for setting, cost in result.cost.items():
         print(f"{setting}: {cost['turning_s']:.2f} s a speed turning against {cost['rest_s']:.2f} s at rest "
               f"(ratio {cost['ratio']:.2f})")
-    machine = write_results("bench_rotating_map", rows, crossing_1B_EO4=crossing, cost_per_speed=result.cost,
+    machine = write_results("bench_rotating_map" + ("_disk" if args.disk else ""), rows, crossing_1B_EO4=crossing,
+                            cost_per_speed=result.cost,
                             speeds=list(config.speeds), revolutions=config.sweep.revolutions)
     print(f"1B/EO4 turning: {crossing:.1f} rad/s; machine: {machine}")
     return 0

@@ -44,7 +44,8 @@ def test_turning_disk_rom_holds_the_centrifugal_state_and_reduces_its_forces(tur
     * there the reduced nonlinear force is the sector force's projection that eq. 61 defines: on each sector's own
       columns the full-order nonlinear force's Phi_s^T g(u_c), on the interface coordinates its faces' part on the
       face shapes the force sees ([Psi_L L, Psi_R' L]: L holds the centrifugal face), to 1e-9 (the cubic tensors'
-      sums against the quadrature's on a 0.5 mm state; measured 2.4e-10), so the reduced residual K q + g(q) - Omega^2 (F_c + M_P q) vanishes on the sectors' columns
+      sums against the quadrature's on a 0.5 mm state; measured 2.4e-10), so the reduced residual
+      K q + g(q) - Omega^2 (F_c + M_P q) vanishes on the sectors' columns
       (1e-9 of the load: the full-order Newton's 1e-10 through the projection).
 
     What eq. 61 leaves out (the faces' nonlinear force outside L) is measured and printed, not asserted: the
@@ -105,7 +106,8 @@ def test_turning_disk_rom_holds_the_centrifugal_state_and_reduces_its_forces(tur
     ci_disk_ops.u.x.array[:] = 0.0
     print(f"r = {model.r}: state in the span to {span:.1e}; force off eq. 61's projection by "
           f"{np.abs(g - expected).max() / np.abs(expected).max():.1e}; residual on the sectors' columns "
-          f"{np.linalg.norm(residual[:N * rs]) / load:.1e}, on the interface's {np.linalg.norm(residual[N * rs:]) / load:.1e}"
+          f"{np.linalg.norm(residual[:N * rs]) / load:.1e}, on the interface's "
+          f"{np.linalg.norm(residual[N * rs:]) / load:.1e}"
           f" (eq. 61); LE's centrifugal displacement {1e3 * np.abs(state[le]).max():.3f} mm, the reduced equilibrium's "
           f"off it by {error:.1e}; lowest frequency per index against the full order: {deviation}")
     assert span <= 1e-12

@@ -448,13 +448,14 @@ def test_turning_rom_is_the_full_order_at_its_snapshots(turning_rom, ci_blade, c
 
 def test_the_integrator_turns_the_reduced_model(turning_rom):
     """A turning scheme (``CentralDifference(rotation=Rotation())``): Omega^2 (F_c + M_P q) joins each step's force
-    (explicitly, as g). Started by default at the model's centrifugal state at 2,000 rad/s (no casing, no damping) the run stays there: to 1e-8 of the state
-    over 4,000 steps (the state's Newton residual is 1e-10 of the load; measured 2e-10). Started there plus a small
-    displacement eps along the first mode of the turning tangent K + dg/dq(q_c) - Omega^2 M_P, its modal
-    coordinate follows the central-difference oscillator of that mode exactly, cos(omega_h t) with omega_h =
-    (2/h) asin(omega_1 h/2), but for the O(eps) nonlinear remainder: below 1e-4 at eps = 1 micron at the tip
-    (measured 3e-6) and doubling with eps (ratio in [1.5, 2.5]). Broken on purpose: the hook without its spin
-    softening (F_c alone) leaves the state by 1.5e-2 (fails at the first assertion)."""
+    (explicitly, as g). Started by default at the model's centrifugal state at 2,000 rad/s (no casing, no damping)
+    the run stays there: to 1e-8 of the state over 4,000 steps (the state's Newton residual is 1e-10 of the load;
+    measured 2e-10). Started there plus a small displacement eps along the first mode of the turning tangent
+    K + dg/dq(q_c) - Omega^2 M_P, its modal coordinate follows the central-difference oscillator of that mode
+    exactly, cos(omega_h t) with omega_h = (2/h) asin(omega_1 h/2), but for the O(eps) nonlinear remainder: below
+    1e-4 at eps = 1 micron at the tip (measured 3e-6) and doubling with eps (ratio in [1.5, 2.5]). Broken on
+    purpose: the force without its spin softening (F_c alone) leaves the state by 1.5e-2 (fails at the first
+    assertion)."""
     from rotor37_rom.dynamics.explicit import CentralDifference, simulate
     from rotor37_rom.dynamics.turning import Rotation
     from rotor37_rom.model.rotating import centrifugal_equilibrium, rotating_stiffness
@@ -527,8 +528,8 @@ def test_the_running_clearance_is_measured_from_the_centrifugal_state(turning_ro
     the running blade, so a run started at q_c never touches a casing c0 away and records 0 (to the round-off of q_c's
     equilibrium); 'rest' measures both from the blade at rest, so a casing at half the tip's smallest radial growth
     (N q_c) is met at the first step: the records start at N q_c exactly, the pushed nodes are on the casing after
-    it, u_r = c0, and no record passes it (the active set's gaps closed to 1e-14 m) while the blade rebounds. Broken on purpose: without the
-    records' offset the running run records N q_c (fails at the first assertion)."""
+    it, u_r = c0, and no record passes it (the active set's gaps closed to 1e-14 m) while the blade rebounds. Broken
+    on purpose: without the records' offset the running run records N q_c (fails at the first assertion)."""
     from rotor37_rom.dynamics.casing import Casing, contact_matrices
     from rotor37_rom.dynamics.explicit import CentralDifference, simulate
     from rotor37_rom.dynamics.turning import Rotation

@@ -26,6 +26,8 @@ import dataclasses
 import numpy as np
 import scipy.linalg
 
+from rotor37_rom.disk.harmonics import HarmonicBlocks
+
 __all__ = ["Rotation", "TurningRuns", "CLEARANCES", "prestressed_highest_frequency"]
 
 CLEARANCES = ("running", "rest")
@@ -84,6 +86,10 @@ class TurningRuns:
                     raise ValueError(f"time step h = {scheme.h:.4g} s exceeds the stability limit of the blade "
                                      f"prestressed at {w:g} rad/s, 2/omega_max = {2.0 / w_max:.4g} s; use h <= "
                                      f"{2.0 / w_max:.4g} s")
+        # a tuned disk's M_P is block-circulant: applied per harmonic index (``HarmonicBlocks``), not densely
+        sectors = getattr(model, "sectors", None)
+        self.spin_softening = None if sectors is None or self.linearised else \
+            HarmonicBlocks.from_operators(sectors.blocks, [self.terms.M_P], [model.K, model.M])
         running = scheme.rotation.clearance == "running"
         self.reference = self.q_c if running else np.zeros_like(self.q_c)
 
@@ -91,4 +97,5 @@ class TurningRuns:
         """The rotation's force (r, n_active) on the states Q of the runs ``active``."""
         if self.linearised:
             return np.matmul(self.A[active], Q.T[:, :, None])[:, :, 0].T + self.b[:, active]
-        return (self.terms.F_c[:, None] + self.terms.M_P @ Q) * self.spin2[active]
+        M_P_Q = self.terms.M_P @ Q if self.spin_softening is None else self.spin_softening.apply(Q)
+        return (self.terms.F_c[:, None] + M_P_Q) * self.spin2[active]

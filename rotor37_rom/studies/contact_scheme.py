@@ -29,8 +29,8 @@ from rotor37_rom.studies.sweep import idle_barrier
 if TYPE_CHECKING:
     from mpi4py import MPI
 
-__all__ = ["time_scheme", "turning", "setting_names", "cubature_model", "capped_probe", "capped_gnl_step", "capped_probe_states",
-           "print_step_outliers"]
+__all__ = ["time_scheme", "turning", "setting_names", "cubature_model", "capped_probe", "capped_gnl_step",
+           "capped_probe_states", "print_step_outliers"]
 
 
 def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm | None

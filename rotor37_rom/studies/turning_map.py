@@ -14,7 +14,6 @@ ratio of their integration times in this one run (same speeds, revolutions and m
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
