@@ -50,6 +50,11 @@ class SectorMatrices:
               "R": slice(self.r_s + self.n_L, self.r_s + 2 * self.n_L)}
         return A[sl[a], sl[b]]
 
+    def faces(self, A: np.ndarray) -> np.ndarray:
+        """The block of K or M on both faces' DOFs [u_L; u_L of the next sector] (2 n_L square)."""
+        return np.block([[self.part(A, "L", "L"), self.part(A, "L", "R")],
+                         [self.part(A, "R", "L"), self.part(A, "R", "R")]])
+
 
 def _harmonic_blocks(s: SectorMatrices, A: np.ndarray, k: int, n_sectors: int) -> np.ndarray:
     """The cyclic block of the assembled matrix for harmonic index k (n_L, Hermitian; real for k = 0 and k = N/2):
@@ -129,7 +134,7 @@ def assemble_disk_operator(s: SectorMatrices, A: np.ndarray, Pi: np.ndarray, n_s
     Aqq = s.part(A, "q", "q")
     Aqc, Acq = np.hstack([s.part(A, "q", "L"), s.part(A, "q", "R")]), np.vstack([s.part(A, "L", "q"),
                                                                                  s.part(A, "R", "q")])
-    Acc = np.block([[s.part(A, "L", "L"), s.part(A, "L", "R")], [s.part(A, "R", "L"), s.part(A, "R", "R")]])
+    Acc = s.faces(A)
     for n in range(N):                             # N sector blocks (dense products of the sector's size)
         q = slice(n * rs, (n + 1) * rs)
         Pn = np.vstack([Pi[n * nL:(n + 1) * nL], Pi[((n + 1) % N) * nL:((n + 1) % N + 1) * nL]])

@@ -174,6 +174,7 @@ def _with_index0_faces(s: SectorMatrices, Pi: np.ndarray, omega: np.ndarray, k: 
     other indices' columns are orthogonal to it), scaled to a unit interface mass; dropped where that part leaves
     less than 1e-8 of it. Its frequency is its Rayleigh quotient on the faces' blocks."""
     cols, omegas = [Pi], [omega]
+    K_faces, M_faces = s.faces(s.K), s.faces(s.M)
     for a in faces:
         t = np.tile(np.asarray(a, float), n_sectors)
         size = np.linalg.norm(t)
@@ -183,9 +184,7 @@ def _with_index0_faces(s: SectorMatrices, Pi: np.ndarray, omega: np.ndarray, k: 
         if not np.linalg.norm(t) > 1e-8 * size:
             continue
         face = np.concatenate([t[:s.n_L], t[:s.n_L]])          # [u_L; u_L of the next sector]: the same a
-        blocks = [np.block([[s.part(A, "L", "L"), s.part(A, "L", "R")], [s.part(A, "R", "L"), s.part(A, "R", "R")]])
-                  for A in (s.K, s.M)]
-        stiffness, mass = (face @ B @ face for B in blocks)
+        stiffness, mass = face @ K_faces @ face, face @ M_faces @ face
         cols.append((t / np.sqrt(n_sectors * mass))[:, None])
         omegas.append(np.array([np.sqrt(max(stiffness, 0.0) / mass)]))
     added = len(cols) - 1
@@ -314,7 +313,7 @@ def build_disk_model(sector, config: DiskReductionConfig = DiskReductionConfig()
         rotation = RotationTerms(M_P=0.5 * (M_P + M_P.T), F_c=assemble_disk_vector(s, F_B, Pi, N),
                                  G=0.5 * (G - G.T), speeds=np.array(config.spin_snapshots))
         lap("rotation_terms")
-    n_spin = len(faces_c) and int(np.sum(chosen[:, 0] == SPIN_SNAPSHOT_PAIR))
+    n_spin = int(np.sum(chosen[:, 0] == SPIN_SNAPSHOT_PAIR))
     model = ReducedModel(M=M, C=C, K=K, forces=forces, boundary_dofs=tip_dofs,
                          nodes=disk_node_map(sector_nodes, N, r_s),
                          sizes={"r_b": nb, "r_c": config.r_c, "r_load": S_f.shape[1], "r_md": Z.shape[1] - n_spin,
