@@ -161,6 +161,13 @@ def test_shooting_monodromy_is_the_derivative(ci_rom, linear_contact):
     e = 1e-7
     fd = (shooting.march(z + e * d, sol.omega, False)[0] - shooting.march(z - e * d, sol.omega, False)[0]) / (2 * e)
     assert np.linalg.norm(fd - mono @ d) <= 1e-6 * np.linalg.norm(mono @ d)
+    # d z(T) / d omega marched as the tangent's last column (the operators' change with the step h = T / n)
+    dz = shooting.march(z, sol.omega, domega=True)[3]
+    w = 1e-6 * sol.omega
+    fd = (shooting.march(z, sol.omega + w, False)[0] - shooting.march(z, sol.omega - w, False)[0]) / (2 * w)
+    print("d z(T) / d omega against central differences (linear, contact):",
+          np.linalg.norm(fd - dz) / np.linalg.norm(dz))
+    assert np.linalg.norm(fd - dz) <= 1e-6 * np.linalg.norm(dz)
     # GNL and contact: 1,000 steps of 60 ns (the tangent's stability limit on rubbing states) from a touching state
     h, n = 6e-8, 1000
     gnl = Shooting(CentralDifference(ci_rom, nonlinear=True, h=h), Casing(), steps=n, jacobian_every=16)
@@ -175,6 +182,13 @@ def test_shooting_monodromy_is_the_derivative(ci_rom, linear_contact):
         errs.append(np.linalg.norm(fd - mono @ d) / np.linalg.norm(mono @ d))
     print("GNL + contact monodromy against central differences (1e-6, 1e-7):", errs)
     assert errs[1] < 1e-5 and errs[1] < errs[0] / 30
+    dz = gnl.march(z, omega, domega=True)[3]
+    errs = []
+    for e in (1e-5, 1e-6):
+        fd = (gnl.march(z, omega * (1 + e), False)[0] - gnl.march(z, omega * (1 - e), False)[0]) / (2 * e * omega)
+        errs.append(np.linalg.norm(fd - dz) / np.linalg.norm(dz))
+    print("GNL + contact d z(T) / d omega against central differences (1e-5, 1e-6):", errs)
+    assert max(errs) < 1e-5                    # the monodromy's bound: the Jacobian interpolated on free stretches
 
 
 def test_shooting_orbit_is_the_schemes_attractor(linear_contact):

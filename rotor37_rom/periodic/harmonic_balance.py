@@ -399,10 +399,12 @@ def _tangent(J: np.ndarray, dR_domega: np.ndarray, previous: np.ndarray | None) 
 
 def continue_branch(hb: PeriodicProblem, start: PeriodicSolution, omega_end: float, step: float,
                     step_min: float | None = None, step_max: float | None = None, max_points: int = 2000,
-                    tol: float = 1e-10, max_iter: int = 12, stability: bool = True) -> Branch:
+                    tol: float = 1e-10, max_iter: int = 12, stability: bool = True,
+                    progress: Callable[[PeriodicSolution], None] | None = None) -> Branch:
     """Pseudo-arc-length continuation from ``start`` towards ``omega_end`` (the branch ends past it, or where the
     step falls below ``step_min``: the end is said in ``Branch.ended``). Arc length is measured in (x / s_x, omega /
-    s_omega) with s_x the start's norm and s_omega its frequency, so that ``step`` is relative."""
+    s_omega) with s_x the start's norm and s_omega its frequency, so that ``step`` is relative. ``progress`` is
+    called with each new point."""
     if not step > 0:
         raise ValueError(f"step must be > 0 (the relative arc length of a continuation step), got {step}")
     step_min = step / 64 if step_min is None else step_min
@@ -449,6 +451,8 @@ def continue_branch(hb: PeriodicProblem, start: PeriodicSolution, omega_end: flo
         X, L = _split(hb, z[:-1] * sx)
         points.append(PeriodicSolution(z[-1] * sw, X, exps, _stable(exps, z[-1] * sw), float(np.linalg.norm(R)),
                                        L=L))
+        if progress is not None:
+            progress(points[-1])
         change = _crossing(points[-2], points[-1])
         if change is not None:
             bifurcations.append((len(points) - 1,) + change)

@@ -10,7 +10,8 @@ change under a small perturbation; its eigenvalues are the Floquet multipliers o
 of the orbit of the time-marching model, not of an approximation of it). A plastic impact erases the normal velocity
 of a node: its multipliers are (near) zero.
 
-``Shooting`` offers ``residual`` (R = z(T) - z(0), dR/dz = monodromy - I, dR/domega by a difference),
+``Shooting`` offers ``residual`` (R = z(T) - z(0), dR/dz = monodromy - I, dR/domega marched as one more column of
+the tangent; by a difference under an external forcing),
 ``floquet_exponents``, ``size``, ``split``, so that ``solve_periodic`` and ``continue_branch`` (arc length through
 folds) work on it as on the harmonic balance. The branch parameter is the fundamental frequency omega = 2 pi / T: the
 casing's two lobes pass a blade every pi / Omega, so for the period m pi / Omega, Omega = m omega / 2.
@@ -87,8 +88,11 @@ class Shooting:
         """Omega (rad/s) of the fundamental frequency omega: m omega / 2."""
         return self.m * omega / 2
 
-    def march(self, z: np.ndarray, omega: float, tangent: bool = True, record: bool = False):
-        """One period from z = (q_0, q_-1): (z(T), monodromy (2 r, 2 r) or None, records (n + 1, r) of q or None).
+    def march(self, z: np.ndarray, omega: float, tangent: bool = True, record: bool = False,
+              domega: bool = False):
+        """One period from z = (q_0, q_-1): (z(T), monodromy (2 r, 2 r) or None, records (n + 1, r) of q or None);
+        with ``domega`` (and ``tangent``) a fourth item, dz(T)/domega, marched as one more column of the tangent
+        (``_step_derivatives``; an external forcing's time dependence is not in it: None then).
 
         The orbit is marched first (its states and each touching step's active set kept), then the tangent along
         it. The GNL force's exact Jacobian is evaluated at every step (the exact derivative of the discrete map), or,
@@ -99,6 +103,7 @@ class Shooting:
         sc = self.scheme_at(omega)
         h, r, n = sc.h, self.r, self.steps
         Q, Qp = np.array(z[:r], float), np.array(z[r:], float)
+        Qp0 = Qp.copy()
         Xg = sc.Xg
         force = sc.model.forces if sc.nonlinear else None
         casing = self.casing
@@ -108,12 +113,17 @@ class Shooting:
         states = np.empty((n + 1, r))
         states[0] = Q
         touched = {}
+        sensitivity = domega and tangent and self.forcing is None
+        forces = np.zeros((n, r)) if sensitivity and force is not None else None
         for k in range(n):
             Qn = sc.X1 @ Q + sc.X2 @ Qp
             if self.forcing is not None:
                 Qn += sc.X0 @ np.asarray(self.forcing(k * h, omega), float)
             if force is not None:
-                Qn += Xg.evaluate(Q[:, None])[:, 0] if Xg is not None else -sc.X0 @ force.evaluate(Q[:, None])[:, 0]
+                fk = Xg.evaluate(Q[:, None])[:, 0] if Xg is not None else -sc.X0 @ force.evaluate(Q[:, None])[:, 0]
+                Qn += fk
+                if forces is not None:
+                    forces[k] = fk
             if casing is not None:
                 theta = self.theta0 + sense * Om * (k + 1) * h
                 g = casing.c0 - casing_profile(theta, casing.c0, casing.p0, casing.width) - self.N @ Qn
@@ -121,15 +131,19 @@ class Shooting:
                     lam, _ = self.solver.solve(mu, g)
                     if (lam > 0).any():
                         act, inv = self.solver.inverse(mu, lam > 0)        # D_AA^-1, kept by the solver
-                        Qn = Qn + B[:, act] @ lam[act]
-                        touched[k] = act, inv
+                        correction = B[:, act] @ lam[act]
+                        Qn = Qn + correction
+                        touched[k] = act, inv, correction
             Qp, Q = Q, Qn
             states[k + 1] = Q
         zT = np.r_[Q, Qp]
         if not tangent:
             return zT, None, (states if record else None)
-        # the tangent: d q_n / d z and d q_n-1 / d z along the orbit
+        # the tangent: d q_n / d z and d q_n-1 / d z along the orbit (and d q_n / d h as a last column)
         T, Tp = np.eye(2 * r)[:r].copy(), np.eye(2 * r)[r:].copy()
+        if sensitivity:
+            T, Tp = np.hstack([T, np.zeros((r, 1))]), np.hstack([Tp, np.zeros((r, 1))])
+            dX1, dX2, G0 = self._step_derivatives(sc)
         # an orbit that touches rings the highest modes (periods of a few steps): J at every step there
         every = 1 if touched else self.jacobian_every
         if force is not None:                     # J at k = 0, every, 2 every, ... and n - 1, linear between
@@ -143,12 +157,35 @@ class Shooting:
                 s = (k - k0) / (k1 - k0) if k1 > k0 else 0.0
                 A = A - (Jk[k0] if s == 0.0 else (1 - s) * Jk[k0] + s * Jk[k1])
             Tn = A @ T + sc.X2 @ Tp
+            if sensitivity:
+                # the operators' own change with h: X1, X2, and X0 in the force (f_k = -X0 g: dX0 X0^-1 f_k)
+                dq = dX1 @ states[k] + dX2 @ (states[k - 1] if k else Qp0)
+                if forces is not None:
+                    dq += G0 @ forces[k]
+                Tn[:, -1] += dq
             if k in touched:
-                act, inv = touched[k]
+                act, inv, correction = touched[k]
+                if sensitivity:
+                    # B = W E changes as dW W^-1 B = G0 B: d q = P (d q_pred + G0 B_A lambda_A)
+                    Tn[:, -1] += G0 @ correction
                 # lambda_A = D_AA^-1 (c - N_A q_pred): d q = (I - B_A D_AA^-1 N_A) d q_pred
                 Tn = Tn - B[:, act] @ (inv @ (self.N[act] @ Tn))
             Tp, T = T, Tn
-        return zT, np.vstack([T, Tp]), (states if record else None)
+        mono = np.vstack([T[:, :2 * r], Tp[:, :2 * r]])
+        if domega and tangent:
+            # h = 2 pi / (omega n); the casing's angle per step, Omega h = m pi / n, does not depend on omega
+            dz = None if not sensitivity else np.r_[T[:, -1], Tp[:, -1]] * (-h / omega)
+            return zT, mono, (states if record else None), dz
+        return zT, mono, (states if record else None)
+
+    @staticmethod
+    def _step_derivatives(sc):
+        """(dX1/dh, dX2/dh, dX0/dh X0^-1) of the scheme ``sc`` (not massless): with S = 2 M + h C and S^-1 = X0 /
+        (2 h^2), dX1/dh = -S^-1 (C X1 + 4 h K), dX2/dh = S^-1 C (I - X2), dX0/dh X0^-1 = 2 I / h - S^-1 C."""
+        h, r = sc.h, sc.r
+        Sinv = sc.X0 / (2 * h * h)
+        SC = Sinv @ sc.C
+        return -(SC @ sc.X1 + 4 * h * (Sinv @ sc.K)), SC @ (np.eye(r) - sc.X2), 2 * np.eye(r) / h - SC
 
     def from_rest(self, omega: float, periods: int) -> np.ndarray:
         """A start for Newton at ``omega``: the state after ``periods`` periods of the scheme (step T / n) from rest,
@@ -175,13 +212,16 @@ class Shooting:
         return self.march(solution.unknowns, solution.omega, tangent=False, record=True)[2]
 
     def residual(self, x: np.ndarray, omega: float, jacobian: bool = True, domega: bool = True):
-        zT, mono, _ = self.march(x, omega, tangent=jacobian)
-        R = zT - x
         if not jacobian:
-            return R
+            return self.march(x, omega, tangent=False)[0] - x
         if not domega:
-            return R, mono - np.eye(self.size), None
-        d = 1e-7 * omega
+            zT, mono, _ = self.march(x, omega)
+            return zT - x, mono - np.eye(self.size), None
+        zT, mono, _, dz = self.march(x, omega, domega=True)
+        R = zT - x
+        if dz is not None:
+            return R, mono - np.eye(self.size), dz
+        d = 1e-7 * omega                   # an external forcing: dR/domega by central differences
         dR = (self.march(x, omega + d, tangent=False)[0] - self.march(x, omega - d, tangent=False)[0]) / (2 * d)
         return R, mono - np.eye(self.size), dR
 

@@ -55,7 +55,8 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
                                                                   verbose=comm is None or comm.rank == 0))
     else:
         scheme = CentralDifference(model, nonlinear=True, safety=config.scheme.safety)
-    runs = [model.key, train.tolist(), revolutions, scheme.h, vars(config.sweep.casing)]
+    # h to 12 digits: its last bits follow the BLAS's summation order (1 or 2 threads), the caches' keys must not
+    runs = [model.key, train.tolist(), revolutions, float(f"{scheme.h:.12g}"), vars(config.sweep.casing)]
     key = hashlib.sha256(json.dumps(runs + [config.scheme.cubature, "step states: largest and training"],
                                     sort_keys=True, default=str).encode()).hexdigest()[:16]
     cache = config.cache_dir / f"cubature_{key}.npz"
@@ -176,8 +177,10 @@ def capped_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np
     ``config.cache_dir`` (a resumed map does not probe again; every rank computes or reads the same)."""
     scheme = CentralDifference(model, nonlinear=True, safety=config.scheme.safety,
                                frequency_cap=config.scheme.frequency_cap_rad_s, rotation=turning(config))
-    key = json.dumps([model.key, probe.tolist(), revolutions, scheme.h, scheme.frequency_cap, vars(config.sweep.casing),
-                      "8 largest states"] + ([] if scheme.rotation is None else [vars(scheme.rotation)]),
+    # the step to 12 digits: its last bits follow the BLAS's summation order (the thread count), the key must not
+    key = json.dumps([model.key, probe.tolist(), revolutions, float(f"{scheme.h:.12g}"), scheme.frequency_cap,
+                      vars(config.sweep.casing), "8 largest states"]
+                     + ([] if scheme.rotation is None else [vars(scheme.rotation)]),
                      sort_keys=True, default=str)
     cache = config.cache_dir / f"gnl_probe_{hashlib.sha256(key.encode()).hexdigest()[:16]}.npz"
     cached = load_npz(cache, ("states", "h"), what="probe")

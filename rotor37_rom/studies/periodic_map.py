@@ -122,12 +122,13 @@ def describe_against(name: str, comparison: dict) -> str:
     return line
 
 
-def periodic_branch(config, scheme, continued: dict | None = None, max_points: int = 400) -> PeriodicBranch:
+def periodic_branch(config, scheme, continued: dict | None = None, max_points: int = 400,
+                    progress=None) -> PeriodicBranch:
     """The periodic orbits of ``scheme`` (the map's scheme of one GNL setting) against the map's casing, from rest
     at the low end of ``config.continuation_span`` continued by arc length (relative step
     ``config.continuation.periodic``) to its high end; with ``continued`` ({name: list of
     ``sweep.ContinuationPoint``}, the map's sequential continuation) each branch compared with the stable orbits
-    (``against_continuation``). ValueError for a disk's model (shooting marches a blade's 2 r states; a tuned disk's
+    (``against_continuation``); ``progress(point)`` after each new point of the branch. ValueError for a disk's model (shooting marches a blade's 2 r states; a tuned disk's
     travelling wave is ``periodic.TravellingWaveBalance``)."""
     model = scheme.model
     if model.sectors is not None:
@@ -147,7 +148,7 @@ def periodic_branch(config, scheme, continued: dict | None = None, max_points: i
                               ended=f"no periodic orbit found at {low:g} rad/s: {error}", steps=steps,
                               wall_s=time.perf_counter() - t0)
     branch = continue_branch(shooting, start, 2 * high, config.continuation.periodic, tol=1e-9,
-                             max_points=max_points)
+                             max_points=max_points, progress=progress)
     Nn = contact_matrices(model.nodes, model.r, casing, rows=[model.nodes.row("LE", config.sector)])[0]
     amplitude = np.array([np.abs(shooting.orbit(p) @ Nn[0]).max() for p in branch.points])
     against = {name: against_continuation(shooting, branch.points, Nn[0], points)
