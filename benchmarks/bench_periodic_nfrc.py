@@ -7,7 +7,8 @@ paper's casing, 1,200-1,600 rad/s. The orbits: shooting the map's scheme, arc le
 --step), Floquet multipliers at every point. The map: a batch of 50 of its speeds run one revolution, scaled to its
 100 speeds x 200 revolutions (retries left out, two ranks counted at twice one's speed).
 
-    python benchmarks/bench_periodic_nfrc.py [--r-c 25] [--step 0.02] [--model ROM.npz] [--out OUT] [--cache DIR]
+    python benchmarks/bench_periodic_nfrc.py [--r-c 25] [--step 0.02] [--model ROM.npz] [--range LOW HIGH] [--out OUT]
+        [--cache DIR]
 
 The cubature's training (6 exact GNL runs x 12 revolutions, ~10 min) is cached in OUT/cache and not counted: the map
 and the orbits share it. Results: results/bench_periodic_nfrc.json (machine stated), the chart in OUT.
@@ -31,6 +32,8 @@ def main(argv=None) -> int:
     parser.add_argument("--speeds", type=float, nargs=3, default=(1200.0, 1600.0, 100), metavar=("START", "STOP", "N"))
     parser.add_argument("--revolutions", type=float, default=200.0)
     parser.add_argument("--max-points", type=int, default=400)
+    parser.add_argument("--range", type=float, nargs=2, default=None, metavar=("LOW", "HIGH"),
+                        help="the orbits' speeds (rad/s; default the map's): Newton's start at LOW")
     parser.add_argument("--out", type=Path, default=Path("results/bench_periodic_nfrc"))
     parser.add_argument("--cache", type=Path, default=None, help="the caches' folder (default OUT/cache)")
     args = parser.parse_args(argv)
@@ -40,7 +43,7 @@ def main(argv=None) -> int:
         config = ContactMapConfig.from_options(model=args.model, r_c=None if args.model else args.r_c,
                                                speeds=tuple(args.speeds), revolutions=args.revolutions, gnl="on",
                                                mu=0.0, frequency_cap=120.0, cubature=1e-4, precision="single",
-                                               periodic=args.step, out=args.out, cache=args.cache,
+                                               periodic=args.step, continuation_range=args.range, out=args.out, cache=args.cache,
                                                quiet=False)
         if args.max_points < 2:
             raise ValueError(f"--max-points must be >= 2, got {args.max_points}")
@@ -61,7 +64,7 @@ def main(argv=None) -> int:
           f"period); the map ({config.speeds[2]:g} speeds x {args.revolutions:g} rev, h = {cost.h:.3g} s): "
           f"{cost.map_steps:.3g} simulation steps at {1e6 * cost.map_probe_s / cost.map_probe_steps:.1f} us "
           f"(batch of {cost.map_batch}) = {cost.map_serial_s / 60:.1f} min on one process, {cost.map_s / 60:.1f} "
-          f"on {cost.map_ranks}; ratio {cost.ratio:.1f}")
+          f"on {cost.map_ranks}; " + ("no orbit: no ratio" if cost.ratio is None else f"ratio {cost.ratio:.1f}"))
     if len(branch.speeds):
         args.out.mkdir(parents=True, exist_ok=True)
         plot_periodic_nfrc(branch, args.out / "nfrc_periodic_gnl.png", None, None,

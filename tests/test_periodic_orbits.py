@@ -300,6 +300,33 @@ def test_shooting_equals_harmonic_balance(ci_rom):
     assert diff[5] <= 10 * last and diff[1] > 100 * last
 
 
+class _Arctan:
+    """R(x) = arctan(x): Newton from |x0| > 1.39 diverges; the residual is not finite past |x| = 3 (as a shooting
+    iterate past the scheme's stability limit)."""
+
+    size = 1
+
+    def split(self, x):
+        return np.asarray(x, float).reshape(1, 1), ()
+
+    def residual(self, x, omega, jacobian=True, domega=True):
+        R = np.arctan(x) if abs(x[0]) <= 3 else np.full(1, np.nan)
+        return R if not jacobian else (R, np.array([[1 / (1 + x[0] ** 2)]]), None)
+
+    def floquet_exponents(self, x, omega, J=None):
+        return np.zeros(1)
+
+
+def test_newton_steps_back_from_a_blown_up_iterate():
+    """From x0 = 2 Newton's first step lands at -3.54, where the residual is not finite: the step is halved (to
+    -0.77, inside Newton's basin |x| < 1.39) and Newton converges to the root; a start whose residual is not finite
+    is refused in one line."""
+    sol = solve_periodic(_Arctan(), np.array([2.0]), 1.0, tol=1e-12, stability=False)
+    assert abs(sol.X[0, 0]) < 1e-12
+    with pytest.raises(ValueError, match="not finite"):
+        solve_periodic(_Arctan(), np.array([4.0]), 1.0, stability=False)
+
+
 def test_shooting_bad_input(ci_rom):
     from rotor37_rom.dynamics.casing import Casing
     from rotor37_rom.dynamics.explicit import CentralDifference

@@ -315,14 +315,24 @@ def _at_floor(hb, norms: list, step: float, size: float) -> bool:
 def solve_periodic(hb: PeriodicProblem, x0: np.ndarray, omega: float, tol: float = 1e-10, max_iter: int = 30,
                    stability: bool = True) -> PeriodicSolution:
     """Newton on R(x, omega) = 0 at fixed omega from x0 (relative tolerance ``tol`` on the update, or a smooth
-    balance's round-off floor, ``_at_floor``); ValueError where it does not converge."""
+    balance's round-off floor, ``_at_floor``); an iterate whose residual is not finite (a shooting step that took
+    the scheme past its stability limit) is replaced by the previous one plus half its step, up to 6 times;
+    ValueError where it does not converge."""
     x = np.asarray(x0, float).ravel().copy()
-    norms = []
+    norms, last, halved = [], None, 0
     for it in range(1, max_iter + 1):
-        R, J, _ = hb.residual(x, omega, domega=False)
+        with np.errstate(over="ignore", invalid="ignore"):
+            R, J, _ = hb.residual(x, omega, domega=False)
         if not (np.isfinite(R).all() and np.isfinite(J).all()):
-            raise ValueError(f"periodic orbit: the residual is not finite at omega = {omega:g} after {it - 1} Newton "
-                             "iterations (a shooting iterate past the scheme's stability limit)")
+            if last is None or halved >= 6:
+                raise ValueError(f"periodic orbit: the residual is not finite at omega = {omega:g} after {it - 1} "
+                                 "Newton iterations (a shooting iterate past the scheme's stability limit)")
+            # the step took the iterate where the scheme blows up: back, half the step (up to 6 times)
+            x, dx = last[0], last[1] / 2
+            halved += 1
+            last = (x, dx)
+            x = x + dx
+            continue
         norms.append(float(np.linalg.norm(R)))
         dx = _newton_step(J, R)
         if hasattr(hb, "scales"):
@@ -337,6 +347,7 @@ def solve_periodic(hb: PeriodicProblem, x0: np.ndarray, omega: float, tol: float
         else:
             small = np.linalg.norm(dx) <= tol * max(np.linalg.norm(x), 1e-300) or \
                 _at_floor(hb, norms, np.linalg.norm(dx), np.linalg.norm(x))
+        last = (x.copy(), dx)
         x += dx
         if small:
             if stability:

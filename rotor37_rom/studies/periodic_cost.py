@@ -56,9 +56,9 @@ class PeriodicCost:
         return self.map_serial_s / self.map_ranks
 
     @property
-    def ratio(self) -> float:
-        """The map's estimated wall time over the NFRC's."""
-        return self.map_s / self.branch.wall_s
+    def ratio(self) -> float | None:
+        """The map's estimated wall time over the NFRC's; None where no orbit was found (nothing to compare)."""
+        return self.map_s / self.branch.wall_s if len(self.branch.speeds) else None
 
     def summary(self) -> dict:
         return {"nfrc": self.branch.summary(), "h": self.h, "map_batch": self.map_batch,
