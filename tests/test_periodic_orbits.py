@@ -327,6 +327,25 @@ def test_newton_steps_back_from_a_blown_up_iterate():
         solve_periodic(_Arctan(), np.array([4.0]), 1.0, stability=False)
 
 
+def test_shooting_residual_of_an_unmarchable_iterate_is_not_finite(linear_contact, monkeypatch):
+    """A period whose contact set does not settle (the contact solver's ContactSetError, as a blown-up Newton iterate
+    makes it) is a residual that is not finite, not an exception: Newton then steps back, and a start there is
+    refused in one line."""
+    from rotor37_rom.dynamics.casing import ContactSetError
+
+    shooting, sol = linear_contact
+    shooting.scheme_at(sol.omega)
+
+    def cycling(mu, g):
+        raise ContactSetError("contact active-set iteration did not converge")
+
+    monkeypatch.setattr(shooting.solver, "solve", cycling)
+    R, J, dR = shooting.residual(sol.unknowns, sol.omega)
+    assert np.isnan(R).all() and np.isnan(J).all() and np.isnan(dR).all()
+    with pytest.raises(ValueError, match="not finite"):
+        solve_periodic(shooting, sol.unknowns, sol.omega)
+
+
 def test_shooting_bad_input(ci_rom):
     from rotor37_rom.dynamics.casing import Casing
     from rotor37_rom.dynamics.explicit import CentralDifference

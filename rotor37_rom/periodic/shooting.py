@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rotor37_rom.dynamics.casing import Casing, ContactSolver, casing_profile, contact_matrices
+from rotor37_rom.dynamics.casing import Casing, ContactSetError, ContactSolver, casing_profile, contact_matrices
 
 __all__ = ["Shooting"]
 
@@ -212,6 +212,16 @@ class Shooting:
         return self.march(solution.unknowns, solution.omega, tangent=False, record=True)[2]
 
     def residual(self, x: np.ndarray, omega: float, jacobian: bool = True, domega: bool = True):
+        """R = z(T) - z(0) (with dR/dz and dR/domega); not finite (NaN) for an iterate whose period the scheme
+        cannot march: past its stability limit, or a contact set that does not settle (``ContactSetError``: the
+        state blown up by a wild Newton iterate), so that Newton steps back and the continuation halves its step."""
+        try:
+            return self._residual(x, omega, jacobian, domega)
+        except ContactSetError:
+            nan = np.full(self.size, np.nan)
+            return nan if not jacobian else (nan, np.full((self.size, self.size), np.nan), nan if domega else None)
+
+    def _residual(self, x: np.ndarray, omega: float, jacobian: bool, domega: bool):
         if not jacobian:
             return self.march(x, omega, tangent=False)[0] - x
         if not domega:
