@@ -328,10 +328,9 @@ def solve_periodic(hb: PeriodicProblem, x0: np.ndarray, omega: float, tol: float
                 raise ValueError(f"periodic orbit: the residual is not finite at omega = {omega:g} after {it - 1} "
                                  "Newton iterations (a shooting iterate past the scheme's stability limit)")
             # the step took the iterate where the scheme blows up: back, half the step (up to 6 times)
-            x, dx = last[0], last[1] / 2
-            halved += 1
-            last = (x, dx)
-            x = x + dx
+            base, dx = last[0], last[1] / 2
+            last, halved = (base, dx), halved + 1
+            x = base + dx
             continue
         norms.append(float(np.linalg.norm(R)))
         dx = _newton_step(J, R)
