@@ -10,6 +10,9 @@ diameter j in its constant part), ``periodic.travelling_wave``.
 
     python benchmarks/bench_travelling_wave.py [--model results/disk_map200/rom.npz] [--k 6] [--force 20] [--H 3]
 
+With ``--departure SPEED ...`` the stability along the branch is replaced by the full disk marched from the wave at
+those rotor speeds (``periodic.departure``): each set of nodal diameters' growth a period against Hill's.
+
 Results: results/bench_travelling_wave.json (the machine, both costs and their ratio, the branch: speed, node LE's
 amplitude, and at every --every-th point its stability and the classes that are unstable). ~30 min on this
 machine.
@@ -41,6 +44,40 @@ def map_model(path: Path | None, cache: Path):
     return build_disk_model(sector, config, cache_dir=cache)[0]
 
 
+def departures(args, tw, branch, out) -> int:
+    """The full disk marched from the wave at each --departure speed (``periodic.departure``): per set of nodal
+    diameters, the measured growth a period against Hill's largest multiplier of its classes."""
+    from rotor37_rom.periodic import solve_periodic
+    from rotor37_rom.periodic.departure import wave_departure
+
+    k = args.k
+    speeds = [pt.omega / k for pt in branch.points]
+    rows = []
+    for speed in args.departure:
+        i = int(np.argmin(np.abs(np.asarray(speeds) - speed)))
+        if abs(speeds[i] - speed) > 0.01 * speed:
+            print(f"bench_travelling_wave: --departure {speed:g} rad/s is not on the branch (its speeds "
+                  f"{min(speeds):,.1f}-{max(speeds):,.1f} rad/s)", file=sys.stderr)
+            return 2
+        sol = solve_periodic(tw, branch.points[i].X.ravel(), speed * k, stability=False, tol=1e-8)
+        t = time.perf_counter()
+        dep = wave_departure(tw, sol, periods=args.periods, size=1e-6)
+        wall = time.perf_counter() - t
+        print(f"{speed:,.1f} rad/s: {dep.periods} periods ({dep.ended}), {wall:.0f} s; the wave's own set "
+              f"(Hill {dep.wave_predicted:.4f}) drifts {dep.drift[1]:.3f} -> {dep.drift.max():.3f}", flush=True)
+        for st in dep.sets:
+            measured = "-" if st.measured is None else f"{st.measured:.4f}"
+            print(f"  diameters {st.diameters}: Hill {st.predicted:.4f}, marched {measured}; amplitude "
+                  f"{st.amplitude[0]:.1e} -> max {st.amplitude.max():.1e}", flush=True)
+        rows.append({"speed": speed, "periods": dep.periods, "ended": dep.ended, "wall_s": wall,
+                     "wave_predicted": dep.wave_predicted, "drift": dep.drift.tolist(),
+                     "sets": [{"diameters": list(st.diameters), "predicted": st.predicted, "measured": st.measured,
+                               "amplitude": st.amplitude.tolist()} for st in dep.sets]})
+    machine = write_results(args.name, rows, **out)
+    print(f"results: results/{args.name}.json ({machine})")
+    return 0
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--model", type=Path, default=None, help="a saved disk model (default: build the maps' one)")
@@ -53,6 +90,10 @@ def main(argv=None) -> int:
     p.add_argument("--max-points", type=int, default=150, help="points of the branch at most")
     p.add_argument("--every", type=int, default=2, help="the stability at every this many points (>= 1)")
     p.add_argument("--no-full", action="store_true", help="skip the full disk's cost (its balance is dense)")
+    p.add_argument("--departure", type=float, nargs="+", default=None, metavar="SPEED",
+                   help="instead of the stability along the branch: the full disk marched from the wave at these rotor "
+                        "speeds (rad/s, on the branch), each perturbation set's growth against Hill's")
+    p.add_argument("--periods", type=int, default=60, help="--departure: wave periods marched at most (>= 8)")
     p.add_argument("--name", default="bench_travelling_wave", help="results/<name>.json")
     args = p.parse_args(argv)
     for ok, msg in ((1 <= args.k <= 17, f"--k must be in 1..17, got {args.k}"),
@@ -60,7 +101,10 @@ def main(argv=None) -> int:
                     (1 <= args.H <= 8, f"--H must be in 1..8, got {args.H}"),
                     (0 < args.range[0] < args.range[1], f"--range must be 0 < FROM < TO, got {args.range}"),
                     (args.step > 0, f"--step must be > 0, got {args.step}"),
-                    (args.every >= 1, f"--every must be >= 1, got {args.every}")):
+                    (args.every >= 1, f"--every must be >= 1, got {args.every}"),
+                    (args.departure is None or all(v > 0 for v in args.departure),
+                     f"--departure speeds must be > 0 rad/s, got {args.departure}"),
+                    (args.periods >= 8, f"--periods must be >= 8, got {args.periods}")):
         if not ok:
             print(f"bench_travelling_wave: {msg}", file=sys.stderr)
             return 2
@@ -109,6 +153,8 @@ def main(argv=None) -> int:
     branch = continue_branch(tw, start, args.range[1] * w0, args.step, max_points=args.max_points, tol=1e-8,
                              stability=False)
     out["branch_s"] = time.perf_counter() - t
+    if args.departure:
+        return departures(args, tw, branch, out)
     t = time.perf_counter()
     rows, previous = [], None
     for i, pt in enumerate(branch.points):

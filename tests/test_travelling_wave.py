@@ -143,3 +143,72 @@ def test_travelling_wave_bad_input(disk_model):
         TravellingWaveBalance(dataclasses.replace(model, K=mistuned), F, basis, K_ND)
     with pytest.raises(ValueError, match="H >= 1"):
         travelling_excitation(P, 1.0, K_ND, Harmonics(0, 3))
+    from rotor37_rom.periodic.departure import wave_departure
+
+    tw = TravellingWaveBalance(model, F, basis, K_ND)
+    rest = solve_periodic(tw, np.zeros(tw.size), 1000.0, stability=False)
+    for kwargs, message in (({"periods": 4}, "periods must be an integer >= 8"),
+                            ({"steps_per_period": 8}, "steps_per_period must be an integer >= 16"),
+                            ({"size": 0.5}, r"size must be in \(0, linear_limit\)")):
+        with pytest.raises(ValueError, match=message):
+            wave_departure(tw, rest, **kwargs)
+
+
+def _trapezoidal_multipliers(w, zeta, h, n):
+    """|z_n / z_0| after n steps of average-acceleration Newmark (the trapezoidal rule on the first-order form) for
+    damped modes w, zeta: |(1 + lambda h / 2) / (1 - lambda h / 2)|^n, lambda = w (-zeta + i sqrt(1 - zeta^2))."""
+    lam = w * (-zeta + 1j * np.sqrt(1 - zeta ** 2))
+    return np.abs((1 + lam * h / 2) / (1 - lam * h / 2)) ** n
+
+
+def test_linear_wave_departure_decays_at_its_modes(disk_model):
+    """The full disk marched from a linear travelling wave (H = 1: exact) plus a perturbation of the lowest modes of
+    every other set of nodal diameters: the sets are orthonormal, M- and K-orthogonal and span the disk; each set's
+    perturbation amplitude (the square root of its energy, a sum of its modes' energies) decays a period at a rate
+    between the slowest and the fastest of the perturbed modes' own decay under the same scheme (closed form of the
+    trapezoidal rule), within the fit's error (1e-4: the energy of a damped mode sampled once a period oscillates
+    by ~zeta); Hill's largest multiplier of the set's classes is its slowest mode's exp(-zeta omega_i T) (round-off
+    of the eigenvalues); and the wave's own set stays on the harmonic balance's wave within the scheme's frequency error
+    (omega h)^2 / 12 times the forced response's sensitivity to it, 2 (omega / omega_1)^2 / (1 - (omega /
+    omega_1)^2), plus the scheme's own relative error of a resolved motion, (omega h)^2 / 12, twice (the forced part
+    and the start's transient, which beat)."""
+    from rotor37_rom.periodic.departure import residue_sets, wave_departure
+
+    model, _ = disk_model
+    linear = dataclasses.replace(model, forces=None)
+    basis = Harmonics(1, 4)
+    tw = TravellingWaveBalance(linear, travelling_excitation(le_loads(model), LOAD, K_ND, basis), basis, K_ND)
+    w1 = harmonic_frequencies(model, 1)[K_ND, 0]
+    omega = 0.9 * w1
+    sol = solve_periodic(tw, np.zeros(tw.size), omega, stability=False)
+    sets = residue_sets(tw)
+    U = np.hstack(list(sets.values()))
+    eps = np.finfo(float).eps
+    assert U.shape == (model.r, model.r) and np.abs(U.T @ U - np.eye(model.r)).max() <= 1e3 * eps
+    for rho, A in sets.items():
+        for sigma, B in sets.items():
+            if rho != sigma:
+                for Op in (model.M, model.K):
+                    assert np.linalg.norm(A.T @ Op @ B) <= 1e-10 * np.linalg.norm(Op)
+
+    spp, periods = 32, 12
+    dep = wave_departure(tw, sol, periods=periods, steps_per_period=spp, size=1e-4, rho_inf=None)
+    h = 2 * np.pi / omega / spp
+    w2, Phi = scipy.linalg.eigh(model.K, model.M)
+    w = np.sqrt(w2)
+    zeta = np.einsum("ij,ik,kj->j", Phi, model.C, Phi) / (2 * w)
+    g = 6                                                  # gcd(6, 36)
+    assert [s.residue for s in dep.sets] == [1, 2, 3]
+    for s in dep.sets:
+        B = sets[s.residue]
+        inside = (np.linalg.norm(B.T @ (model.M @ Phi), axis=0) > 0.5) & (w < 2.0 * omega)
+        mu = _trapezoidal_multipliers(w[inside], zeta[inside], h, spp)
+        print(f"diameters = +-{s.residue} mod {g}: marched {s.measured:.6f}, the modes' {mu.min():.6f}-"
+              f"{mu.max():.6f}, Hill {s.predicted:.6f}")
+        assert mu.min() - 1e-4 <= s.measured <= mu.max() + 1e-4
+        every = np.linalg.norm(B.T @ (model.M @ Phi), axis=0) > 0.5            # Hill: the set's slowest mode
+        assert s.predicted == pytest.approx(np.exp(-zeta[every] * w[every] * 2 * np.pi / omega).max(), rel=1e-8)
+    ratio = (omega / w1) ** 2
+    bound = 2 * (omega * h) ** 2 / 12 * (2 * ratio / (1 - ratio) + 1)
+    print(f"the wave's own set: {dep.drift.max():.2e} from the balance's wave (bound {bound:.2e})")
+    assert dep.drift.max() <= bound

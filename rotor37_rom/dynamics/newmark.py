@@ -28,7 +28,7 @@ import scipy.sparse as sp
 
 from rotor37_rom.dynamics.casing import ContactSetError, ContactSolver
 
-__all__ = ["Newmark", "StepContact", "simulate_newmark", "simulate_linear_newmark", "ROUNDOFF"]
+__all__ = ["Newmark", "StepContact", "dense_newmark", "simulate_newmark", "simulate_linear_newmark", "ROUNDOFF"]
 
 LOG = logging.getLogger(__name__)
 #: The residual's round-off, relative to the terms it is summed from: u sqrt(n) for sums of n ~ 65,000 terms (a
@@ -99,6 +99,11 @@ class Newmark:
     def acceleration_at_rest(self) -> np.ndarray:
         """a_0 = M^-1 force(0), the acceleration from rest (x = 0, v = 0, internal(0) = 0)."""
         return self.factorise(self.M)(self.force(0.0))
+
+    def acceleration(self, x: np.ndarray, v: np.ndarray, t: float) -> np.ndarray:
+        """a = M^-1 (force(t) - internal(x) - C v): the acceleration of a state out of contact (a run's start)."""
+        rhs = self.force(t) - self.internal(x) - (0.0 if self.C is None else self.C @ v)
+        return self.factorise(self.M)(rhs)
 
     def step(self, x, v, a, t_new: float, h: float, touching: bool = False, depth: int = 0):
         """One step of length h to t_new: (x, v, a, iterations, multipliers (None without contact)). Where Newton
@@ -272,18 +277,13 @@ def _dense_solver(A) -> Callable:
     return lambda B: scipy.linalg.lu_solve(lu, B)
 
 
-def simulate_newmark(M: np.ndarray, C: np.ndarray, K: np.ndarray, f: Callable[[float], np.ndarray], dt: float,
-                     n_steps: int, forces=None, rtol: float = 1e-10, max_iterations: int = 40
-                     ) -> tuple[np.ndarray, np.ndarray]:
-    """Average-acceleration Newmark (beta = 1/4, gamma = 1/2) of M q'' + C q' + K q + g(q) = f(t) from rest, dense:
-    ``Newmark`` with K q + g(q) as the internal force, K + dg/dq as its tangent and dense LU factorisations.
-
+def dense_newmark(M: np.ndarray, C: np.ndarray | None, K: np.ndarray, f: Callable[[float], np.ndarray], forces=None,
+                  rtol: float = 1e-10, max_iterations: int = 40, rho_inf: float | None = None) -> Newmark:
+    """The average-acceleration ``Newmark`` (or with ``rho_inf`` generalised alpha) of a dense reduced model M q'' +
+    C q' + K q + g(q) = f(t): K q + g(q) as the internal force, K + dg/dq as its tangent, dense LU factorisations.
     ``forces``: the reduced nonlinear force g (``evaluate``/``jacobian``), None for the linear model (one
-    factorisation for the run). Stops at |residual| <= rtol x the largest term it is summed from, the effective load
-    c0 M q_n + ... among them (``Newmark``'s history_scale: a relative accuracy of the displacement). Returns
-    (t, q) with q (r, n_steps + 1)."""
-    if not (dt > 0 and np.isfinite(dt) and isinstance(n_steps, (int, np.integer)) and n_steps >= 1):
-        raise ValueError(f"dt must be finite and > 0 s and n_steps an integer >= 1, got {dt}, {n_steps}")
+    factorisation for the run). Its stopping test is ``rtol`` of the largest term, the effective load c0 M q_n + ...
+    among them (a relative accuracy of the displacement)."""
     r = K.shape[0]
     if forces is None:
         def internal(q):
@@ -298,8 +298,19 @@ def simulate_newmark(M: np.ndarray, C: np.ndarray, K: np.ndarray, f: Callable[[f
         def tangent(q):
             return K + forces.jacobian(q)
     damped = C is not None and np.any(C)
-    stepper = Newmark(M, internal, tangent, _dense_solver, f, rtol=rtol, max_iterations=max_iterations,
-                      linear=forces is None, C=C if damped else None, history_scale=True)
+    return Newmark(M, internal, tangent, _dense_solver, f, rtol=rtol, max_iterations=max_iterations,
+                   linear=forces is None, C=C if damped else None, history_scale=True, rho_inf=rho_inf)
+
+
+def simulate_newmark(M: np.ndarray, C: np.ndarray, K: np.ndarray, f: Callable[[float], np.ndarray], dt: float,
+                     n_steps: int, forces=None, rtol: float = 1e-10, max_iterations: int = 40
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Average-acceleration Newmark (beta = 1/4, gamma = 1/2) of M q'' + C q' + K q + g(q) = f(t) from rest, dense
+    (``dense_newmark``). Returns (t, q) with q (r, n_steps + 1)."""
+    if not (dt > 0 and np.isfinite(dt) and isinstance(n_steps, (int, np.integer)) and n_steps >= 1):
+        raise ValueError(f"dt must be finite and > 0 s and n_steps an integer >= 1, got {dt}, {n_steps}")
+    r = K.shape[0]
+    stepper = dense_newmark(M, C, K, f, forces, rtol, max_iterations)
     q, v = np.zeros(r), np.zeros(r)
     a = stepper.acceleration_at_rest()
     out = [q.copy()]

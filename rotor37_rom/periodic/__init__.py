@@ -2,14 +2,16 @@
 arc-length continuation (``harmonic_balance``); Coulomb friction with sticking, collocated without regularisation
 (``contact``); shooting of the project's explicit scheme with its casing contact, Floquet multipliers from its
 monodromy (``shooting``); a tuned disk's travelling-wave response on one sector, its Hill stability per nodal
-diameter (``travelling_wave``). Pure NumPy/SciPy, on any second-order system whose nonlinear force evaluates a batch of
+diameter (``travelling_wave``), and the full disk marched from that wave, each set of diameters' growth against Hill's
+(``departure``). Pure NumPy/SciPy, on any second-order system whose nonlinear force evaluates a batch of
 states with its Jacobian, as the reduced models' forces do."""
 from .harmonic_balance import (Branch, Harmonics, HarmonicBalance, PeriodicProblem, PeriodicSolution, continue_branch,
     model_force, solve_periodic, time_state, backbone, bifurcation_kind)
 from .contact import CoulombFriction, ContactBalance
 from .shooting import Shooting
 from .travelling_wave import TravellingWaveBalance, travelling_excitation
+from .departure import wave_departure
 
 __all__ = ["Branch", "Harmonics", "HarmonicBalance", "PeriodicProblem", "PeriodicSolution", "continue_branch",
            "solve_periodic", "model_force", "time_state", "backbone", "bifurcation_kind", "CoulombFriction",
-           "ContactBalance", "Shooting", "TravellingWaveBalance", "travelling_excitation"]
+           "ContactBalance", "Shooting", "TravellingWaveBalance", "travelling_excitation", "wave_departure"]
