@@ -100,11 +100,6 @@ class Newmark:
         """a_0 = M^-1 force(0), the acceleration from rest (x = 0, v = 0, internal(0) = 0)."""
         return self.factorise(self.M)(self.force(0.0))
 
-    def acceleration(self, x: np.ndarray, v: np.ndarray, t: float) -> np.ndarray:
-        """a = M^-1 (force(t) - internal(x) - C v): the acceleration of a state out of contact (a run's start)."""
-        rhs = self.force(t) - self.internal(x) - (0.0 if self.C is None else self.C @ v)
-        return self.factorise(self.M)(rhs)
-
     def step(self, x, v, a, t_new: float, h: float, touching: bool = False, depth: int = 0):
         """One step of length h to t_new: (x, v, a, iterations, multipliers (None without contact)). Where Newton
         fails the step is split in two halves, recursively (``max_halvings`` levels): a local nonlinearity (a point
