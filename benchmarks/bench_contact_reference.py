@@ -61,7 +61,8 @@ def reference_run(sector, ops, casing, omega, duration, h, gnl, checkpoint, rho_
     res = solve_repeating_newmark(sector, 1, None, None, h, n_steps, nonlinear=gnl, ops=ops, casing=casing,
                                   omega=omega, duration=duration, snapshot_every=n_steps, rtol=1e-6,
                                   checkpoint=checkpoint, rho_inf=rho_inf, contact_interface=interface)
-    normal = contact_frames(sector.tip_nodes[:1], casing.direction, casing.rotation_sense, casing.cone_slope)[0][0]
+    normal = contact_frames(sector.tip_nodes[:1], casing.direction, casing.rotation_sense, casing.cone_slope,
+                            sector.blade_frame_angle())[0][0]
     le = res.tip[:, 0, 0, :] @ normal
     on = res.lam > 0
     return {"t": res.t.tolist(), "u_le": le.tolist(), "wall_s": time.perf_counter() - t0, "h": h,

@@ -9,8 +9,7 @@ in contact with the two-lobe casing (each blade at its own angle), through the b
    and on; the GNL step from the tangent limit on states of a capped GNL run; the wall time of the issue's full-disk map
    (90 speeds x 200 revolutions in 1,200-1,650 rad/s, GNL) extrapolated from them, on one process.
 2. A short map through ``studies.sweep.run_sweep`` (GNL off, --speeds x --revolutions): node LE of sector 0 and the
-largest
-   over the sectors, the contact checks (penetration, lambda >= 0, friction power <= 0).
+   largest over the sectors, the contact checks (penetration, lambda >= 0, friction power <= 0).
 
     python benchmarks/bench_disk_contact.py [--speeds 1200 1650 10] [--revolutions 20] [--cap 60]
     python benchmarks/bench_disk_contact.py --gnl-throughput 10          # one process, 10 speeds x 1,500 GNL steps
@@ -19,42 +18,96 @@ largest
 
 Results: results/bench_disk_contact.json (machine stated). A full map of the disk is this bench's extrapolation,
 not a run: see docs/performance.md.
+
+Every option is checked, and the folders written in, before any work: a bad one is one line on stderr and exit
+status 2. ``--check`` does only that (exit status 0); SIGTERM or SIGINT stop the run with one line
+(``rotor37_rom.cli.run_main``).
 """
 from __future__ import annotations
 
-import argparse
 import copy
 import resource
 import sys
 import time
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
-from rotor37_rom.machine import write_results
-from rotor37_rom.dynamics.casing import Casing  # noqa: E402
-from rotor37_rom.dynamics.explicit import CentralDifference, gnl_time_step, largest_states, simulate  # noqa: E402
-from rotor37_rom.studies.sweep import SweepSpec, last_revolution_max, load_sweep, run_sweep  # noqa: E402
-from rotor37_rom.studies.disk_contact import MAP_REVOLUTIONS, MAP_SPEEDS, contact_disk_model, cost_per_sim_step
+from rotor37_rom.checks import before_work, fits_in_memory, real_number, whole_number
+from rotor37_rom.cli import ArgumentParser, run_main
+
+MAX_SPEED = 1e5                  # rad/s: the map command's (studies.contact_config.MAX_SPEED)
+MAX_SPEEDS = 1000                # speeds of the short map at most (one batch: all of them integrated together)
+MAX_THROUGHPUT = 100             # speeds of --gnl-throughput at most
+DEFAULT_SPEEDS, DEFAULT_REVOLUTIONS = (1200.0, 1650.0, 10), 20.0
+ROWS = 37 + 8 * 36               # what a record holds per run: node LE of the 36 sectors, TE, the 288 contact forces
+RECORD_DT = 1e-5                 # s: the sweep's sampling (studies.sweep.SweepSpec.record_dt)
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--preset", default="ci", choices=["ci", "coarse"])
-    parser.add_argument("--cap", type=float, default=60.0, help="frequency cap (kHz) of the explicit scheme")
-    parser.add_argument("--speeds", type=float, nargs=3, default=[1200.0, 1650.0, 10], metavar=("START", "STOP", "N"))
-    parser.add_argument("--revolutions", type=float, default=20.0, help="revolutions of the short map")
-    parser.add_argument("--mu", type=float, default=0.15, help="friction coefficient")
-    parser.add_argument("--gnl-throughput", type=int, metavar="P", default=0,
-                        help="only time P speeds x 1,500 GNL steps at h = 1.15e-6 s (run two side by side to measure "
-                             "what two ranks give)")
-    args = parser.parse_args(argv)
+def build_parser() -> ArgumentParser:
+    p = ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--preset", default="ci", choices=["ci", "coarse"], help="mesh preset of the disk sector "
+                   "(default ci)")
+    p.add_argument("--cap", type=float, default=60.0,
+                   help="frequency cap of the explicit scheme (kHz), in [5, 500] (default 60)")
+    p.add_argument("--speeds", type=float, nargs=3, default=None, metavar=("START", "STOP", "N"),
+                   help=f"the short map's N speeds (rad/s) from START to STOP, 0 < START <= STOP <= {MAX_SPEED:g}, "
+                        f"N in 1..{MAX_SPEEDS} (default 1200 1650 10); not with "
+                        f"--gnl-throughput")
+    p.add_argument("--revolutions", type=float, default=None,
+                   help="revolutions of the short map per speed, in (0, 200] (default 20); not with --gnl-throughput")
+    p.add_argument("--mu", type=float, default=0.15, help="friction coefficient, in [0, 2] (default 0.15)")
+    p.add_argument("--gnl-throughput", type=int, metavar="P", default=0,
+                   help=f"only time P speeds x 1,500 GNL steps at h = 1.15e-6 s, P in 0..{MAX_THROUGHPUT} (0, the "
+                        f"default: the whole bench; run two side by side to measure what two ranks give)")
+    return p
+
+
+def check_options(args) -> None:
+    """Every option checked (ValueError naming it and its range); the short map's defaults filled in."""
+    real_number("--cap", args.cap, 5, 500, unit=" kHz")
+    real_number("--mu", args.mu, 0, 2)
+    whole_number("--gnl-throughput", args.gnl_throughput, 0, MAX_THROUGHPUT)
+    if args.gnl_throughput:
+        for option, value in (("--speeds", args.speeds), ("--revolutions", args.revolutions)):
+            if value is not None:
+                raise ValueError(f"{option} (the short map's) does nothing with --gnl-throughput (which only times "
+                                 f"GNL steps at 1,200-1,650 rad/s)")
+        return
+    args.speeds = list(DEFAULT_SPEEDS) if args.speeds is None else args.speeds
+    args.revolutions = DEFAULT_REVOLUTIONS if args.revolutions is None else args.revolutions
     start, stop, n = args.speeds
-    if not (5.0 <= args.cap <= 500.0) or not (0 < start <= stop) or not (n >= 1 and float(n).is_integer()) \
-            or not (0 < args.revolutions <= 200) or not (0 <= args.mu <= 2) or not 0 <= args.gnl_throughput <= 100:
-        print("error: --cap must be in [5, 500] kHz, --speeds need 0 < START <= STOP and an integer N >= 1, "
-              "--revolutions in (0, 200], --mu in [0, 2], --gnl-throughput in [0, 100]", file=sys.stderr)
-        return 2
+    for value in args.speeds:
+        real_number("--speeds (START, STOP, N)", value, 0, MAX_SPEED, open_low=True)
+    if not (start <= stop and float(n).is_integer() and 1 <= n <= MAX_SPEEDS):
+        raise ValueError(f"--speeds: need 0 < START <= STOP <= {MAX_SPEED:g} rad/s and an integer N in "
+                         f"1..{MAX_SPEEDS}, got {' '.join(f'{v:g}' for v in args.speeds)}")
+    args.speeds = [float(start), float(stop), int(n)]
+    real_number("--revolutions", args.revolutions, 0, 200, open_low=True)
+    records = args.revolutions * 2 * np.pi / start / RECORD_DT + 1
+    fits_in_memory("--revolutions", 8.0 * ROWS * records * int(n),
+                   f"{int(n)} runs x {records:.3g} records x {ROWS} values, at {start:g} rad/s",
+                   hint="fewer revolutions or speeds")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Check the options, then the costs and the short map (or the GNL throughput); raises ValueError for a bad
+    input."""
+    args = build_parser().parse_args(argv)
+    check_options(args)
+    folders = {"the model cache": Path("results/cache")}
+    if not args.gnl_throughput:
+        folders["the results folder"] = Path("results")
+    before_work(folders)                                    # before any work; a dry run stops here
+
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.dynamics.explicit import CentralDifference, gnl_time_step, largest_states, simulate
+    from rotor37_rom.machine import write_results
+    from rotor37_rom.studies.disk_contact import MAP_REVOLUTIONS, MAP_SPEEDS, contact_disk_model, cost_per_sim_step
+    from rotor37_rom.studies.sweep import SweepSpec, last_revolution_max, load_sweep, run_sweep
+
+    start, stop, n = args.speeds if args.speeds is not None else (None, None, None)
     cap = 2 * np.pi * 1e3 * args.cap
     casing = Casing(mu=args.mu, direction="cone")
     _, model, offline = contact_disk_model(args.preset)
@@ -127,4 +180,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_main(main))

@@ -18,10 +18,13 @@ trained on exact GNL contact runs from rest at --train speeds (``dynamics.explic
 
 Results: results/bench_disk_cubature.json (machine stated); the training runs are kept in
 results/bench_disk_cubature/ (a rerun with other tolerances reuses them).
+
+Every option is checked, and the folders written in, before any work: a bad one is one line on stderr and exit
+status 2. ``--check`` does only that (exit status 0); SIGTERM or SIGINT stop the run with one line
+(``rotor37_rom.cli.run_main``).
 """
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import hashlib
 import json
@@ -29,24 +32,73 @@ import resource
 import sys
 import time
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
-from rotor37_rom.machine import write_results
-from rotor37_rom.reduction.builder import hyper_reduce  # noqa: E402
-from rotor37_rom.dynamics.casing import Casing  # noqa: E402
-from rotor37_rom.dynamics.explicit import CentralDifference, contact_training_states, simulate  # noqa: E402
-from rotor37_rom.npz import load_npz, save_npz  # noqa: E402
-from rotor37_rom.model.reduced import with_force_precision  # noqa: E402
-from rotor37_rom.studies.disk_contact import MAP_REVOLUTIONS, MAP_SPEEDS, contact_disk_model, cost_per_sim_step
-from rotor37_rom.studies.sweep import last_revolution_max  # noqa: E402
+from rotor37_rom.checks import before_work, fits_in_memory, real_number
+from rotor37_rom.cli import ArgumentParser, run_main
 
+MAX_SPEED = 1e5                  # rad/s: the map command's (studies.contact_config.MAX_SPEED)
+MAX_SPEEDS = 100                 # training or evaluation speeds at most (each a GNL run from rest)
+R = 36 * (24 + 10 + 10) + 144    # the maps' disk model's size (8 tip nodes, r_c = 10, r_MD = 10, r_cyclic = 144)
+RECORD_DT = 1e-5                 # s: the runs' states are recorded this often
 OUT = Path("results/bench_disk_cubature")
+
+
+def build_parser() -> ArgumentParser:
+    p = ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--preset", default="ci", choices=["ci", "coarse"], help="mesh preset of the disk sector "
+                   "(default ci)")
+    p.add_argument("--tol", type=float, nargs="+", default=[1e-3, 3e-4],
+                   help="cubature training tolerances, each in (0, 1) (default 1e-3 3e-4)")
+    p.add_argument("--h", type=float, default=1.15e-6, help="GNL time step (s), in (0, 1e-4) (default 1.15e-6)")
+    p.add_argument("--cap", type=float, default=60.0, help="frequency cap (kHz), in [5, 500] (default 60)")
+    p.add_argument("--mu", type=float, default=0.15, help="friction coefficient, in [0, 2] (default 0.15)")
+    p.add_argument("--train", type=float, nargs="+", default=[1200.0, 1290.0, 1380.0, 1470.0, 1560.0, 1650.0],
+                   help=f"training speeds (rad/s), each in (0, {MAX_SPEED:g}], at most {MAX_SPEEDS} (default 1200 "
+                        f"1290 1380 1470 1560 1650)")
+    p.add_argument("--train-revolutions", type=float, default=12.0,
+                   help="revolutions of each training run, in (0, 200] (default 12)")
+    p.add_argument("--speeds", type=float, nargs="+", default=[1250.0, 1350.0, 1450.0, 1550.0],
+                   help=f"evaluation speeds (rad/s), each in (0, {MAX_SPEED:g}], none a --train speed, at most "
+                        f"{MAX_SPEEDS} (default 1250 1350 1450 1550)")
+    p.add_argument("--revolutions", type=float, default=20.0,
+                   help="revolutions of the evaluation runs, in (0, 200] (default 20)")
+    return p
+
+
+def check_options(args) -> None:
+    """Every option checked: ValueError naming it and its range."""
+    for tol in args.tol:
+        real_number("--tol (cubature training tolerances)", tol, 0, 1, open_low=True, open_high=True)
+    real_number("--h (the GNL step)", args.h, 0, 1e-4, open_low=True, open_high=True, unit=" s")
+    real_number("--cap", args.cap, 5, 500, unit=" kHz")
+    real_number("--mu", args.mu, 0, 2)
+    for option, speeds in (("--train", args.train), ("--speeds", args.speeds)):
+        for w in speeds:
+            real_number(f"{option} (speeds)", w, 0, MAX_SPEED, open_low=True, unit=" rad/s")
+        if len(speeds) > MAX_SPEEDS:
+            raise ValueError(f"{option}: at most {MAX_SPEEDS} speeds, got {len(speeds)}")
+    real_number("--train-revolutions", args.train_revolutions, 0, 200, open_low=True)
+    real_number("--revolutions", args.revolutions, 0, 200, open_low=True)
+    for option, speeds, revolutions, copies in (("--train-revolutions", args.train, args.train_revolutions, 1),
+                                                ("--revolutions", args.speeds, args.revolutions, 2)):
+        records = sum(revolutions * 2 * np.pi / w / RECORD_DT + 1 for w in speeds)
+        fits_in_memory(option, 8.0 * R * records * copies, f"{records:.3g} recorded states of r = {R} over the "
+                       f"speeds{', twice' if copies > 1 else ''}", hint="fewer revolutions or speeds")
+    repeated = sorted(set(args.train) & set(args.speeds))
+    if repeated:
+        raise ValueError(f"--speeds must not repeat a --train speed (the evaluation is held out), got "
+                         f"{', '.join(f'{w:g}' for w in repeated)}")
 
 
 def responses(scheme, casing, speeds, revolutions, monitor) -> tuple[dict, np.ndarray]:
     """Node LE of sector 0 and the largest over the blades (max over the last revolution, m) per speed, and the
     run's states (records every 1e-5 s)."""
+    from rotor37_rom.dynamics.explicit import simulate
+    from rotor37_rom.studies.sweep import last_revolution_max
+
     res = simulate(scheme, speeds, casing, revolutions=revolutions, monitor=monitor, on_blowup="flag",
                    record_q=True, record_every=max(1, int(round(1e-5 / scheme.h))))
     le0, largest = [], []
@@ -59,29 +111,22 @@ def responses(scheme, casing, speeds, revolutions, monitor) -> tuple[dict, np.nd
             "max_friction_power": float(res.friction_power.max())}, np.hstack(res.records_q)
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--preset", default="ci", choices=["ci", "coarse"])
-    parser.add_argument("--tol", type=float, nargs="+", default=[1e-3, 3e-4], help="cubature training tolerances")
-    parser.add_argument("--h", type=float, default=1.15e-6, help="GNL time step (s)")
-    parser.add_argument("--cap", type=float, default=60.0, help="frequency cap (kHz)")
-    parser.add_argument("--mu", type=float, default=0.15, help="friction coefficient")
-    parser.add_argument("--train", type=float, nargs="+", default=[1200.0, 1290.0, 1380.0, 1470.0, 1560.0, 1650.0],
-                        help="training speeds (rad/s)")
-    parser.add_argument("--train-revolutions", type=float, default=12.0)
-    parser.add_argument("--speeds", type=float, nargs="+", default=[1250.0, 1350.0, 1450.0, 1550.0],
-                        help="evaluation speeds (rad/s)")
-    parser.add_argument("--revolutions", type=float, default=20.0, help="revolutions of the evaluation runs")
-    args = parser.parse_args(argv)
-    if not all(0 < t < 1 for t in args.tol) or not 0 < args.h < 1e-4 or not 5 <= args.cap <= 500 \
-            or not 0 <= args.mu <= 2 or not 0 < args.revolutions <= 200 or not 0 < args.train_revolutions <= 200 \
-            or min(args.train + args.speeds) <= 0:
-        print("error: --tol must be in (0, 1), --h in (0, 1e-4) s, --cap in [5, 500] kHz, --mu in [0, 2], "
-              "--revolutions and --train-revolutions in (0, 200], speeds > 0", file=sys.stderr)
-        return 2
-    if set(args.train) & set(args.speeds):
-        print("error: --speeds must not repeat a --train speed (the evaluation is held out)", file=sys.stderr)
-        return 2
+def main(argv: Sequence[str] | None = None) -> int:
+    """Check the options, then the training runs, the cubatures, their costs and errors; raises ValueError for a bad
+    input."""
+    args = build_parser().parse_args(argv)
+    check_options(args)
+    before_work({"the training runs' folder": OUT, "the model cache": Path("results/cache"),
+                 "the results folder": Path("results")})          # before any work; a dry run stops here
+
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.dynamics.explicit import CentralDifference, contact_training_states
+    from rotor37_rom.machine import write_results
+    from rotor37_rom.model.reduced import with_force_precision
+    from rotor37_rom.npz import load_npz, save_npz
+    from rotor37_rom.reduction.builder import hyper_reduce
+    from rotor37_rom.studies.disk_contact import MAP_REVOLUTIONS, MAP_SPEEDS, contact_disk_model, cost_per_sim_step
+
     cap = 2 * np.pi * 1e3 * args.cap
     casing = Casing(mu=args.mu, direction="cone")
     sector, model, _ = contact_disk_model(args.preset)
@@ -157,4 +202,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_main(main))

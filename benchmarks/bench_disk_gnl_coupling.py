@@ -24,29 +24,31 @@ missing) and the disk models are its cached ones (built when missing):
         [--faces-only] [--name SUFFIX]
 
 Results: results/disk_gnl_coupling_<preset><SUFFIX>.json.
+
+Every option is checked, and the folders written in, before any work: a bad one is one line on stderr and exit
+status 2. ``--check`` does only that (exit status 0); SIGTERM or SIGINT stop the run with one line
+(``rotor37_rom.cli.run_main``).
 """
 from __future__ import annotations
 
-import argparse
+import re
 import sys
 import time
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
-from rotor37_rom import fem  # noqa: E402
-from rotor37_rom.disk.indicators import best_approximation, performance_indicator  # noqa: E402
-from rotor37_rom.disk.assembly import face_shapes  # noqa: E402
-from rotor37_rom.disk.loads import travelling_load  # noqa: E402
-from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
-from rotor37_rom.fem.periodic import RepeatingSectors  # noqa: E402
-from rotor37_rom.forces.tensors import QuadratureForces, compute_polynomial_forces  # noqa: E402
-from rotor37_rom.reduction.craig_bampton import CRITERIA  # noqa: E402
-from rotor37_rom.dynamics.newmark import simulate_newmark  # noqa: E402
-from rotor37_rom.machine import write_results
-from rotor37_rom.studies.forced_response import AMPLITUDE, reference, sector_load
+from rotor37_rom.checks import before_work, real_number, whole_number
+from rotor37_rom.cli import ArgumentParser, run_main
+from rotor37_rom.reduction.craig_bampton import CRITERIA
 
 OMEGA, PERIODS, SPP, RAMP = 4000.0, 10, 100, 1.0
+R_C, R_CYCLIC = 10, 144
+#: modal derivatives per sector at most: the pairs (j <= k) of the sector's 14 linear columns (node LE's 3 constraint
+#: modes, the R_C fixed-interface modes and the patch load's static correction): 14 x 15 / 2
+MAX_R_MD = (3 + R_C + 1) * (3 + R_C + 2) // 2
+MAX_FACE_SHAPES = R_CYCLIC       # shapes per face at most (and at most the face's DOFs, checked once it is built)
 
 
 class _Mapped:
@@ -75,6 +77,10 @@ def tied_basis(model) -> tuple[np.ndarray, int, np.ndarray]:
 def face_shape_force(sector, model, r_s: int, Pi0: np.ndarray, n_f: int):
     """The force of the disk model with ``face_shapes = n_f`` (``disk.assembly.face_shapes``: the faces on n_f shapes L)
     restricted to the tied sector: x = [q; L^T Pi_0 eta; L^T Pi_0 eta] (both faces alike under k = 0)."""
+    from rotor37_rom import fem
+    from rotor37_rom.disk.assembly import face_shapes
+    from rotor37_rom.forces.tensors import QuadratureForces, compute_polynomial_forces
+
     b = model.sectors
     eta = slice(b.blocks.size, model.r)
     omega = np.sqrt(np.diag(model.K)[eta] / np.diag(model.M)[eta])   # the interface modes are K- and M-orthogonal
@@ -89,33 +95,60 @@ def face_shape_force(sector, model, r_s: int, Pi0: np.ndarray, n_f: int):
     return _Mapped(forces, G)
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--preset", default="ci", choices=["ci", "coarse", "paper"])
-    parser.add_argument("--r-md", nargs="+", type=int, default=[10, 20, 40])
-    parser.add_argument("--criterion", default="MI2b")
-    parser.add_argument("--patch", type=float, default=3.0, help="load patch radius (mm), in (0, 20]")
-    parser.add_argument("--out", default="results/disk_forced")
-    parser.add_argument("--face-shapes", nargs="*", type=int, default=[],
-                        help="also the disk model's force with the faces on these numbers of shapes (disk.face_shapes)")
-    parser.add_argument("--faces-only", action="store_true", help="only the --face-shapes variants")
-    parser.add_argument("--name", default="", help="results file suffix: results/disk_gnl_coupling_<preset><name>.json")
-    args = parser.parse_args(argv)
-    if args.face_shapes and min(args.face_shapes) < 1:
-        print(f"error: face-shapes must be >= 1, got {args.face_shapes}", file=sys.stderr)
-        return 2
-    if min(args.r_md) < 1:
-        print(f"error: r-md must be >= 1 (the coupling acts through the modal derivatives), got {args.r_md}",
-              file=sys.stderr)
-        return 2
-    if args.criterion not in CRITERIA:
-        print(f"error: criterion must be one of {CRITERIA}, got {args.criterion!r}", file=sys.stderr)
-        return 2
-    if not 0 < args.patch <= 20:
-        print(f"error: patch must be in (0, 20] mm, got {args.patch:g}", file=sys.stderr)
-        return 2
+def build_parser() -> ArgumentParser:
+    p = ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--preset", default="ci", choices=["ci", "coarse", "paper"],
+                   help="mesh preset of the disk sector (default ci)")
+    p.add_argument("--r-md", nargs="+", type=int, default=[10, 20, 40],
+                   help=f"modal derivatives per sector of the disk models, each in 1..{MAX_R_MD} (the coupling acts "
+                        f"through them; default 10 20 40)")
+    p.add_argument("--criterion", default="MI2b", choices=CRITERIA,
+                   help="the modal derivatives' selection criterion (default MI2b)")
+    p.add_argument("--patch", type=float, default=3.0, help="load patch radius (mm), in (0, 20] (default 3)")
+    p.add_argument("--out", default="results/disk_forced",
+                   help="folder of bench_disk_forced.py's cached GNL reference and disk models, OUT/<preset> "
+                        "(default results/disk_forced)")
+    p.add_argument("--face-shapes", nargs="*", type=int, default=[],
+                   help=f"also the disk model's force with the faces on these numbers of shapes "
+                        f"(disk.face_shapes), each in 1..{MAX_FACE_SHAPES} (default none)")
+    p.add_argument("--faces-only", action="store_true", help="only the --face-shapes variants (needs --face-shapes)")
+    p.add_argument("--name", default="",
+                   help="results file suffix, letters, digits, '_', '-' or '.': "
+                        "results/disk_gnl_coupling_<preset><name>.json (default none)")
+    return p
+
+
+def check_options(args) -> None:
+    """Every option checked: ValueError naming it and its range."""
+    for r_md in args.r_md:
+        whole_number("--r-md (the coupling acts through the modal derivatives)", r_md, 1, MAX_R_MD)
+    real_number("--patch (load patch radius)", args.patch, 0, 20, open_low=True, unit=" mm")
+    for n_f in args.face_shapes:
+        whole_number("--face-shapes", n_f, 1, MAX_FACE_SHAPES)
+    if args.faces_only and not args.face_shapes:
+        raise ValueError("--faces-only needs --face-shapes (the only variants it runs): nothing would run")
+    if not re.fullmatch(r"[\w.-]*", args.name):
+        raise ValueError(f"--name must be letters, digits, '_', '-' or '.' (a file name's suffix), got {args.name!r}")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Check the options, then the reference (cached), the disk models and the tied sector's variants; raises
+    ValueError for a bad input."""
+    args = build_parser().parse_args(argv)
+    check_options(args)
     out = Path(args.out) / args.preset
-    out.mkdir(parents=True, exist_ok=True)
+    before_work({"--out": out, "the results folder": Path("results")})    # before any work; a dry run stops here
+
+    from rotor37_rom import fem
+    from rotor37_rom.disk.indicators import best_approximation, performance_indicator
+    from rotor37_rom.disk.loads import travelling_load
+    from rotor37_rom.dynamics.newmark import simulate_newmark
+    from rotor37_rom.fem.periodic import RepeatingSectors
+    from rotor37_rom.forces.tensors import QuadratureForces, compute_polynomial_forces
+    from rotor37_rom.machine import write_results
+    from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model
+    from rotor37_rom.studies.forced_response import AMPLITUDE, reference, sector_load
+
     sector = fem.create_disk_sector(preset=args.preset)
     system = RepeatingSectors(sector, 1)
     ops = system.ops
@@ -128,7 +161,7 @@ def main(argv=None) -> int:
     T = 2 * np.pi / OMEGA
     rows = []
     for r_md in args.r_md:
-        config = DiskReductionConfig(tip_nodes="LE", r_c=10, r_md=r_md, criterion=args.criterion, r_cyclic=144,
+        config = DiskReductionConfig(tip_nodes="LE", r_c=R_C, r_md=r_md, criterion=args.criterion, r_cyclic=R_CYCLIC,
                                      forces="intrusive", load_patch=1e-3 * args.patch)
         model, _ = build_disk_model(sector, config, ops=ops, cache_dir=out / "models")
         B, r_s, Pi0 = tied_basis(model)
@@ -170,4 +203,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_main(main))

@@ -36,26 +36,28 @@ runs at the reference speeds only; each sitting's report shows the floor's runs 
     OPENBLAS_NUM_THREADS=1 mpirun -n 2 python benchmarks/bench_disk_map.py --part reference --no-floor
 
 writes results/bench_disk_map_reference.json.
+
+Every option is checked, and the folders written in, before any work: a bad one is one line on stderr and exit
+status 2. ``--check`` does only that (exit status 0); SIGTERM or SIGINT stop the run with one line
+(``rotor37_rom.cli.run_main``).
 """
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 import sys
 import threading
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from rotor37_rom.machine import write_results  # noqa: E402
+from rotor37_rom.checks import before_work, real_number, whole_number
+from rotor37_rom.cli import ArgumentParser, run_main
 
-from rotor37_rom.studies.contact_map import (ContactMapConfig, reduced_model, run_contact_map,  # noqa: E402
-    time_scheme, world_comm)
-
-from rotor37_rom.dynamics.explicit import CentralDifference, training_speeds  # noqa: E402
-from rotor37_rom.studies.sweep import load_speed, run_sweep, sector_maxima, sweep_folder  # noqa: E402
+if TYPE_CHECKING:
+    from rotor37_rom.studies.contact_config import ContactMapConfig
 
 SPEEDS, REVOLUTIONS = (1200.0, 1650.0, 90), 200.0
 CUBATURE, PRECISION, CAP_KHZ = 3e-3, "single", 60.0
@@ -110,6 +112,8 @@ class Sittings:
 def responses(folder: Path, speeds, missing_ok: bool = False) -> dict:
     """Node LE of sector 0 and the largest over the blades (max over the last revolution, m) of a sweep's speeds;
     with ``missing_ok`` NaN where the sweep has not run a speed."""
+    from rotor37_rom.studies.sweep import load_speed, sector_maxima
+
     le0, largest, blade = [], [], []
     for w in speeds:
         rec = load_speed(folder, float(w))
@@ -127,57 +131,100 @@ def responses(folder: Path, speeds, missing_ok: bool = False) -> dict:
     return {"le0_m": le0, "largest_m": largest, "largest_blade": blade}
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=Path("results/disk_map200"), help="the map's folder")
-    parser.add_argument("--reference", type=int, nargs="+", default=[10, 30, 50, 70],
-                        help="indices (0..89) of the map's speeds run with the exact sector tensors")
-    parser.add_argument("--part", choices=["all", "map", "reference", "stress"], default="all",
-                        help="reference: the map's model at the --reference speeds only (what the map has not run "
-                             "yet), the exact tensors and the floor there; stress: the disk's stress at t_max at the "
-                             "--stress-at speeds, GNL off and on (the map's model and step)")
-    parser.add_argument("--stress-at", type=int, nargs="+", default=[11, 62],
-                        help="with --part stress: indices (0..89) of the map's speeds, each run from rest GNL off "
-                             "and on and carried on one revolution for the stress at t_max, in <out>/stress_<index> "
-                             "(default 11 62: the largest responses of the maps without and with GNL)")
-    parser.add_argument("--no-floor", action="store_true",
-                        help="skip the floor run (exact forces x (1 + 1e-4)); the report still shows the floor's runs "
-                             "an earlier sitting made at these speeds")
-    parser.add_argument("--revolutions", type=float, default=REVOLUTIONS,
-                        help="per speed (default 200; fewer: a smoke run of the whole chain)")
-    args = parser.parse_args(argv)
-    if not 0 < args.revolutions <= 1000:
-        print(f"error: --revolutions must be in (0, 1000], got {args.revolutions:g}", file=sys.stderr)
-        return 2
+def build_parser() -> ArgumentParser:
+    p = ArgumentParser(description=__doc__.splitlines()[0])
+    n = int(SPEEDS[2])
+    p.add_argument("--out", type=Path, default=Path("results/disk_map200"),
+                   help="the map's folder (default results/disk_map200)")
+    p.add_argument("--reference", type=int, nargs="+", default=None,
+                   help=f"with --part all or reference: indices (0..{n - 1}) of the map's speeds run with the exact "
+                        f"sector tensors, none of the cubature's training speeds (default 10 30 50 70)")
+    p.add_argument("--part", choices=["all", "map", "reference", "stress"], default="all",
+                   help="reference: the map's model at the --reference speeds only (what the map has not run "
+                        "yet), the exact tensors and the floor there; stress: the disk's stress at t_max at the "
+                        "--stress-at speeds, GNL off and on (the map's model and step); map: the map alone "
+                        "(default all: the map, then the reference)")
+    p.add_argument("--stress-at", type=int, nargs="+", default=None,
+                   help=f"with --part stress: indices (0..{n - 1}) of the map's speeds, each run from rest GNL off "
+                        f"and on and carried on one revolution for the stress at t_max, in <out>/stress_<index> "
+                        f"(default 11 62: the largest responses of the maps without and with GNL)")
+    p.add_argument("--no-floor", action="store_true",
+                   help="with --part all or reference: skip the floor run (exact forces x (1 + 1e-4)); the report "
+                        "still shows the floor's runs an earlier sitting made at these speeds")
+    p.add_argument("--revolutions", type=float, default=REVOLUTIONS,
+                   help=f"per speed, in (0, 1000] and within this machine's memory (default {REVOLUTIONS:g}; fewer: "
+                        f"a smoke run of the whole chain)")
+    return p
+
+
+def check_options(args) -> np.ndarray:
+    """Every option checked (ValueError naming it and its range), the defaults of those that need a --part filled
+    in; the map's speeds."""
+    from rotor37_rom.dynamics.explicit import training_speeds
+
+    real_number("--revolutions", args.revolutions, 0, 1000, open_low=True)
     grid = np.linspace(*SPEEDS[:2], int(SPEEDS[2]))
-    if not all(0 <= i < grid.size for i in args.stress_at):
-        print(f"error: --stress-at must be indices in 0..{grid.size - 1} of the map's speeds, got {args.stress_at}",
-              file=sys.stderr)
-        return 2
     train = training_speeds(grid)
-    if not all(0 <= i < grid.size for i in args.reference) or set(grid[args.reference]) & set(train):
-        print(f"error: --reference must be indices in 0..{grid.size - 1} of the map's speeds, none of the training "
-              f"ones ({', '.join(str(int(np.argmin(abs(grid - w)))) for w in train)})", file=sys.stderr)
-        return 2
+    reference = args.part in ("all", "reference")
+    for option, value, wanted in (("--reference", args.reference, reference),
+                                  ("--stress-at", args.stress_at, args.part == "stress"),
+                                  ("--no-floor", args.no_floor or None, reference)):
+        if value is not None and not wanted:
+            needs = "--part stress" if option == "--stress-at" else "--part all or reference"
+            raise ValueError(f"{option} does nothing with --part {args.part}: it needs {needs}")
+    for option, value, default in (("--reference", args.reference, [10, 30, 50, 70]),
+                                   ("--stress-at", args.stress_at, [11, 62])):
+        value = default if value is None else value
+        for i in value:
+            whole_number(f"{option} (indices of the map's speeds)", i, 0, grid.size - 1)
+        setattr(args, option[2:].replace("-", "_"), value)
+    trained = sorted(int(np.argmin(abs(grid - w))) for w in train)
+    if reference and set(grid[args.reference]) & set(train):
+        raise ValueError(f"--reference must be indices in 0..{grid.size - 1} of the map's speeds, none of the "
+                         f"training ones ({', '.join(map(str, trained))}), got {' '.join(map(str, args.reference))}")
+    return grid
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Check the options, then the model, probe and cubature (cached), the map, the reference or the stress runs;
+    raises ValueError for a bad input."""
+    args = build_parser().parse_args(argv)
+    grid = check_options(args)
+    from rotor37_rom.studies.contact_config import ContactMapConfig, saved_model_info
+
+    try:
+        config = ContactMapConfig.from_options(disk=True, direction="cone", mu=0.15, frequency_cap=CAP_KHZ,
+                                               speeds=SPEEDS, revolutions=args.revolutions, gnl="on",
+                                               cubature=CUBATURE, precision=PRECISION, stress=True, out=args.out,
+                                               quiet=False)
+    except ValueError as exc:                       # the map's own checks: --revolutions is this command's input
+        raise ValueError(f"--revolutions {args.revolutions:g}: {exc}") from None
+    rom = args.out / "rom.npz"
+    if rom.is_file() and not saved_model_info("--out", rom)["disk"]:     # the map's model, read as it is
+        raise ValueError(f"--out: {rom} is a single blade's model; the map's is the bladed disk's (use another "
+                         f"--out)")
+    before_work({"--out": args.out, "the results folder": Path("results")})    # before any work; a dry run stops here
+
+    from rotor37_rom.studies.contact_map import world_comm
+
     comm = world_comm()
     rank = 0 if comm is None else comm.rank
     # the stress runs keep their own account (the map's wall time is the sittings of the map and its reference)
     sittings = Sittings(args.out / ("bench_disk_map_stress_sittings.json" if args.part == "stress"
                                     else "bench_disk_map_sittings.json"), rank == 0)
-    config = ContactMapConfig.from_options(disk=True, direction="cone", mu=0.15, frequency_cap=CAP_KHZ, speeds=SPEEDS,
-                              revolutions=args.revolutions, gnl="on", cubature=CUBATURE, precision=PRECISION,
-                              stress=True, out=args.out, quiet=False)
     try:
         return run(args, config, grid, comm, sittings)
-    except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
     finally:
         sittings.close()
 
 
 def run(args, config: ContactMapConfig, grid: np.ndarray, comm, sittings: Sittings) -> int:
     """The model, probe and cubature (cached), the map, the reference and floor runs, the report."""
+    from rotor37_rom.dynamics.explicit import CentralDifference
+    from rotor37_rom.machine import write_results
+    from rotor37_rom.studies.contact_map import reduced_model, run_contact_map, time_scheme
+    from rotor37_rom.studies.sweep import run_sweep, sweep_folder
+
     rank = 0 if comm is None else comm.rank
     sittings.enter("model, probe and cubature")
     rom = args.out / "rom.npz"
@@ -251,4 +298,4 @@ def run(args, config: ContactMapConfig, grid: np.ndarray, comm, sittings: Sittin
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_main(main))

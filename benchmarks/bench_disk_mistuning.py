@@ -21,57 +21,109 @@ preset, speeds, revolutions, friction, cap and step (another seed adds to the di
 may go on side by side: the file is read and written under a lock); per sigma over its seeds
 (disks), the amplification's mean and largest and the localisation's, and where the largest blade sits in the
 ranking of the stiffness factors. The sweeps in results/bench_disk_mistuning/.
+
+Every option is checked, and the folders written in, before any work: a bad one is one line on stderr and exit
+status 2. ``--check`` does only that (exit status 0); SIGTERM or SIGINT stop the run with one line
+(``rotor37_rom.cli.run_main``).
 """
 from __future__ import annotations
 
-import argparse
 import fcntl
 import sys
 import time
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
-from rotor37_rom.machine import write_results
-from rotor37_rom import fem  # noqa: E402
-from rotor37_rom.dynamics.casing import Casing  # noqa: E402
-from rotor37_rom.disk.assembly import mistuning_factors  # noqa: E402
-from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model  # noqa: E402
-from rotor37_rom.dynamics.explicit import CentralDifference  # noqa: E402
-from rotor37_rom.studies.mistuning import blade_amplitudes, earlier_rows, over_seeds
-from rotor37_rom.studies.sweep import SweepSpec, run_sweep  # noqa: E402
+from rotor37_rom.checks import before_work, fits_in_memory, real_number, whole_number
+from rotor37_rom.cli import ArgumentParser, run_main
 
+MAX_SPEED = 1e5                  # rad/s: the map command's (studies.contact_config.MAX_SPEED)
+MAX_SPEEDS = 100                 # speeds at most (one batch: all of them integrated together)
+MAX_SEED = 2 ** 32 - 1
+N_SECTORS = 36
+ROWS = N_SECTORS + 8 * N_SECTORS     # what a record holds per run: node LE of every sector, the 288 contact forces
+RECORD_DT = 1e-5                 # s: the sweep's sampling (studies.sweep.SweepSpec.record_dt)
+H_GNL = 1.15e-6                  # s: the GNL step's default (the short GNL map's)
 OUT = Path("results/bench_disk_mistuning")
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--preset", default="ci", choices=["ci", "coarse"])
-    parser.add_argument("--sigma", type=float, nargs="+", default=[0.0, 0.01, 0.03, 0.05],
-                        help="standard deviations of the blades' stiffness factors, in [0, 1) (0: tuned)")
-    parser.add_argument("--seeds", type=int, nargs="+", default=[0], help="seeds of the mistuning factors (>= 0)")
-    parser.add_argument("--speeds", type=float, nargs="+", default=[1256.0, 1453.0, 1554.0],
-                        help="angular speeds (rad/s; default: one in each band of large response of the tuned map: "
-                             "the k = 5 band's largest, the 1B/EO4 branch above its jump, its upper part)")
-    parser.add_argument("--revolutions", type=float, default=200.0, help="per speed, from rest")
-    parser.add_argument("--gnl", action="store_true", help="geometric nonlinearity (exact sector tensors at --h)")
-    parser.add_argument("--h", type=float, default=1.15e-6, help="the GNL step (s)")
-    parser.add_argument("--cap", type=float, default=60.0, help="frequency cap (kHz)")
-    parser.add_argument("--mu", type=float, default=0.15, help="friction coefficient")
-    args = parser.parse_args(argv)
-    if not all(0 <= s < 1 for s in args.sigma) or min(args.seeds) < 0 or min(args.speeds) <= 0 \
-            or not 0 < args.revolutions <= 1000 or not 0 < args.h < 1e-4 or not 5 <= args.cap <= 500 \
-            or not 0 <= args.mu <= 2:
-        print("error: --sigma must be in [0, 1), --seeds >= 0, --speeds > 0 rad/s, --revolutions in (0, 1000], --h in "
-              "(0, 1e-4) s, --cap in [5, 500] kHz, --mu in [0, 2]", file=sys.stderr)
-        return 2
+def build_parser() -> ArgumentParser:
+    p = ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--preset", default="ci", choices=["ci", "coarse"], help="mesh preset of the disk sector "
+                   "(default ci)")
+    p.add_argument("--sigma", type=float, nargs="+", default=[0.0, 0.01, 0.03, 0.05],
+                   help="standard deviations of the blades' stiffness factors, each in [0, 1) (0: tuned; the tuned "
+                        "disk always runs; default 0 0.01 0.03 0.05)")
+    p.add_argument("--seeds", type=int, nargs="+", default=None,
+                   help=f"seeds of the mistuning factors, each in 0..{MAX_SEED} (default 0); needs a --sigma > 0")
+    p.add_argument("--speeds", type=float, nargs="+", default=[1256.0, 1453.0, 1554.0],
+                   help=f"angular speeds (rad/s), each in (0, {MAX_SPEED:g}], at most {MAX_SPEEDS} (default 1256 1453 "
+                        f"1554: one in each band of large response of the tuned map: the k = 5 band's largest, the "
+                        f"1B/EO4 branch above its jump, its upper part)")
+    p.add_argument("--revolutions", type=float, default=200.0,
+                   help="per speed, from rest, in (0, 1000] and within this machine's memory (default 200)")
+    p.add_argument("--gnl", action="store_true", help="geometric nonlinearity (exact sector tensors at --h)")
+    p.add_argument("--h", type=float, default=None,
+                   help=f"with --gnl: the GNL step (s), in (0, 1e-4) (default {H_GNL:g})")
+    p.add_argument("--cap", type=float, default=60.0, help="frequency cap (kHz), in [5, 500] (default 60)")
+    p.add_argument("--mu", type=float, default=0.15, help="friction coefficient, in [0, 2] (default 0.15)")
+    return p
+
+
+def check_options(args) -> None:
+    """Every option checked (ValueError naming it and its range); the defaults of --seeds and --h filled in."""
+    for sigma in args.sigma:
+        real_number("--sigma (standard deviations of the stiffness factors)", sigma, 0, 1, open_high=True)
+    if args.seeds is not None and not any(s > 0 for s in args.sigma):
+        raise ValueError("--seeds needs a --sigma > 0 (they seed the mistuning's random factors; the tuned disk has "
+                         "none)")
+    args.seeds = [0] if args.seeds is None else args.seeds
+    for seed in args.seeds:
+        whole_number("--seeds", seed, 0, MAX_SEED)
+    for w in args.speeds:
+        real_number("--speeds", w, 0, MAX_SPEED, open_low=True, unit=" rad/s")
+    if len(args.speeds) > MAX_SPEEDS:
+        raise ValueError(f"--speeds: at most {MAX_SPEEDS} speeds, got {len(args.speeds)}")
+    real_number("--revolutions", args.revolutions, 0, 1000, open_low=True)
+    if args.h is not None and not args.gnl:
+        raise ValueError("--h is the GNL step: it needs --gnl (without it the step is the linear model's)")
+    args.h = H_GNL if args.h is None else args.h
+    real_number("--h (the GNL step)", args.h, 0, 1e-4, open_low=True, open_high=True, unit=" s")
+    real_number("--cap", args.cap, 5, 500, unit=" kHz")
+    real_number("--mu", args.mu, 0, 2)
+    records = args.revolutions * 2 * np.pi / min(args.speeds) / RECORD_DT + 1
+    batch = len(args.speeds)
+    fits_in_memory("--revolutions", 8.0 * ROWS * records * batch,
+                   f"{batch} runs x {records:.3g} records x {ROWS} values, at {min(args.speeds):g} rad/s",
+                   hint="fewer revolutions or speeds")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Check the options, then the tuned and mistuned disks' sweeps and their statistics; raises ValueError for a bad
+    input."""
+    args = build_parser().parse_args(argv)
+    check_options(args)
+    before_work({"the sweeps' folder": OUT, "the model cache": Path("results/cache"),
+                 "the results folder": Path("results")})          # before any work; a dry run stops here
+
+    from rotor37_rom import fem
+    from rotor37_rom.disk.assembly import mistuning_factors
+    from rotor37_rom.dynamics.casing import Casing
+    from rotor37_rom.dynamics.explicit import CentralDifference
+    from rotor37_rom.machine import write_results
+    from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model
+    from rotor37_rom.studies.mistuning import blade_amplitudes, earlier_rows, over_seeds
+    from rotor37_rom.studies.sweep import SweepSpec, run_sweep
+
     cap = 2 * np.pi * 1e3 * args.cap
     casing = Casing(mu=args.mu, direction="cone")
     sector = fem.create_disk_sector(preset=args.preset)
     base = dict(tip_nodes="all", r_c=10, r_md=10, criterion="MI2b", r_cyclic=144)
     rows, tuned = [], None
     disks = [(0.0, 0)] + [(s, seed) for s in args.sigma if s > 0 for seed in args.seeds]
-    N = 36
+    N = N_SECTORS
     for sigma, seed in disks:
         factors = None if sigma == 0 else tuple(mistuning_factors(N, sigma, seed).tolist())
         t0 = time.perf_counter()
@@ -122,4 +174,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_main(main))

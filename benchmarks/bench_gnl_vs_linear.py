@@ -47,27 +47,37 @@ folders of their own, and each row says its model's r. Each cubature training ta
 with --global-md 10 --capped-training); the maps run on
 --ranks ranks, the GNL step from each range's probe (1.2e-7 to 6.7e-7 s measured; 2.11e-8 s at mu = 0.1 over
 1620-2000 rad/s, set by one collapse state: 3.96e-7 s with --step-outliers drop), which sets most of the time.
+
+Every option is checked, and the model read (or its folder written in) and the folders written in, before any work:
+a bad one is one line on stderr and exit status 2. ``--check`` does only that (exit status 0); SIGTERM or SIGINT stop
+the run with one line (``rotor37_rom.cli.run_main``).
 """
 from __future__ import annotations
 
-import argparse
 import functools
 import json
 import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
-from rotor37_rom.studies import contact_map  # noqa: E402
-from rotor37_rom.machine import mpirun_env, write_results  # noqa: E402
-from rotor37_rom.studies.gnl_vs_linear import check_speeds_error, grid_index, in_range, same_step  # noqa: E402
+from rotor37_rom.checks import before_work, readable_file, real_number, whole_number
+from rotor37_rom.cli import ArgumentParser, run_main
+from rotor37_rom.machine import mpirun_env, write_results
+from rotor37_rom.studies.gnl_vs_linear import check_speeds_error, grid_index, in_range, same_step
 
 ROOT = Path(__file__).resolve().parent.parent
 DEMO = ROOT / "demos" / "contact_map.py"
 OUT = Path("results/gnl_vs_linear")
 SETTINGS = {"off": (False,), "on": (True,), "both": (False, True)}
+BUILD = {"preset": "ci", "r_c": 25, "global_md": 3}      # the model built when --model is missing
+MAX_REVOLUTIONS = 1000.0
+MAX_CAP = 1e4                    # kHz: the map command's (studies.contact_config.MapScheme)
+MAX_BATCH = 1000
+MAX_RANKS = 256
 
 
 def map_command(args, mu: float, speeds: tuple, out: Path) -> list[str]:
@@ -314,6 +324,7 @@ def build_model(path: Path, preset: str, r_c: int, global_md: int) -> None:
     the modal derivatives of the first ``global_md`` clamped modes (3: 1B, 1T, 2B), exact cubic tensors), saved to
     ``path``."""
     from rotor37_rom.model.reduced import save_reduced_model
+    from rotor37_rom.studies import contact_map
 
     model = contact_map.build_model(contact_map.ContactMapConfig.from_options(preset=preset, r_c=r_c,
                                                                               global_md=global_md, out=OUT))
@@ -333,60 +344,164 @@ def nfrc_chart(rows: list[dict], direction: str, quarter_omega1: float) -> Path:
                      paper={"paper zero IC, no GNL": 1446.0, "paper zero IC, GNL": 1535.0})
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--model", type=Path, help="reduced model; built when missing (default "
-                        "results/gnl_vs_linear/rom.npz, rom_g<N>.npz with --global-md N other than 3)")
-    parser.add_argument("--preset", default="ci", help="mesh preset of the model built (default ci)")
-    parser.add_argument("--r-c", type=int, default=25, help="fixed-interface modes of the model built (default 25)")
-    parser.add_argument("--global-md", type=int, default=3,
-                        help="modal derivatives of the first N clamped modes in the model built, 0..20 (default 3: "
-                             "the maps' r = 55; 10: r = 104, the basis nearest the full order in contact)")
-    parser.add_argument("--capped-training", action="store_true",
-                        help="the cubature's training runs at the frequency cap (demos/contact_map.py "
-                             "--capped-training; for --global-md 10, whose unscaled exact runs take hours)")
-    parser.add_argument("--mu", type=float, nargs="+", default=[0.15], help="friction coefficients (default 0.15)")
-    parser.add_argument("--direction", choices=["x", "radial", "cone"], default="cone")
-    parser.add_argument("--gnl", choices=list(SETTINGS), default="both", help="maps with GNL off, on or both")
-    parser.add_argument("--speeds", type=float, nargs="+", default=[1200.0, 1600.0, 21, 1620.0, 2000.0, 20],
-                        metavar="START STOP N", help="one or more speed ranges, each a map of its own (its own "
-                        "cubature, trained at its speeds); default 1200-1600 x 21 and 1620-2000 x 20")
-    parser.add_argument("--revolutions", type=float, default=200.0)
-    parser.add_argument("--cap", type=float, default=120.0, help="frequency cap of both settings (kHz)")
-    parser.add_argument("--cubature", type=float, default=1e-4, help="tolerance of the GNL point cubature")
-    parser.add_argument("--batch", type=int, default=11, help="speeds integrated together per rank")
-    parser.add_argument("--ranks", type=int, default=2, help="MPI ranks of the maps (1: serial)")
-    parser.add_argument("--step-outliers", choices=["keep", "drop"], default="keep",
-                        help="the GNL maps' step from every state (keep) or without the few collapse states far "
-                             "above the others (drop; demos/contact_map.py --step-outliers)")
-    parser.add_argument("--floor", type=float, metavar="EPS",
-                        help="run the maps (and the --step-check speeds) again with the internal forces scaled by "
-                             "1 + EPS, |EPS| < 0.01, on the same cubature and step: the speeds a perturbation that "
-                             "small moves (OUT/floor, OUT/step_check_floor)")
-    parser.add_argument("--step-check", type=float, nargs=3, metavar=("START", "STOP", "N"),
-                        help="with --step-outliers drop: run these speeds of the GNL map again at the step from "
-                             "every state and compare (each speed one of a range's)")
-    args = parser.parse_args(argv)
+def build_parser() -> ArgumentParser:
+    from rotor37_rom.reduction.craig_bampton import GLOBAL_MD_MAX
+    from rotor37_rom.studies.contact_config import MAX_MAP_SPEEDS, MAX_SPEED
+
+    p = ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--model", type=Path,
+                   help="reduced model (.npz, a blade's); built when missing (default results/gnl_vs_linear/rom.npz, "
+                        "rom_g<N>.npz with --global-md N other than 3)")
+    p.add_argument("--preset", choices=["ci", "coarse", "paper"], default=None,
+                   help="mesh preset of the model built (default ci); only when the model is built")
+    p.add_argument("--r-c", type=int, default=None,
+                   help="fixed-interface modes of the model built, >= 1 (default 25); only when the model is built")
+    p.add_argument("--global-md", type=int, default=None,
+                   help=f"modal derivatives of the first N clamped modes in the model built, 0..{GLOBAL_MD_MAX} "
+                        f"(default 3: the maps' r = 55; 10: r = 104, the basis nearest the full order in contact); "
+                        f"only when the model is built")
+    p.add_argument("--capped-training", action="store_true",
+                   help="the cubature's training runs at the frequency cap (demos/contact_map.py --capped-training; "
+                        "for --global-md 10, whose unscaled exact runs take hours); needs GNL maps (--gnl on or both)")
+    p.add_argument("--mu", type=float, nargs="+", default=[0.15],
+                   help="friction coefficients, each in [0, 2] (default 0.15)")
+    p.add_argument("--direction", choices=["x", "radial", "cone"], default="cone",
+                   help="the casing's contact normal (default cone)")
+    p.add_argument("--gnl", choices=list(SETTINGS), default="both", help="maps with GNL off, on or both (default both)")
+    p.add_argument("--speeds", type=float, nargs="+", default=[1200.0, 1600.0, 21, 1620.0, 2000.0, 20],
+                   metavar="START STOP N",
+                   help=f"one or more speed ranges, each a map of its own (its own cubature, trained at its speeds): "
+                        f"0 < START <= STOP <= {MAX_SPEED:g} rad/s, N in 1..{MAX_MAP_SPEEDS}; default 1200-1600 x 21 "
+                        f"and 1620-2000 x 20")
+    p.add_argument("--revolutions", type=float, default=200.0,
+                   help=f"revolutions per speed, in (0, {MAX_REVOLUTIONS:g}] and within this machine's memory "
+                        f"(default 200)")
+    p.add_argument("--cap", type=float, default=120.0,
+                   help=f"frequency cap of both settings (kHz), in (0, {MAX_CAP:g}] (default 120)")
+    p.add_argument("--cubature", type=float, default=None,
+                   help="tolerance of the GNL point cubature, in (0, 1) (default 1e-4); needs GNL maps")
+    p.add_argument("--batch", type=int, default=11,
+                   help=f"speeds integrated together per rank, 1..{MAX_BATCH} (default 11)")
+    p.add_argument("--ranks", type=int, default=2, help=f"MPI ranks of the maps, 1..{MAX_RANKS} (1: serial; default 2)")
+    p.add_argument("--step-outliers", choices=["keep", "drop"], default=None,
+                   help="the GNL maps' step from every state (keep, the default) or without the few collapse states "
+                        "far above the others (drop; demos/contact_map.py --step-outliers); needs GNL maps")
+    p.add_argument("--floor", type=float, metavar="EPS",
+                   help="run the maps (and the --step-check speeds) again with the internal forces scaled by "
+                        "1 + EPS, 0 < |EPS| < 0.01, on the same cubature and step: the speeds a perturbation that "
+                        "small moves (OUT/floor, OUT/step_check_floor)")
+    p.add_argument("--step-check", type=float, nargs=3, metavar=("START", "STOP", "N"),
+                   help="with --step-outliers drop: run these speeds of the GNL map again at the step from "
+                        "every state and compare (each speed one of a range's)")
+    return p
+
+
+def check_options(args) -> list[tuple]:
+    """Every option checked (ValueError naming it and its range), the defaults of those that need another filled
+    in; the speed ranges (START, STOP, N). The model is checked by ``check_model``."""
+    from rotor37_rom.reduction.craig_bampton import GLOBAL_MD_MAX
+    from rotor37_rom.studies.contact_config import MAX_MAP_SPEEDS, MAX_SPEED
+
+    for mu in args.mu:
+        real_number("--mu (friction coefficients)", mu, 0, 2)
     if len(args.speeds) % 3:
-        print(f"error: --speeds takes START STOP N per range, got {len(args.speeds)} numbers", file=sys.stderr)
-        return 2
+        raise ValueError(f"--speeds takes START STOP N per range, got {len(args.speeds)} numbers")
     ranges = [tuple(args.speeds[i:i + 3]) for i in range(0, len(args.speeds), 3)]
-    if args.floor is not None and not (np.isfinite(args.floor) and 0 < abs(args.floor) < 0.01):
-        print(f"error: --floor must be a perturbation with 0 < |EPS| < 0.01, got {args.floor}", file=sys.stderr)
-        return 2
+    for start, stop, n in ranges:
+        for value in (start, stop, n):
+            real_number("--speeds (START, STOP, N)", value, 0, MAX_SPEED, open_low=True)
+        if not (start <= stop and float(n).is_integer() and 1 <= n <= MAX_MAP_SPEEDS):
+            raise ValueError(f"--speeds: each range needs 0 < START <= STOP <= {MAX_SPEED:g} rad/s and an integer N "
+                             f"in 1..{MAX_MAP_SPEEDS}, got {start:g} {stop:g} {n:g}")
+    real_number("--revolutions", args.revolutions, 0, MAX_REVOLUTIONS, open_low=True)
+    real_number("--cap (the frequency cap)", args.cap, 0, MAX_CAP, open_low=True, unit=" kHz")
+    whole_number("--batch", args.batch, 1, MAX_BATCH)
+    whole_number("--ranks", args.ranks, 1, MAX_RANKS)
+    if args.global_md is not None:
+        whole_number("--global-md", args.global_md, 0, GLOBAL_MD_MAX)
+    if args.r_c is not None:
+        whole_number("--r-c", args.r_c, 1)
+    gnl = args.gnl != "off"
+    for option, given in (("--cubature", args.cubature is not None), ("--step-outliers", args.step_outliers),
+                          ("--capped-training", args.capped_training)):
+        if given and not gnl:
+            raise ValueError(f"{option} shapes the GNL maps: it does nothing with --gnl off")
+    args.cubature = 1e-4 if args.cubature is None else args.cubature
+    args.step_outliers = "keep" if args.step_outliers is None else args.step_outliers
+    real_number("--cubature (its tolerance)", args.cubature, 0, 1, open_low=True, open_high=True)
+    if args.floor is not None:
+        real_number("--floor (the perturbation EPS)", args.floor, -0.01, 0.01, open_low=True, open_high=True)
+        if args.floor == 0:
+            raise ValueError("--floor must be a perturbation with 0 < |EPS| < 0.01, got 0")
     if args.step_check is not None:
+        for value in args.step_check:
+            real_number("--step-check (START, STOP, N)", value, 0, MAX_SPEED, open_low=True)
         error = check_speeds_error(args, ranges)
         if error:
-            print(f"error: --step-check: {error}", file=sys.stderr)
-            return 2
-    from rotor37_rom.reduction.craig_bampton import GLOBAL_MD_MAX
-    from rotor37_rom.model.reduced import load_reduced_model
+            raise ValueError(f"--step-check: {error}")
+    return ranges
 
-    if not 0 <= args.global_md <= GLOBAL_MD_MAX:
-        print(f"error: --global-md must be in 0..{GLOBAL_MD_MAX}, got {args.global_md}", file=sys.stderr)
-        return 2
+
+def check_model(args) -> dict:
+    """The model the maps share: a saved blade's model read as it is (the options that build one refused), or the
+    one to build (its options checked, its folder written in before any work). {option: folder} of before_work."""
+    from rotor37_rom.studies.contact_config import ContactMapConfig, saved_model_info
+
+    given = {name: getattr(args, name) for name in BUILD if getattr(args, name) is not None}
+    explicit = args.model is not None
     if args.model is None:
-        args.model = OUT / ("rom.npz" if args.global_md == 3 else f"rom_g{args.global_md}.npz")
+        global_md = given.get("global_md", BUILD["global_md"])
+        args.model = OUT / ("rom.npz" if global_md == 3 else f"rom_g{global_md}.npz")
+    if args.model.exists():
+        readable_file("--model", args.model)
+        info = saved_model_info("--model", args.model)
+        if info["disk"]:
+            raise ValueError(f"--model: {args.model} is a bladed disk's model; the maps are the blade's")
+        idle = [n for n in given if explicit or n != "global_md"]      # --global-md names the default model
+        if idle:
+            raise ValueError(f"--{idle[0].replace('_', '-')} builds the model: {args.model} exists and is read as it "
+                             f"is (give another --model to build one)")
+        folders = {}
+    else:
+        if str(args.model).strip() == "" or args.model.suffix != ".npz":
+            raise ValueError(f"--model must be a reduced model's file (.npz), got {str(args.model)!r}")
+        folders = {"--model (the folder of the model built)": args.model.parent}
+    for name, value in BUILD.items():
+        setattr(args, name, given.get(name, value))
+    if not args.model.exists():                     # the model built: its options, as the map command checks them
+        ContactMapConfig.from_options(preset=args.preset, r_c=args.r_c, global_md=args.global_md, out=OUT)
+    return folders
+
+
+def check_maps(args, ranges: list[tuple]) -> None:
+    """Each map command's options as demos/contact_map.py checks them (its memory too): ValueError naming this
+    command's option."""
+    from rotor37_rom.studies.contact_config import ContactMapConfig
+
+    for mu in args.mu:
+        for speeds in ranges:
+            try:
+                ContactMapConfig.from_options(
+                    model=args.model, gnl=args.gnl, frequency_cap=args.cap, cubature=args.cubature,
+                    precision="single", mu=mu, direction=args.direction, speeds=speeds, revolutions=args.revolutions,
+                    retry_diverged=2, batch=args.batch, out=OUT, quiet=True, step_outliers=args.step_outliers,
+                    capped_training=args.capped_training, perturbation=args.floor or 0.0)
+            except ValueError as exc:
+                raise ValueError(str(exc).replace("--frequency-cap", "--cap").replace("--perturbation", "--floor")
+                                 ) from None
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Check the options and the model, then the maps (demos/contact_map.py), their rows and the charts; raises
+    ValueError for a bad input."""
+    args = build_parser().parse_args(argv)
+    ranges = check_options(args)
+    folders = check_model(args)
+    check_maps(args, ranges)
+    before_work(folders | {"the maps' folder": OUT, "the results folder": Path("results")})   # a dry run stops here
+
+    from rotor37_rom.model.reduced import load_reduced_model
+    from rotor37_rom.studies import contact_map
 
     if not args.model.is_file():
         build_model(args.model, args.preset, args.r_c, args.global_md)
@@ -440,4 +555,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_main(main))

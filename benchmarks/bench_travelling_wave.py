@@ -9,6 +9,7 @@ N; the rotor speed of a point is omega / k. Stability: Hill's method per perturb
 diameter j in its constant part), ``periodic.travelling_wave``.
 
     python benchmarks/bench_travelling_wave.py [--model results/disk_map200/rom.npz] [--k 6] [--force 20] [--H 3]
+        [--check]
 
 With ``--departure SPEED ...`` the stability along the branch is replaced by the full disk marched from the wave at
 those rotor speeds (``periodic.departure``): each set of nodal diameters' growth a period against Hill's.
@@ -16,17 +17,31 @@ those rotor speeds (``periodic.departure``): each set of nodal diameters' growth
 Results: results/bench_travelling_wave.json (the machine, both costs and their ratio, the branch: speed, node LE's
 amplitude, and at every --every-th point its stability and the classes that are unstable). ~30 min on this
 machine.
+
+Every option is checked, and the model read and the folders written in, before any work: a bad one is one line on
+stderr and exit status 2. ``--check`` does only that and says what would run (exit status 0); SIGTERM or SIGINT stop
+the run with one line (``rotor37_rom.cli.run_main``).
 """
 from __future__ import annotations
 
-import argparse
+import re
 import sys
 import time
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
+from rotor37_rom.checks import before_work, flagged, real_number, whole_number, writable_folder
+from rotor37_rom.cli import ArgumentParser, run_main
 from rotor37_rom.machine import write_results
+
+N_SECTORS = 36                   # the maps' disk (rotor 37)
+MAX_FORCE = 1e3                  # N at one node: 50 times the default's 20 N
+MAX_RANGE = 10.0                 # the branch's end, times the wave's linear 1B frequency
+MAX_POINTS = 10_000              # points of the branch at most (each a Newton on the balance)
+MAX_DEPARTURE = 3000.0           # rad/s: rotor 37's range (studies.campbell.MAX_TURNING_SPEED)
+NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}")
 
 
 def map_model(path: Path | None, cache: Path):
@@ -34,7 +49,7 @@ def map_model(path: Path | None, cache: Path):
     from rotor37_rom.model.reduced import load_reduced_model
 
     if path is not None:
-        return load_reduced_model(path)
+        return flagged("--model", lambda: load_reduced_model(path))
     from rotor37_rom import fem
     from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model
 
@@ -56,9 +71,8 @@ def departures(args, tw, branch, out) -> int:
     for speed in args.departure:
         i = int(np.argmin(np.abs(np.asarray(speeds) - speed)))
         if abs(speeds[i] - speed) > 0.01 * speed:
-            print(f"bench_travelling_wave: --departure {speed:g} rad/s is not on the branch (its speeds "
-                  f"{min(speeds):,.1f}-{max(speeds):,.1f} rad/s)", file=sys.stderr)
-            return 2
+            raise ValueError(f"--departure {speed:g} rad/s is not on the branch (its speeds {min(speeds):,.1f}-"
+                             f"{max(speeds):,.1f} rad/s)")
         sol = solve_periodic(tw, branch.points[i].X.ravel(), speed * k, stability=False, tol=1e-8)
         t = time.perf_counter()
         dep = wave_departure(tw, sol, periods=args.periods, size=1e-6)
@@ -78,36 +92,117 @@ def departures(args, tw, branch, out) -> int:
     return 0
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--model", type=Path, default=None, help="a saved disk model (default: build the maps' one)")
-    p.add_argument("--k", type=int, default=6, help="the load's nodal diameters (engine order), 1..17")
-    p.add_argument("--force", type=float, default=20.0, help="N at node LE of each sector (> 0)")
-    p.add_argument("--H", type=int, default=3, help="harmonics (1..8)")
+def build_parser() -> ArgumentParser:
+    p = ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--model", type=Path, default=None,
+                   help="a saved tuned bladed disk's model with GNL forces (.npz, e.g. results/disk_map200/rom.npz; "
+                        "default: build the maps' one into --cache)")
+    p.add_argument("--cache", type=Path, default=None,
+                   help="folder the maps' disk model is built into and read from (default results/cache); not with "
+                        "--model")
+    p.add_argument("--k", type=int, default=6,
+                   help=f"the load's nodal diameters (engine order), 1..{N_SECTORS // 2 - 1} (below half the model's "
+                        f"sectors; default 6)")
+    p.add_argument("--force", type=float, default=20.0,
+                   help=f"N at node LE of each sector, in (0, {MAX_FORCE:g}] (default 20)")
+    p.add_argument("--H", type=int, default=3, help="harmonics of the balance, 1..8 (default 3)")
     p.add_argument("--range", type=float, nargs=2, default=(0.9, 1.6), metavar=("FROM", "TO"),
-                   help="the branch from FROM to TO times the wave's linear 1B frequency")
-    p.add_argument("--step", type=float, default=0.02, help="relative arc length of a step (> 0)")
-    p.add_argument("--max-points", type=int, default=150, help="points of the branch at most")
-    p.add_argument("--every", type=int, default=2, help="the stability at every this many points (>= 1)")
+                   help=f"the branch from FROM to TO times the wave's linear 1B frequency, 0 < FROM < TO <= "
+                        f"{MAX_RANGE:g} (default 0.9 1.6)")
+    p.add_argument("--step", type=float, default=0.02,
+                   help="relative arc length of a step, in (0, 0.5] (default 0.02)")
+    p.add_argument("--max-points", type=int, default=150,
+                   help=f"points of the branch at most, 2..{MAX_POINTS} (default 150)")
+    p.add_argument("--every", type=int, default=None,
+                   help=f"the stability at every this many points, 1..{MAX_POINTS} (default 2); not with --departure")
     p.add_argument("--no-full", action="store_true", help="skip the full disk's cost (its balance is dense)")
     p.add_argument("--departure", type=float, nargs="+", default=None, metavar="SPEED",
-                   help="instead of the stability along the branch: the full disk marched from the wave at these rotor "
-                        "speeds (rad/s, on the branch), each perturbation set's growth against Hill's")
-    p.add_argument("--periods", type=int, default=60, help="--departure: wave periods marched at most (>= 8)")
-    p.add_argument("--name", default="bench_travelling_wave", help="results/<name>.json")
-    args = p.parse_args(argv)
-    for ok, msg in ((1 <= args.k <= 17, f"--k must be in 1..17, got {args.k}"),
-                    (args.force > 0, f"--force must be > 0 N, got {args.force}"),
-                    (1 <= args.H <= 8, f"--H must be in 1..8, got {args.H}"),
-                    (0 < args.range[0] < args.range[1], f"--range must be 0 < FROM < TO, got {args.range}"),
-                    (args.step > 0, f"--step must be > 0, got {args.step}"),
-                    (args.every >= 1, f"--every must be >= 1, got {args.every}"),
-                    (args.departure is None or all(v > 0 for v in args.departure),
-                     f"--departure speeds must be > 0 rad/s, got {args.departure}"),
-                    (args.periods >= 8, f"--periods must be >= 8, got {args.periods}")):
-        if not ok:
-            print(f"bench_travelling_wave: {msg}", file=sys.stderr)
-            return 2
+                   help=f"instead of the stability along the branch: the full disk marched from the wave at these "
+                        f"rotor speeds (rad/s, in (0, {MAX_DEPARTURE:g}], on the branch), each perturbation set's "
+                        f"growth against Hill's")
+    p.add_argument("--periods", type=int, default=None,
+                   help="with --departure: wave periods marched at most, 8..10000 (default 60)")
+    p.add_argument("--name", default="bench_travelling_wave",
+                   help="the results file results/NAME.json: a file name (letters, digits, _ . -; default "
+                        "bench_travelling_wave)")
+    return p
+
+
+def check_options(args) -> dict | None:
+    """Every option checked (ValueError naming it and its range), the defaults of those that need another filled
+    in; the saved model's kind (``studies.contact_config.saved_model_info``) when --model is given, else None."""
+    from rotor37_rom.studies.contact_config import saved_model_info
+
+    whole_number("--k", args.k, 1, N_SECTORS // 2 - 1)
+    real_number("--force", args.force, 0, MAX_FORCE, open_low=True, unit=" N")
+    whole_number("--H", args.H, 1, 8)
+    low, high = args.range
+    for value in args.range:
+        real_number("--range (FROM, TO)", value, 0, MAX_RANGE, open_low=True)
+    if not low < high:
+        raise ValueError(f"--range must be 0 < FROM < TO <= {MAX_RANGE:g}, got {low:g} {high:g}")
+    real_number("--step (the relative arc length of a step)", args.step, 0, 0.5, open_low=True)
+    whole_number("--max-points", args.max_points, 2, MAX_POINTS)
+    if args.departure is not None:
+        if args.every is not None:
+            raise ValueError("--every (the stability along the branch) does nothing with --departure (which replaces "
+                             "it)")
+        for speed in args.departure:
+            real_number("--departure (rotor speeds on the branch)", speed, 0, MAX_DEPARTURE, open_low=True,
+                        unit=" rad/s")
+        args.periods = 60 if args.periods is None else args.periods
+        whole_number("--periods", args.periods, 8, 10000)
+    elif args.periods is not None:
+        raise ValueError("--periods needs --departure (the periods the full disk is marched)")
+    else:
+        args.every = 2 if args.every is None else args.every
+        whole_number("--every", args.every, 1, MAX_POINTS)
+    if not (isinstance(args.name, str) and NAME.fullmatch(args.name)):
+        raise ValueError(f"--name must be a file name (letters, digits, _ . -, not starting with '.' or '-'; "
+                         f"results/NAME.json), got {args.name!r}")
+    if args.model is None:
+        args.cache = Path("results/cache") if args.cache is None else args.cache
+        return None
+    if args.cache is not None:
+        raise ValueError("--cache is where the model is built: not with --model (the saved model is read as it is)")
+    info = saved_model_info("--model", args.model)
+    mistuning = (info["metadata"].get("config") or {}).get("mistuning")
+    if not info["disk"]:
+        raise ValueError(f"--model: {args.model} is a single blade's model; the travelling wave takes a bladed disk's "
+                         f"(demos/contact_map.py --disk writes one)")
+    if not info["forces"].startswith("sector_"):
+        raise ValueError(f"--model: {args.model} has no GNL sector forces ({info['forces']}); the wave's NFRC is the "
+                         f"disk's with GNL (build it with --gnl on)")
+    if mistuning and len(set(np.ravel(mistuning).tolist())) > 1:
+        raise ValueError(f"--model: {args.model} is a mistuned disk's model: no travelling wave on one sector")
+    if "LE" not in info["nodes"]:
+        raise ValueError(f"--model: {args.model} has no node LE (the load's node): its nodes are "
+                         f"{sorted(set(info['nodes']))}")
+    if not args.k < info["n_sectors"] / 2:
+        raise ValueError(f"--k must be in 1..{(info['n_sectors'] - 1) // 2} for the model's {info['n_sectors']} "
+                         f"sectors, got {args.k}")
+    return info
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Check the options, say what runs, then the costs, the branch and its stability (or the departures); raises
+    ValueError for a bad input."""
+    args = build_parser().parse_args(argv)
+    check_options(args)
+    folders = {"--name": Path("results")} | ({"--cache": args.cache} if args.model is None else {})
+    for option, folder in folders.items():                    # refused before the plan is said; created below
+        writable_folder(option, folder, create=False)
+    model = (f"the saved model {args.model}" if args.model is not None else
+             f"the maps' disk model (ci, r_c = 10, r_MD = 10, 144 interface modes) built into {args.cache}")
+    after = (f"the full disk marched from the wave at {', '.join(f'{w:g}' for w in args.departure)} rad/s "
+             f"({args.periods} periods at most)" if args.departure else f"its stability every {args.every} points")
+    against = "" if args.no_full else " against the full disk's"
+    print(f"bench_travelling_wave: the {args.k}-diameter wave's GNL branch ({args.force:g} N at node LE, H = {args.H}) "
+          f"from {args.range[0]:g} to {args.range[1]:g} times its linear 1B frequency (step {args.step:g}, at most "
+          f"{args.max_points} points), then {after}; the cost of one sector's balance"
+          f"{against}; on {model}; writes results/{args.name}.json",
+          flush=True)
+    before_work(folders, {"--model": args.model})             # before any work; a dry run stops here
 
     from rotor37_rom.disk.harmonics import harmonic_frequencies
     from rotor37_rom.disk.loads import node_load_matrix
@@ -115,7 +210,7 @@ def main(argv=None) -> int:
                                       model_force, solve_periodic, travelling_excitation)
 
     t0 = time.perf_counter()
-    model = map_model(args.model, Path("results/cache"))
+    model = map_model(args.model, args.cache)
     t_model = time.perf_counter() - t0
     P = node_load_matrix(model.nodes, model.r, "LE", 2)
     le = model.nodes.q_index[model.nodes.row("LE", 0), 2]
@@ -185,4 +280,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_main(main))

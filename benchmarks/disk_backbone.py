@@ -14,21 +14,29 @@ ansatz's defect (``travelling_wave_backbone``).
 Results: results/disk_backbone.json and results/disk_backbone.png (node LE's amplitude against the speed where EO k
 meets the wave, the points whose ansatz defect exceeds 1e-2 marked x; --overlay: the forced runs of
 bench_disk_map.py). 3-6 min for the two default waves on this machine.
+
+Every option is checked, and the model and the files read and the folder written in, before any work: a bad one is
+one line on stderr and exit status 2. ``--check`` does only that (exit status 0); SIGTERM or SIGINT stop the run
+with one line (``rotor37_rom.cli.run_main``).
 """
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
-from rotor37_rom.machine import write_results
+from rotor37_rom.checks import before_work, readable_file, real_number, whole_number
+from rotor37_rom.cli import ArgumentParser, run_main
 
 DIRECTIONS = ("ex", "radial", "cone")
 DEFECT = 1e-2          # points whose ansatz defect is larger are marked (x), not joined
+MODEL = Path("results/disk_map200/rom.npz")      # the full-disk GNL map's model (benchmarks/bench_disk_map.py)
+SAVED, CHART = Path("results/disk_backbone.json"), Path("results/disk_backbone.png")
+DEFAULTS = {"diameters": [4, 6], "le_max": 0.8, "points": 16, "direction": "cone"}
 
 
 def le_amplitude(Nm: np.ndarray, q: np.ndarray, k: int, omega: float) -> float:
@@ -71,59 +79,112 @@ def backbone(model, Nm: np.ndarray, k: int, le_max: float, points: int) -> tuple
     return rows, f"node LE reached {1e3 * le_max:g} mm"
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--model", type=Path, default=Path("results/disk_map200/rom.npz"),
-                        help="a disk map's reduced model (rom.npz, with its GNL tensors)")
-    parser.add_argument("--diameters", type=int, nargs="+", default=[4, 6], help="nodal diameters k of the waves")
-    parser.add_argument("--le-max", type=float, default=0.8, help="node LE's largest amplitude (mm), in (0, 5]")
-    parser.add_argument("--points", type=int, default=16, help="points per backbone, 4..200")
-    parser.add_argument("--direction", choices=DIRECTIONS, default="cone", help="the contact normal node LE is along")
-    parser.add_argument("--overlay", type=Path,
-                        help="results of bench_disk_map.py (bench_disk_map[_reference].json): its forced runs' node LE "
-                             "drawn at their speeds")
-    parser.add_argument("--replot", action="store_true",
-                        help="draw the chart again from results/disk_backbone.json (with --overlay) without computing")
-    args = parser.parse_args(argv)
-    if not 0 < args.le_max <= 5:
-        print(f"error: --le-max must be in (0, 5] mm, got {args.le_max:g}", file=sys.stderr)
-        return 2
-    if not 4 <= args.points <= 200:
-        print(f"error: --points must be in 4..200, got {args.points}", file=sys.stderr)
-        return 2
-    if args.overlay is not None and not args.overlay.is_file():
-        print(f"error: --overlay {args.overlay} is not a file", file=sys.stderr)
-        return 2
-    if args.replot:
-        saved = Path("results/disk_backbone.json")
-        if not saved.is_file():
-            print("error: --replot needs results/disk_backbone.json (run without --replot first)", file=sys.stderr)
-            return 2
-        overlay = json.loads(args.overlay.read_text())["rows"][0] if args.overlay else None
-        chart(json.loads(saved.read_text())["rows"], Path("results/disk_backbone.png"), overlay)
-        print("results/disk_backbone.png")
-        return 0
-    if not args.model.is_file():
-        print(f"error: --model {args.model} is not a file (a disk map's rom.npz: demos/contact_map.py --disk writes "
-              f"it in --out)", file=sys.stderr)
-        return 2
-    from rotor37_rom.dynamics.casing import Casing, contact_matrices
-    from rotor37_rom.model.reduced import load_reduced_model
+def build_parser() -> ArgumentParser:
+    p = ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--model", type=Path, default=None,
+                   help=f"a disk map's reduced model (rom.npz, with its GNL tensors; default {MODEL}); not with "
+                        f"--replot")
+    p.add_argument("--diameters", type=int, nargs="+", default=None,
+                   help="nodal diameters k of the waves, each in 1..(N - 1) // 2 for the model's N sectors (1..17 for "
+                        "rotor 37; default 4 6); not with --replot")
+    p.add_argument("--le-max", type=float, default=None,
+                   help="node LE's largest amplitude (mm), in (0, 5] (default 0.8); not with --replot")
+    p.add_argument("--points", type=int, default=None, help="points per backbone, 4..200 (default 16); not with "
+                                                              "--replot")
+    p.add_argument("--direction", choices=DIRECTIONS, default=None,
+                   help="the contact normal node LE is along (default cone); not with --replot")
+    p.add_argument("--overlay", type=Path,
+                   help="results of bench_disk_map.py (bench_disk_map[_reference].json): its forced runs' node LE "
+                        "drawn at their speeds")
+    p.add_argument("--replot", action="store_true",
+                   help=f"draw the chart again from {SAVED} (with --overlay) without computing")
+    return p
 
+
+def overlay_row(path: Path) -> dict:
+    """The results row of bench_disk_map.py in ``path`` (ValueError naming --overlay for a file that is not one)."""
+    readable_file("--overlay", path)
     try:
-        model = load_reduced_model(args.model)
-    except ValueError as exc:
-        print(f"error: --model: {exc}", file=sys.stderr)
-        return 2
-    N = model.nodes.n_sectors
-    if model.sectors is None or model.forces is None:
-        print(f"error: --model must be a disk model with its nonlinear forces (GNL): {args.model}", file=sys.stderr)
-        return 2
+        row = json.loads(path.read_text())["rows"][0]
+        if not (isinstance(row["responses"], dict) and isinstance(row["reference_speeds"], list)):
+            raise TypeError(type(row).__name__)
+    except (ValueError, KeyError, IndexError, TypeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"--overlay: {path} is not a results file of bench_disk_map.py (no rows with its reference "
+                         f"speeds and responses: {type(exc).__name__})") from None
+    return row
+
+
+def saved_rows(path: Path) -> list[dict]:
+    """The rows of an earlier run's results (``SAVED``), for --replot."""
+    if not path.is_file():
+        raise ValueError(f"--replot needs {path} (run without --replot first)")
+    try:
+        rows = json.loads(path.read_text())["rows"]
+        if not all(isinstance(r, dict) and {"k", "speed", "le0_m", "defect"} <= r.keys() for r in rows):
+            raise KeyError("k, speed, le0_m, defect")
+    except (OSError, ValueError, KeyError, TypeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"--replot: {path} is not this command's results ({type(exc).__name__})") from None
+    return rows
+
+
+def check_options(args) -> dict | None:
+    """Every option checked (ValueError naming it and its range), the defaults filled in; the saved model's kind
+    (``studies.contact_config.saved_model_info``), None with --replot."""
+    if args.replot:
+        given = [name for name in ("model", *DEFAULTS) if getattr(args, name) is not None]
+        if given:
+            raise ValueError(f"--{given[0].replace('_', '-')} does nothing with --replot (the chart is drawn again "
+                             f"from {SAVED})")
+    for name, value in DEFAULTS.items():
+        if getattr(args, name) is None:
+            setattr(args, name, value)
+    real_number("--le-max (node LE's largest amplitude)", args.le_max, 0, 5, open_low=True, unit=" mm")
+    whole_number("--points", args.points, 4, 200)
+    for k in args.diameters:
+        whole_number("--diameters (nodal diameters of travelling waves)", k, 1)
+    if args.overlay is not None:
+        overlay_row(args.overlay)
+    if args.replot:
+        saved_rows(SAVED)
+        return None
+    from rotor37_rom.studies.contact_config import saved_model_info
+
+    args.model = MODEL if args.model is None else args.model
+    info = saved_model_info("--model", args.model)
+    if not info["disk"] or info["forces"] == "none":
+        raise ValueError(f"--model must be a disk model with its nonlinear forces (GNL): {args.model} is "
+                         f"{'a single blade' if not info['disk'] else 'a linear disk'}'s (demos/contact_map.py --disk "
+                         f"writes one in --out)")
+    N = info["n_sectors"]
     bad = [k for k in args.diameters if not 0 < k < N / 2]
     if bad:
-        print(f"error: --diameters must be in 1..{(N - 1) // 2} (travelling waves of {N} sectors), got {bad}",
-              file=sys.stderr)
-        return 2
+        raise ValueError(f"--diameters must be in 1..{(N - 1) // 2} (travelling waves of {N} sectors), got "
+                         f"{' '.join(map(str, bad))}")
+    if info["nodes"] and "LE" not in info["nodes"]:
+        raise ValueError(f"--model: {args.model} has no node LE (the node the backbone follows): its nodes are "
+                         f"{sorted(set(info['nodes']))}")
+    return info
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Check the options, then the backbones and their chart (or the chart again); raises ValueError for a bad
+    input."""
+    args = build_parser().parse_args(argv)
+    check_options(args)
+    before_work({"the results folder": SAVED.parent})            # before any work; a dry run stops here
+    overlay = overlay_row(args.overlay) if args.overlay is not None else None
+    if args.replot:
+        chart(saved_rows(SAVED), CHART, overlay)
+        print(str(CHART))
+        return 0
+    from rotor37_rom.dynamics.casing import Casing, contact_matrices
+    from rotor37_rom.machine import write_results
+    from rotor37_rom.model.reduced import load_reduced_model
+
+    model = load_reduced_model(args.model)
+    N = model.nodes.n_sectors
+    if model.sectors is None or model.forces is None:
+        raise ValueError(f"--model must be a disk model with its nonlinear forces (GNL): {args.model}")
     Nm = contact_matrices(model.nodes, model.r, Casing(direction=args.direction),
                           rows=[model.nodes.row("LE", s) for s in range(N)])[0]
     Nm = Nm.toarray() if hasattr(Nm, "toarray") else np.asarray(Nm)
@@ -134,9 +195,8 @@ def main(argv=None) -> int:
     wall = time.perf_counter() - t0
     machine = write_results("disk_backbone", rows, model=str(args.model), model_key=model.key, r=model.r,
                             direction=args.direction, wall_s=wall, stopped=stops)
-    overlay = json.loads(args.overlay.read_text())["rows"][0] if args.overlay else None
-    chart(rows, Path("results/disk_backbone.png"), overlay)
-    print(f"results/disk_backbone.json, results/disk_backbone.png ({wall:.0f} s; {machine})")
+    chart(rows, CHART, overlay)
+    print(f"{SAVED}, {CHART} ({wall:.0f} s; {machine})")
     return 0
 
 
@@ -175,4 +235,4 @@ def chart(rows: list[dict], path: Path, overlay: dict | None = None) -> None:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_main(main))

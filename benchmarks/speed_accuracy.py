@@ -62,33 +62,84 @@ previous entries. Every figure of docs/choosing-a-model.md comes from that file.
 (``floor_record``: what the reference's own cap is worth, and for a stress how far the reference's
 1e-4 perturbation moves it), which ``choose_model`` takes as every candidate's least expected error.
 
+``--json``, ``--cache`` and ``--out`` put the study file, the work files and the charts with their page elsewhere
+(e.g. a trial run that leaves the repository's alone): ``--out DIR`` writes DIR/img/speed_accuracy_<scene>.png and
+the generated block of DIR/choosing-a-model.md (a new page if there is none).
+
 The scenes are library code, ``rotor37_rom.studies.speed_accuracy`` (one module per scene family, a registry of
 scenes, the study file's schema in ``study_file``); this script turns its options into the scenes to run.
+
+Every option is checked, and the study file read and the folders written in, before any work: a bad one is one line
+on stderr and exit status 2. ``--check`` does only that (exit status 0); SIGTERM or SIGINT stop the run with one line
+(``rotor37_rom.cli.run_main``).
 """
 from __future__ import annotations
 
-import argparse
+import json
+import os
 import sys
 from pathlib import Path
+from typing import Sequence
 
-from rotor37_rom.studies.speed_accuracy.context import StudyContext
-from rotor37_rom.studies.speed_accuracy.scenes import DISK_SCENES, GROUPS, SCENES, expand_scenes, run_study
+from rotor37_rom.checks import before_work, readable_file
+from rotor37_rom.cli import ArgumentParser, run_main
+from rotor37_rom.studies.speed_accuracy.scenes import DISK_SCENES, GROUPS, SCENES
 
 ROOT = Path(__file__).resolve().parents[1]
+PAGE = "choosing-a-model.md"          # the page whose generated block the study rewrites, in --out
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scene", nargs="+", choices=SCENES + DISK_SCENES + tuple(GROUPS),
-                        default=["all"],
-                        help="scenes to run: all (the single blade's), disk (the bladed disk's) or names")
-    parser.add_argument("--json", type=Path, default=ROOT / "rotor37_rom" / "data" / "speed_accuracy.json")
-    args = parser.parse_args(argv)
-    study = run_study(StudyContext.in_repository(ROOT, args.json), expand_scenes(args.scene))
+def build_parser() -> ArgumentParser:
+    p = ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--scene", nargs="+", choices=SCENES + DISK_SCENES + tuple(GROUPS), default=["all"],
+                   help="scenes to run: all (the single blade's, the default), disk (the bladed disk's) or names")
+    p.add_argument("--json", type=Path, default=ROOT / "rotor37_rom" / "data" / "speed_accuracy.json",
+                   help="the study file (.json; read if it exists, the scenes not run keep their entries; default "
+                        "rotor37_rom/data/speed_accuracy.json, the one choose_model reads)")
+    p.add_argument("--cache", type=Path, default=ROOT / "results" / "speed_accuracy",
+                   help="folder of the work files: the cached maps, models and runs (default results/speed_accuracy)")
+    p.add_argument("--out", type=Path, default=ROOT / "docs",
+                   help=f"folder of the charts (OUT/img) and of the page whose generated block is rewritten "
+                        f"(OUT/{PAGE}; default docs)")
+    return p
+
+
+def study_file(path: Path) -> None:
+    """ValueError naming --json unless ``path`` is a .json file's path and, where it exists, a study file."""
+    if path.suffix != ".json" or not path.name[:-len(".json")].strip():
+        raise ValueError(f"--json must be a .json file's path (the study file), got {str(path)!r}")
+    if path.exists():
+        readable_file("--json", path)
+        try:
+            study = json.loads(path.read_text())
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise ValueError(f"--json: {path} is not a study file ({type(exc).__name__})") from None
+        if not isinstance(study, dict):
+            raise ValueError(f"--json: {path} is not a study file (a JSON object)")
+        if not os.access(path, os.W_OK):
+            raise ValueError(f"--json: cannot write {path} (permission denied)")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Check the options, then run the scenes into the study file, its charts and page; raises ValueError for a bad
+    input."""
+    args = build_parser().parse_args(argv)
+    study_file(args.json)
+    page = args.out / PAGE
+    if page.exists() and not (page.is_file() and os.access(page, os.R_OK | os.W_OK)):
+        raise ValueError(f"--out: cannot rewrite {page} (not a file that can be read and written)")
+    before_work({"--json": args.json.parent, "--cache": args.cache,
+                 "--out": args.out / "img"})             # before any work; a dry run stops here
+
+    from rotor37_rom.studies.speed_accuracy.context import StudyContext
+    from rotor37_rom.studies.speed_accuracy.scenes import expand_scenes, run_study
+
+    ctx = StudyContext(work=args.cache, img=args.out / "img", doc=page, study_file=args.json)
+    study = run_study(ctx, expand_scenes(args.scene))
     for name, scene in study["scenes"].items():
         print(name, {k: v.get("name") for k, v in scene["choices"].items()})
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_main(main))

@@ -22,7 +22,8 @@ from typing import Sequence
 
 from rotor37_rom.cli import ArgumentParser, run_main
 from rotor37_rom.geometry.blade import MESH_PRESETS
-from rotor37_rom.studies.campbell import CampbellConfig, CampbellResult, run_campbell
+from rotor37_rom.studies.campbell import (MAX_REFINE, MAX_SPEED_COUNT, MAX_TURNING_SPEED, CampbellConfig,
+                                         CampbellResult, run_campbell)
 # -
 
 
@@ -49,12 +50,14 @@ def build_parser() -> ArgumentParser:
     parser = ArgumentParser(description="Campbell diagram of the turning rotor 37 blade")
     parser.add_argument("--preset", default="ci", help=f"mesh preset: {', '.join(MESH_PRESETS)} (default ci)")
     parser.add_argument("--speeds", type=float, nargs=3, default=(0.0, 2000.0, 11), metavar=("START", "STOP", "N"),
-                        help="N speeds (rad/s) from START >= 0 to STOP (default 0 2000 11)")
+                        help=f"N speeds (rad/s) from START >= 0 to STOP <= {MAX_TURNING_SPEED:g} (rotor 37's range: "
+                             f"its blade yields above), N in 2..{MAX_SPEED_COUNT} (default 0 2000 11)")
     parser.add_argument("--modes", type=int, default=4, help="modes followed (1..20, default 4)")
     parser.add_argument("--orders", type=int, nargs="+", default=list(range(1, 9)),
                         help="engine orders (1..100, default 1 to 8)")
     parser.add_argument("--refine", type=float, default=0.01,
-                        help="iterate each crossing on the blade to this (rad/s; 0: interpolated; default 0.01)")
+                        help=f"iterate each crossing on the blade to this (rad/s, 0..{MAX_REFINE:g}; 0: interpolated; "
+                             f"default 0.01)")
     parser.add_argument("--coriolis", action="store_true",
                         help="include the Coriolis force (gyroscopic, on 3x the modes without it)")
     parser.add_argument("--out", type=Path, default=Path("results/campbell"), help="output folder")

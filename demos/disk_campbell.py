@@ -24,6 +24,7 @@ from typing import Sequence
 
 from rotor37_rom.cli import ArgumentParser, run_main
 from rotor37_rom.geometry.blade import MESH_PRESETS
+from rotor37_rom.studies.campbell import MAX_REFINE, MAX_SPEED_COUNT, MAX_TURNING_SPEED
 from rotor37_rom.studies.disk_campbell import DiskCampbellConfig, DiskCampbellResult, run_disk_campbell
 # -
 
@@ -57,16 +58,19 @@ def build_parser() -> ArgumentParser:
     parser = ArgumentParser(description="Campbell and interference diagrams of the turning rotor 37 bladed disk")
     parser.add_argument("--preset", default="ci", help=f"mesh preset: {', '.join(MESH_PRESETS)} (default ci)")
     parser.add_argument("--speeds", type=float, nargs=3, default=(0.0, 2000.0, 5), metavar=("START", "STOP", "N"),
-                        help="N speeds (rad/s) from START >= 0 to STOP (default 0 2000 5)")
+                        help=f"N speeds (rad/s) from START >= 0 to STOP <= {MAX_TURNING_SPEED:g} (rotor 37's range: "
+                             f"its blade yields above), N in 2..{MAX_SPEED_COUNT} (default 0 2000 5)")
     parser.add_argument("--families", type=int, nargs="+", default=[],
                         help="nodal diameters 0..18 (default all)")
     parser.add_argument("--modes", type=int, default=3, help="modes per family (1..10, default 3)")
     parser.add_argument("--orders", type=int, nargs="+", default=list(range(1, 9)),
                         help="engine orders (1..200, default 1 to 8)")
     parser.add_argument("--zzenf-speed", type=float, default=None,
-                        help="the interference diagram's speed (rad/s, default the last speed)")
+                        help=f"the interference diagram's speed (rad/s, 0..{MAX_TURNING_SPEED:g}; default the last "
+                             f"speed)")
     parser.add_argument("--refine", type=float, default=0.0,
-                        help="iterate each crossing on the disk to this (rad/s; default 0: interpolated on the grid)")
+                        help=f"iterate each crossing on the disk to this (rad/s, 0..{MAX_REFINE:g}; default 0: "
+                             f"interpolated on the grid)")
     parser.add_argument("--coriolis", action="store_true",
                         help="include the Coriolis force (forward and backward waves)")
     parser.add_argument("--no-prestress", action="store_true",

@@ -508,6 +508,7 @@ def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], ti
             contact = contact if contact is None or isinstance(contact, str) or np.ndim(contact) != 2 \
                 else turned(contact)
         facets = mesh_import.boundary_facets(mesh.tets)
+        _, normals, areas = mesh_import.outward_normals(mesh.points, mesh.tets)        # row for row with facets
         groups, named = {}, {}
         faces = ((BladeGroup.CLAMP, "clamp", clamp), (BladeGroup.TIP, "tip", tip))
         if cyclic is not None:
@@ -521,6 +522,8 @@ def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], ti
             if not inside.any():
                 raise ValueError(f"{what}: {name!r} of {path} covers no boundary facet (all three corners of a "
                                  f"facet must be in it)")
+            if what == "clamp" and not isinstance(name, str):
+                mesh_import.check_box_face(normals[inside], areas[inside], what, name)
             groups[(int(tag), what)] = facets[inside]
         keys = {what: {tuple(sorted(f)) for f in facets[:, :3].tolist()} for (_, what), facets in groups.items()}
         for a, b in itertools.combinations(keys, 2):
@@ -534,6 +537,8 @@ def import_blade_model(path: str | os.PathLike, clamp: str | Sequence[float], ti
             if isinstance(contact, str):
                 contact = mesh.group(contact, "contact")
             nodes, _ = mesh_import.select_contact_nodes(mesh.points, tip_group, contact)
+            mesh_import.check_contact_on_tip(mesh.points, facets, normals, nodes, "tip" if tip is not None else
+                                             "contact")
             tip_nodes = mesh.points[nodes]
         parts = None
         if blade is not None:

@@ -35,7 +35,8 @@ import numpy as np
 from .abaqus import AbaqusDeck, read_deck
 from .nastran import without_materials
 
-__all__ = ["MESH_SUFFIXES", "UNITS", "BLADE_MASS", "check_blade_mass", "group_report", "ImportedMesh", "read_mesh",
+__all__ = ["MESH_SUFFIXES", "UNITS", "BLADE_MASS", "check_blade_mass", "group_report", "outward_normals",
+           "check_box_face", "check_contact_on_tip", "ImportedMesh", "read_mesh",
            "split_to_tetrahedra", "boundary_facets", "order_le_to_te", "select_contact_nodes", "add_to_gmsh", "AXES",
            "turn_to_z"]
 
@@ -208,9 +209,11 @@ def read_mesh(path: str | os.PathLike, scale: float = 1.0) -> ImportedMesh:
             mesh = meshio.read(str(source), file_format={".bdf": "nastran", ".nas": "nastran", ".fem": "nastran",
                                                          ".inp": "abaqus"}.get(suffix))
     except (Exception, SystemExit) as exc:  # meshio raises ReadError, KeyError, ... or exits on a malformed file
-        first = ([ln for ln in (str(exc) + "\n" + said.getvalue()).splitlines() if ln.strip()][:1]
-                 or [type(exc).__name__])[0].strip()
-        raise ValueError(f"mesh file {path} could not be read ({type(exc).__name__}: {first})") from None
+        # meshio's exit code says nothing: the reason is what it printed before exiting
+        text = said.getvalue() if isinstance(exc, SystemExit) else str(exc) + "\n" + said.getvalue()
+        first = ([ln for ln in text.splitlines() if ln.strip()][:1] or [type(exc).__name__])[0].strip()
+        kind = "meshio stopped" if isinstance(exc, SystemExit) else type(exc).__name__
+        raise ValueError(f"mesh file {path} could not be read ({kind}: {first})") from None
     points = np.asarray(mesh.points, dtype=float)
     if points.ndim != 2 or points.shape[0] == 0:
         raise ValueError(f"mesh file {path} holds no nodes: is it a {suffix} mesh?")
@@ -478,15 +481,72 @@ def _mid_node(kind, cell_index, cell, la, lb, edge_slot, x0, new_node) -> int:
     return new_node(("body", cell_index), centre)
 
 
-def boundary_facets(tets: np.ndarray) -> np.ndarray:
-    """(f, 3) or (f, 6) boundary facets (faces of one tetrahedron only), VTK triangle order."""
+def _boundary(tets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(corner facets (f, 3), their tetrahedra (f,), the face of each in its tetrahedron (f,)) of the boundary."""
     faces = np.array([[t[i] for i in f] for t in tets[:, :4] for f in _TET_FACES]).reshape(len(tets), 4, 3)
     keys = np.sort(faces.reshape(-1, 3), axis=1)
     _, first, counts = np.unique(keys, axis=0, return_index=True, return_counts=True)
     once = first[counts == 1]
-    tet_of, face_of = once // 4, once % 4
+    return faces.reshape(-1, 3)[once], once // 4, once % 4
+
+
+def outward_normals(points: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(corner facets (f, 3), outward unit normals (f, 3), areas (f,)) of the boundary facets of ``tets``: each
+    normal points away from the fourth node of the facet's tetrahedron."""
+    corners, tet_of, face_of = _boundary(tets)
+    a, b, c = (points[corners[:, k]] for k in range(3))
+    n = np.cross(b - a, c - a)
+    apex = points[tets[tet_of, 6 - np.array(_TET_FACES).sum(axis=1)[face_of]]]
+    n *= np.where(np.einsum("ij,ij->i", n, apex - a) > 0, -1.0, 1.0)[:, None]
+    area = 0.5 * np.linalg.norm(n, axis=1)
+    return corners, n / np.maximum(2 * area, np.finfo(float).tiny)[:, None], area
+
+
+#: the widest angle between a box clamp's facets and their mean normal that still makes one face (a root on a
+#: hub cone turns by the blade's angular extent, ~11 deg on rotor 37); past it the box has caught another face
+ONE_FACE_DEG = 30.0
+#: the widest angle between a contact node's tip facet and the outward radial direction (rotor 37's tip cone
+#: is tilted 15.3 deg from radial)
+TIP_FACING_DEG = 45.0
+
+
+def check_box_face(normals: np.ndarray, areas: np.ndarray, what: str, box, share: float = 0.02) -> None:
+    """Refuse a group given as a box whose boundary facets are not one face: more than ``share`` of their area
+    faces more than ``ONE_FACE_DEG`` away from their area-weighted mean normal (a root box that also caught the
+    blade's flanks over-clamps it: +7.5 % on f1 of a third-party blade)."""
+    mean = (areas[:, None] * normals).sum(axis=0)
+    mean /= max(np.linalg.norm(mean), np.finfo(float).tiny)
+    off = areas[normals @ mean < np.cos(np.radians(ONE_FACE_DEG))].sum() / areas.sum()
+    if off > share:
+        raise ValueError(f"{what}: the box {tuple(float(v) for v in box)} m catches {1e6 * areas.sum():.4g} mm^2 of "
+                         f"boundary facets, {100 * off:.0f} % of them facing more than {ONE_FACE_DEG:g} deg away "
+                         f"from the rest (the blade's flanks or another face): a box selects one face; draw it "
+                         f"around that face only, or name a node set of the file")
+
+
+def check_contact_on_tip(points: np.ndarray, facets: np.ndarray, normals: np.ndarray, nodes: np.ndarray,
+                         what: str) -> None:
+    """Refuse contact nodes that are not on the blade's tip: each must be a node of a boundary facet facing outwards
+    within ``TIP_FACING_DEG`` of the radial direction (the largest radius, where the casing is), not on the flanks
+    (a tip box reaching down the flanks moves the nodes chosen along the 'camber line' there)."""
+    centre = points[facets[:, :3]].mean(axis=1)
+    radial = centre[:, :2] / np.maximum(np.linalg.norm(centre[:, :2], axis=1), np.finfo(float).tiny)[:, None]
+    facing = np.einsum("ij,ij->i", normals[:, :2], radial) >= np.cos(np.radians(TIP_FACING_DEG))
+    off = np.flatnonzero(~np.isin(nodes, facets[facing]))
+    if off.size:
+        radius = np.hypot(points[nodes[off], 0], points[nodes[off], 1])
+        raise ValueError(f"{what}: contact nodes {off.tolist()} (of {nodes.size}, LE -> TE; r = "
+                         f"{', '.join(f'{1e3 * r:.2f}' for r in radius)} mm) lie on no boundary facet facing "
+                         f"outwards within {TIP_FACING_DEG:g} deg of radial about +z: they are not on the tip (a tip "
+                         f"group or box that reaches down the flanks? or a rotation axis other than the file's +z: "
+                         f"axis=); give the tip face only")
+
+
+def boundary_facets(tets: np.ndarray) -> np.ndarray:
+    """(f, 3) or (f, 6) boundary facets (faces of one tetrahedron only), VTK triangle order."""
+    corners, tet_of, face_of = _boundary(tets)
     if tets.shape[1] == 4:
-        return faces.reshape(-1, 3)[once]
+        return corners
     edge_slot = {frozenset(e): 4 + k for k, e in enumerate(_TET_EDGES)}
     out = []
     for t, f in zip(tet_of, face_of):

@@ -1,20 +1,27 @@
 """The checks every configuration makes of its numbers when it is made, before any work: one ValueError naming the
-field and the range allowed. A command line prefixes the option's name (``flagged``). Pure Python."""
+field and the range allowed. A command line prefixes the option's name (``flagged``); a run takes its output
+folder's lock before it works (``output_lock``: a second run on the same folder is refused at once). Pure Python."""
 from __future__ import annotations
 
 import contextlib
 import contextvars
+import errno
+import fcntl
+import logging
 import math
 import numbers
 import os
+import socket
 import tempfile
+import time
 from pathlib import Path
 from typing import Callable, TypeVar
 
 __all__ = ["whole_number", "real_number", "flagged", "writable_folder", "fits_in_memory", "physical_memory",
-           "readable_file", "before_work", "dry_run", "DryRun"]
+           "readable_file", "before_work", "dry_run", "DryRun", "output_lock", "LOCK_FILE"]
 
 T = TypeVar("T")
+LOG = logging.getLogger(__name__)
 
 
 def whole_number(name: str, value, low: int, high: int | None = None) -> None:
@@ -173,3 +180,102 @@ def readable_file(what: str, path) -> Path:
     if not os.access(path, os.R_OK):
         raise ValueError(f"{what} {path} cannot be read (permission denied)")
     return path
+
+
+LOCK_FILE = ".lock"
+_HELD: dict[str, list] = {}        # the locks this process holds: real path of the folder -> [fd, lock file, depth]
+
+
+def _holder(fd: int) -> str:
+    """Who holds the lock of the open lock file ``fd``: 'pid <n>' (and ' on <host>' when not this machine's)."""
+    try:
+        words = os.pread(fd, 200, 0).decode(errors="replace").split()
+    except OSError:
+        words = []
+    if not words or not words[0].isdigit():
+        return "pid unknown"
+    host = f" on {words[1]}" if len(words) > 1 and words[1] != socket.gethostname() else ""
+    return f"pid {words[0]}{host}"
+
+
+def _acquire(folder: Path, what: str) -> str | None:
+    """Take ``folder``'s lock (see ``output_lock``); its key in ``_HELD``, None where the file system has no locks."""
+    key = os.path.realpath(folder)
+    if key in _HELD:                                    # this process holds it already (a sweep within its map)
+        _HELD[key][2] += 1
+        return key
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / LOCK_FILE
+    for _ in range(20):
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            holder = _holder(fd)
+            os.close(fd)
+            if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                raise ValueError(f"{what} {folder} is in use by another run ({holder}, holding {path}): wait for "
+                                 f"it to end, or write elsewhere") from None
+            LOG.warning("cannot lock %s (%s): two runs on %s would not see each other", path,
+                        exc.strerror or exc, folder)
+            return None
+        try:
+            same = os.path.samestat(os.fstat(fd), os.stat(path))
+        except FileNotFoundError:
+            same = False
+        if same:
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"{os.getpid()} {socket.gethostname()}\n".encode(), 0)
+            _HELD[key] = [fd, path, 1]
+            return key
+        os.close(fd)                                    # its holder removed it as it let go: the new one
+    raise ValueError(f"{what} {folder}: could not take its lock {path} (other runs keep taking it)")
+
+
+def _release(key: str | None) -> None:
+    if key is None or key not in _HELD:
+        return
+    held = _HELD[key]
+    held[2] -= 1
+    if held[2] == 0:
+        del _HELD[key]
+        fd, path = held[0], held[1]
+        with contextlib.suppress(OSError):
+            path.unlink()                               # while held: a run that opened it retries on the new one
+        os.close(fd)
+
+
+@contextlib.contextmanager
+def output_lock(folder, what: str = "output folder", comm=None, check: Callable[[], None] | None = None):
+    """Hold ``folder``'s lock for the block (created if need be): an advisory ``fcntl.flock`` on ``<folder>/.lock``,
+    which holds the holder's pid and host. A second run on the same folder (another process) is refused at once: a
+    ValueError in one line naming ``what`` (e.g. '--out'), the folder and the holder's pid. The OS lets the lock go
+    when its process ends, crashed or killed; the file is removed when the block ends. Re-entrant within a process (a
+    map's sweeps take their own folders' locks inside the map's). ``check()``, if given, runs once the lock is held,
+    before the block (the checks of the folder's files before any work; its ValueError refuses the run too).
+
+    With ``comm`` (an mpi4py communicator) rank 0 alone takes the lock and runs ``check``; every rank waits for it
+    (asleep) and raises the same refusal, so no rank is left waiting for another that stopped."""
+    rank = 0 if comm is None else comm.rank
+    key, error = None, None
+    if rank == 0:
+        try:
+            key = _acquire(Path(folder), what)
+            if check is not None:
+                check()
+        except Exception as exc:                          # any failure: told to every rank before it is raised
+            _release(key)
+            key, error = None, exc
+    if comm is not None and comm.size > 1:
+        request = comm.Ibarrier()                         # the others wait asleep (rank 0 may read many files)
+        while not request.Test():
+            time.sleep(0.05)
+        message = comm.bcast(None if error is None else " ".join(str(error).split()), root=0)
+        if message is not None and error is None:
+            error = ValueError(message)
+    if error is not None:
+        raise error
+    try:
+        yield Path(folder)
+    finally:
+        _release(key)

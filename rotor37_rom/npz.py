@@ -3,7 +3,9 @@
 writing the same file side by side do not clash, and a writer killed half-way leaves nothing a glob of the real
 names picks up; ``save_json`` does the same for the JSON stores and summaries that later calls read back), and
 reads a cache that may be damaged (``load_npz``: a damaged or
-mismatched file is reported and treated as absent, so the caller computes it again)."""
+mismatched file is reported and treated as absent, so the caller computes it again). A damaged file a run would read
+back (a summary, a sweep's spec, a result) is moved aside before the run works (``set_aside``, ``load_json``), with a
+warning naming it, where it went and what the run does instead: it is never left to fail the run at its end."""
 from __future__ import annotations
 
 import glob
@@ -16,7 +18,7 @@ from typing import Callable, Iterable
 
 import numpy as np
 
-__all__ = ["save_npz", "save_json", "load_npz", "DAMAGED"]
+__all__ = ["save_npz", "save_json", "load_npz", "load_json", "set_aside", "DAMAGED"]
 
 LOG = logging.getLogger(__name__)
 
@@ -82,3 +84,44 @@ def load_npz(path: str | Path | None, names: Iterable[str] | None = None,
         LOG.warning("ignoring %s %s (%s: %s): computed again", what, path, exc.__class__.__name__, exc)
         return None
     return arrays
+
+
+def set_aside(path: str | Path, why: str, then: str) -> Path:
+    """Move the damaged file ``path`` to ``<name>.damaged-<n>`` beside it (n: the first number free, so an earlier
+    one is kept) and log a warning naming both paths, ``why`` (what is wrong with it) and ``then`` (what the run does
+    instead); returns the new path. ValueError in one line where it cannot be moved (the user's to do)."""
+    path = Path(path)
+    n = 1
+    while path.with_name(f"{path.name}.damaged-{n}").exists():
+        n += 1
+    aside = path.with_name(f"{path.name}.damaged-{n}")
+    try:
+        os.rename(path, aside)
+    except OSError as exc:
+        raise ValueError(f"{path} is damaged ({why}) and cannot be moved aside ({exc.strerror or exc}): move or "
+                         f"remove it, then run again") from None
+    LOG.warning("%s is damaged (%s): moved aside to %s; %s", path, why, aside, then)
+    return aside
+
+
+def _why(exc: BaseException) -> str:
+    return " ".join(f"{exc.__class__.__name__}: {exc}".split())
+
+
+def load_json(path: str | Path, check: Callable[[object], None] | None = None, then: str = "it is written again"
+              ) -> object | None:
+    """The content of the JSON file ``path``; None where there is none. A damaged file (it cannot be read, is not
+    JSON, or ``check(content)`` raises ValueError, KeyError or TypeError: not what the caller wrote) is moved aside
+    (``set_aside``: the warning names it, where it went and ``then``, what the caller does instead) and None
+    returned, so that the caller's run does not end on it."""
+    path = Path(path)
+    if not path.is_file():
+        return None
+    try:
+        content = json.loads(path.read_text())
+        if check is not None:
+            check(content)
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+        set_aside(path, _why(exc), then)
+        return None
+    return content

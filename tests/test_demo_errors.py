@@ -24,19 +24,28 @@ CASES = {
                     "patch": (["--contact-patch", "0.05"], "--contact-patch"),
                     "step outliers": (["--step-outliers", "drop"], "--step-outliers"),   # needs --frequency-cap
                     "perturbation": (["--perturbation", "0.02"], "--perturbation"),
-                    "rotation": (["--rotation", "running", "--disk"], "--rotation")},
-    "turning_map": {"cubature": (["--gnl", "on", "--cubature", "1e-4"], "--rotation")},
+                    "rotation": (["--rotation", "running", "--disk"], "--rotation"),
+                    "seed without mistuning": (["--disk", "--seed", "4"], "--seed"),             # #85 (9)
+                    "range without continuation": (["--continuation-range", "1300", "1400"], "--continuation-range"),
+                    "count": (["--speeds", "1200", "1600", "1e300"], "--speeds")},
+    "turning_map": {"cubature": (["--gnl", "on", "--cubature", "1e-4"], "--rotation"),
+                    "count": (["--speeds", "1400", "1900", "1e9"], "--speeds"),                  # #85 (9)
+                    "beyond the blade": (["--speeds", "1400", "5000", "3"], "--speeds")},
     "report": {"preset": (["--preset", "huge"], "--preset"), "model file": (["--table", "{text}"], "--table"),
                "numbers": (["--speeds", "1600", "1200", "5"], "--speeds")},
     "bladed_disk": {"preset": (["--preset", "huge"], "--preset"), "model file": (["--table", "{text}"], "--table"),
                     "numbers": (["--modes", "99"], "--modes")},
     "campbell": {"preset": (["--preset", "huge"], "--preset"), "numbers": (["--speeds", "0", "-5", "3"], "--speeds"),
-                 "orders": (["--orders", "0", "4"], "--orders"), "refine": (["--refine", "-1"], "--refine")},
+                 "orders": (["--orders", "0", "4"], "--orders"), "refine": (["--refine", "-1"], "--refine"),
+                 "infinite count": (["--speeds", "0", "2000", "inf"], "--speeds"),                # #85 (9)
+                 "beyond the blade": (["--speeds", "0", "1e6", "3"], "--speeds")},
     "disk_campbell": {"preset": (["--preset", "huge"], "--preset"),
                       "numbers": (["--speeds", "0", "-5", "3"], "--speeds"),
                       "families": (["--families", "19"], "--families"), "modes": (["--modes", "0"], "--modes"),
                       "orders": (["--orders", "0", "4"], "--orders"), "refine": (["--refine", "-1"], "--refine"),
-                      "zzenf": (["--zzenf-speed", "-1"], "--zzenf-speed")},
+                      "zzenf": (["--zzenf-speed", "-1"], "--zzenf-speed"),
+                      "infinite count": (["--speeds", "0", "2000", "inf"], "--speeds"),           # #85 (9)
+                      "beyond the blade": (["--speeds", "0", "1e6", "3"], "--speeds")},
 }
 
 
@@ -86,3 +95,25 @@ def test_argparse_errors_are_one_line_too():
         assert run.returncode == 2
         err = run.stderr
         assert err.count("\n") == 1 and err.startswith("error: ") and words in err, err
+
+
+def test_a_stop_caught_as_another_error_is_still_said_as_a_stop(capsys):
+    """SIGTERM caught on its way by a library's ``except Exception`` and raised again as a ValueError (as
+    ``fem.sector.build_on_rank0`` does with gmsh's failures, while a demo or a benchmark meshes) still ends the
+    command as stopped: one line on how to resume, exit status 128 + 15, not 'error: gmsh failed' and status 2."""
+    import signal
+    import time
+
+    from rotor37_rom.cli import run_main
+
+    def main(argv):
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(5)
+        except Exception as exc:
+            raise ValueError(f"gmsh failed on the disk sector ({exc})") from None
+        return 0
+
+    assert run_main(main, []) == 128 + signal.SIGTERM
+    assert capsys.readouterr().err == ("stopped by SIGTERM: run the same command again to resume from the last "
+                                       "checkpoint\n")

@@ -93,14 +93,16 @@ def test_contact_map_rerun_keeps_the_wall_time(tmp_path):
     that ran them; a run at another step, or one that ran, reports its own."""
     previous = tmp_path / "summary.json"
     head = {"r": 55, "speeds": [1620.0, 2000.0, 20], "revolutions": 200.0}
-    previous.write_text(json.dumps(head | {"runs": {"GNL": {"h": 4e-7, "wall_s": 686.0, "rev_per_s": 5.8},
-                                                    "no GNL": {"h": 1e-6, "wall_s": 100.0, "rev_per_s": 40.0}}}))
-    summary = head | {"runs": {"GNL": {"h": 4e-7, "wall_s": 0.08, "rev_per_s": None},
-                               "no GNL": {"h": 5e-7, "wall_s": 0.05, "rev_per_s": None}}}
+    curve = {"speeds": [1620.0, 2000.0], "nfrc": [1e-4, 2e-4]}          # what write_summary reads of each run
+    previous.write_text(json.dumps(head | {"runs": {"GNL": {"h": 4e-7, "wall_s": 686.0, "rev_per_s": 5.8, **curve},
+                                                    "no GNL": {"h": 1e-6, "wall_s": 100.0, "rev_per_s": 40.0,
+                                                               **curve}}}))
+    summary = head | {"runs": {"GNL": {"h": 4e-7, "wall_s": 0.08, "rev_per_s": None, **curve},
+                               "no GNL": {"h": 5e-7, "wall_s": 0.05, "rev_per_s": None, **curve}}}
     contact_map.merge_earlier_runs(summary, previous)
-    assert summary["runs"]["GNL"] == {"h": 4e-7, "wall_s": 686.0, "rev_per_s": 5.8}
-    assert summary["runs"]["no GNL"] == {"h": 5e-7, "wall_s": 0.05, "rev_per_s": None}     # another step
-    summary = head | {"runs": {"GNL": {"h": 4e-7, "wall_s": 300.0, "rev_per_s": 13.3}}}
+    assert summary["runs"]["GNL"] == {"h": 4e-7, "wall_s": 686.0, "rev_per_s": 5.8, **curve}
+    assert summary["runs"]["no GNL"] == {"h": 5e-7, "wall_s": 0.05, "rev_per_s": None, **curve}     # another step
+    summary = head | {"runs": {"GNL": {"h": 4e-7, "wall_s": 300.0, "rev_per_s": 13.3, **curve}}}
     contact_map.merge_earlier_runs(summary, previous)
     assert summary["runs"]["GNL"]["wall_s"] == 300.0 and summary["runs"]["no GNL"]["wall_s"] == 100.0
 

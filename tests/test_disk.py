@@ -200,14 +200,16 @@ def test_a_users_plate_about_another_axis(plate, tmp_path):
         turned = tmp_path / f"plate_{axis[1]}{'p' if axis[0] == '+' else 'm'}.inp"
         meshio.write(turned, meshio.Mesh(mesh.points @ AXES[axis], mesh.cells, point_sets=mesh.point_sets))
         sector = fem.create_sector_from_file(turned, clamp="CLAMP", units="mm", verbose=False,
-                                             cyclic=("LEFT", "RIGHT", 8), axis=axis)
+                                             cyclic=("LEFT", "RIGHT", 8), axis=axis, material=plate.material)
         assert f"its axis {axis} turned to +z" in sector.summary
         for k, omega in zip((0, 1), ref):
             np.testing.assert_allclose(fem.solve_cyclic_modes(sector, k, 3).omega, omega, rtol=1e-9)
     with pytest.raises(ValueError, match="cyclic faces do not match under a rotation by 360/8 degrees"):
-        fem.create_sector_from_file(turned, clamp="CLAMP", units="mm", verbose=False, cyclic=("LEFT", "RIGHT", 8))
+        fem.create_sector_from_file(turned, clamp="CLAMP", units="mm", verbose=False, cyclic=("LEFT", "RIGHT", 8),
+                                    material=plate.material)
     with pytest.raises(ValueError, match="axis must be one of"):
-        fem.create_sector_from_file(turned, clamp="CLAMP", units="mm", verbose=False, axis="z")
+        fem.create_sector_from_file(turned, clamp="CLAMP", units="mm", verbose=False, axis="z",
+                                    material=plate.material)
 
 
 def test_cyclic_bad_input(plate, ci_blade):

@@ -43,8 +43,8 @@ def test_turning_disk_rom_holds_the_centrifugal_state_and_reduces_its_forces(tur
       tiled over the sectors in the span of the interface modes, the rest in every sector's columns (1e-12);
     * there the reduced nonlinear force is the sector force's projection that eq. 61 defines: on each sector's own
       columns the full-order nonlinear force's Phi_s^T g(u_c), on the interface coordinates its faces' part on the
-      face shapes the force sees ([Psi_L L, Psi_R' L]: L holds the centrifugal face), to 1e-9 (the cubic tensors'
-      sums against the quadrature's on a 0.5 mm state; measured 2.4e-10), so the reduced residual
+      face shapes the force sees ([Psi_L L, Psi_R' L]: L holds the centrifugal face), to 1e-8 (the cubic tensors'
+      sums against the quadrature's on a 0.5 mm state; measured 2.4e-10 and 1.7e-9 under two BLAS kernels), so the reduced residual
       K q + g(q) - Omega^2 (F_c + M_P q) vanishes on the sectors' columns
       (1e-9 of the load: the full-order Newton's 1e-10 through the projection).
 
@@ -111,7 +111,9 @@ def test_turning_disk_rom_holds_the_centrifugal_state_and_reduces_its_forces(tur
           f" (eq. 61); LE's centrifugal displacement {1e3 * np.abs(state[le]).max():.3f} mm, the reduced equilibrium's "
           f"off it by {error:.1e}; lowest frequency per index against the full order: {deviation}")
     assert span <= 1e-12
-    assert np.abs(g - expected).max() <= 1e-9 * np.abs(expected).max()
+    # two summation orders of one force (the tensors' contractions, the assembly's ~1e5 quadrature points) whose
+    # terms cancel: n eps ~ 2e-11 times the cancellation; measured 2.4e-10 (OpenBLAS Haswell kernels), 1.7e-9 (Zen)
+    assert np.abs(g - expected).max() <= 1e-8 * np.abs(expected).max()
     assert np.linalg.norm(residual[:N * rs]) <= 1e-9 * load
 
 

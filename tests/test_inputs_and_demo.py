@@ -65,13 +65,14 @@ def test_cad_without_clamp(tmp_path):
         gmsh.model.mesh.generate(3)
         gmsh.write(str(msh))
     with pytest.raises(ValueError) as e:
-        fem.create_sector_from_file(brep, clamp=(1, 1, 1, 2, 2, 2), preset="ci")
+        fem.create_sector_from_file(brep, clamp=(1, 1, 1, 2, 2, 2), preset="ci", material=Material())
     _one_line(e, "clamp", "box.brep")
     with pytest.raises(ValueError) as e:
-        fem.create_sector_from_file(msh, clamp="clamp")
+        fem.create_sector_from_file(msh, clamp="clamp", material=Material())
     _one_line(e, "clamp", "box.msh", "root")
     # and a user's file that is right works: clamp the x = 0 face of the BREP box
-    sector = fem.create_sector_from_file(brep, clamp=(-1e-6, -1e-6, -1e-6, 1e-6, 0.02, 0.02), preset="ci")
+    sector = fem.create_sector_from_file(brep, clamp=(-1e-6, -1e-6, -1e-6, 1e-6, 0.02, 0.02), preset="ci",
+                                         material=Material())
     omega = fem.compute_clamped_modes(sector, 1).omega[0]
     # 1st bending of the 50 x 10 x 10 mm steel cantilever. Euler-Bernoulli: 1.875^2 sqrt(EI/(rho A L^4)); at
     # L/h = 5 shear and rotary inertia lower it, by 3.0 % in Timoshenko's model (kappa = 5/6, computed below).
@@ -137,7 +138,7 @@ def test_demo_runs_and_draws(tmp_path, ci_blade):
         assert 0.02 < non_white < 0.9
         assert img.reshape(-1, 3).std(axis=0).max() > 0.05
         info = json.loads(png.with_name(png.name + ".json").read_text())
-        assert info["n_cells"] == n_cells and info["scalar_name"] == "|u| (normalised)" and info["clim"] is None
+        assert info["n_cells"] == n_cells and info["scalar_name"] == "|u| (normalised)" and info["clim"] == [0.0, 1.0]
         lo, hi = info["scalar_range"]
         assert hi == 1.0 and 0.0 <= lo < 1e-12
 

@@ -9,11 +9,13 @@ import pytest
 import scipy.linalg
 
 from rotor37_rom import fem
+from rotor37_rom.forms import Material
 from rotor37_rom.geometry import blade as geo
 from rotor37_rom.geometry import mesh_import as mi
 
 pytestmark = pytest.mark.fe
 
+STEEL = Material()                                  # the files made here state no material: the paper's steel, said
 L, H = 0.05, 0.01                                   # the 50 x 10 x 10 mm steel cantilever of test_inputs_and_demo
 
 
@@ -52,7 +54,8 @@ def _bar(path, kind, n=(10, 2), unit=1.0, order=2, incomplete=True):
 
 
 def _omega(path, n=2, **kwargs):
-    sector = fem.create_sector_from_file(path, clamp="ROOT", preset="ci", verbose=False, **kwargs)
+    sector = fem.create_sector_from_file(path, clamp="ROOT", preset="ci", verbose=False,
+                                         **{"material": STEEL, **kwargs})
     return fem.compute_clamped_modes(sector, n).omega, sector
 
 
@@ -142,7 +145,7 @@ def test_curved_quadratic_hexahedra_keep_their_geometry(tmp_path):
             gmsh.model.mesh.generate(3)
             gmsh.model.mesh.setOrder(order)
             gmsh.write(str(path))
-        return fem.create_sector_from_file(path, clamp="ROOT", verbose=False)
+        return fem.create_sector_from_file(path, clamp="ROOT", verbose=False, material=STEEL)
 
     for order in (2, 1):
         volume = ring(tmp_path / f"ring{order}.msh", order).volume
@@ -169,11 +172,12 @@ def test_millimetres_with_scale_equal_metres(tmp_path):
     np.testing.assert_allclose(scaled, metres, rtol=1e-9)
     with pytest.raises(ValueError, match=r"mass is 4e\+0?7 kg, outside 1 g - 100 kg; the file is likely in mm "
                                          r"\(0\.04 kg with units 'mm'\)"):
-        fem.create_sector_from_file(mm_path, clamp="ROOT", verbose=False)
-    confirmed = fem.create_sector_from_file(mm_path, clamp="ROOT", verbose=False, mass_check=False)
+        fem.create_sector_from_file(mm_path, clamp="ROOT", verbose=False, material=STEEL)
+    confirmed = fem.create_sector_from_file(mm_path, clamp="ROOT", verbose=False, mass_check=False,
+                                            material=STEEL)
     np.testing.assert_allclose(confirmed.volume, L * H * H * 1e9, rtol=1e-12)      # the mass confirmed: read as is
     with pytest.raises(ValueError) as e:
-        fem.create_sector_from_file(mm_path, clamp="ROOT", scale=2.0, units="mm")
+        fem.create_sector_from_file(mm_path, clamp="ROOT", scale=2.0, units="mm", material=STEEL)
     _one_line(e, "scale", "units", "disagree")
 
 
@@ -208,7 +212,7 @@ def test_abaqus_inp_round_trip(tmp_path):
     from_msh, _ = _omega(msh)
     inp = tmp_path / "bar.inp"
     _write_inp(inp, meshio.read(msh))
-    sector = fem.create_sector_from_file(inp, clamp="root", tip="END", contact=3, verbose=False)
+    sector = fem.create_sector_from_file(inp, clamp="root", tip="END", contact=3, verbose=False, material=STEEL)
     from_inp = fem.compute_clamped_modes(sector, 2).omega
     np.testing.assert_allclose(from_inp, from_msh, rtol=1e-9)
     assert "80 wedge15 -> 240 tetrahedra" in sector.summary, sector.summary
@@ -253,7 +257,7 @@ def test_boundary_map_follows_the_boundary_dofs_in_any_order(tmp_path):
     from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
 
     sector = fem.create_sector_from_file(_bar(tmp_path / "bar.msh", "hex"), clamp="ROOT", tip="END", contact=4,
-                                         verbose=False)
+                                         verbose=False, material=STEEL)
     dofs = sector.tip_dofs
     boundary = np.concatenate([dofs[3], dofs[0], dofs[1]])           # TE, LE, tip1 (tip2 left out)
     model, _ = build_reduced_model(sector, ReductionConfig(r_c=4, r_md=2, forces="none", keep_basis=True),
@@ -264,7 +268,12 @@ def test_boundary_map_follows_the_boundary_dofs_in_any_order(tmp_path):
         np.testing.assert_allclose(model.nodes.coordinates[k], sector.tip_nodes[row], atol=1e-12)
         np.testing.assert_allclose(model.Phi[np.ix_(dofs[row], model.nodes.q_index[k])], np.eye(3), atol=1e-12)
     N, _, _, rows = casing.contact_matrices(model.nodes, model.r, None)
-    assert N.shape == (3, model.r) and np.count_nonzero(N) == 3
+    # the 'x' normal is the bar's frame (its centre of mass at atan(5 / 25) = 11.3 deg): x and y at each node
+    frame = np.arctan2(0.5 * H, 0.5 * L)
+    assert model.nodes.frame_angle == pytest.approx(frame, abs=1e-12)
+    assert N.shape == (3, model.r) and np.count_nonzero(N) == 6
+    np.testing.assert_allclose(N[np.arange(3)[:, None], model.nodes.q_index[rows]],
+                               np.tile([np.cos(frame), np.sin(frame), 0.0], (3, 1)), atol=1e-15)
 
 
 def test_refusals_are_one_line(tmp_path):
@@ -275,29 +284,29 @@ def test_refusals_are_one_line(tmp_path):
 
     bad = _bar(tmp_path / "wedge18.msh", "wedge", incomplete=False)   # gmsh's complete Prism18: not accepted
     with pytest.raises(ValueError) as e:
-        fem.create_sector_from_file(bad, clamp="ROOT")
+        fem.create_sector_from_file(bad, clamp="ROOT", material=STEEL)
     _one_line(e, "wedge18", "accepted", "hexahedron20", "wedge15")
     msh = _bar(tmp_path / "bar.msh", "wedge")
     with pytest.raises(ValueError) as e:
-        fem.create_sector_from_file(msh, clamp="clamp")
+        fem.create_sector_from_file(msh, clamp="clamp", material=STEEL)
     _one_line(e, "clamp", "no group named 'clamp'", "ROOT", "END")
     inp = tmp_path / "bar.inp"
     _write_inp(inp, meshio.read(msh), {"ONE": [0, 1]})                # two nodes: no facet has 3 corners in it
     with pytest.raises(ValueError) as e:
-        fem.create_sector_from_file(inp, clamp="ONE")
+        fem.create_sector_from_file(inp, clamp="ONE", material=STEEL)
     _one_line(e, "clamp", "ONE", "covers no boundary facet")
     with pytest.raises(ValueError) as e:
-        fem.create_sector_from_file(msh, clamp="ROOT", units="furlong")
+        fem.create_sector_from_file(msh, clamp="ROOT", units="furlong", material=STEEL)
     _one_line(e, "units", "mm")
     with pytest.raises(ValueError) as e:
-        fem.create_sector_from_file(tmp_path / "bar.stl", clamp="ROOT")
+        fem.create_sector_from_file(tmp_path / "bar.stl", clamp="ROOT", material=STEEL)
     _one_line(e, "bar.stl")
     (tmp_path / "garbage.inp").write_text("*NODE\n1, 0, 0\n*ELEMENT, TYPE=C3D99\n1, 1, 2\n")
     with pytest.raises(ValueError) as e:
-        fem.create_sector_from_file(tmp_path / "garbage.inp", clamp="ROOT")
-    _one_line(e, "garbage.inp")
+        fem.create_sector_from_file(tmp_path / "garbage.inp", clamp="ROOT", material=STEEL)
+    _one_line(e, "garbage.inp", "C3D99")                                # meshio's reason, not its exit code
     with pytest.raises(ValueError) as e:
-        fem.create_sector_from_file(msh, clamp="ROOT", contact=3)
+        fem.create_sector_from_file(msh, clamp="ROOT", contact=3, material=STEEL)
     _one_line(e, "contact", "tip")
 
 
@@ -309,7 +318,7 @@ def test_the_project_blade_round_trips_through_an_abaqus_deck(ci_blade, tmp_path
     deck = fem.write_sector_mesh(ci_blade, tmp_path / "blade_mm.inp", units="mm")
     for contact in (8, "CONTACT"):
         back = fem.create_sector_from_file(deck, clamp="CLAMP", tip="TIP", units="mm", contact=contact,
-                                           verbose=False)
+                                           verbose=False, material=STEEL)
         np.testing.assert_allclose(fem.compute_clamped_modes(back, 4).omega, omega, rtol=1e-9)
         np.testing.assert_allclose(back.tip_nodes, ci_blade.tip_nodes, atol=1e-12)
         assert back.tip_names == ci_blade.tip_names
@@ -359,15 +368,21 @@ def test_own_blade_demo(tmp_path):
     assert summary["mu_star_le_half"] is not None and 0 < summary["mu_star_le_half"] < 1
     assert not summary["diverged"] and summary["le_max_radial_mm"] > 0
     assert summary["frame"] == {"axis": "+z", "file_axis": "+z", "rotation_sense": -1, "contact_normal": "x",
-                                "tip_stagger_deg": pytest.approx(np.degrees(0.1943543), abs=1e-3)}
+                                "tip_stagger_deg": pytest.approx(np.degrees(0.1943543), abs=1e-3),
+                                "blade_frame": "the plane through the axis and the blade's centre of mass",
+                                "blade_frame_theta_deg": pytest.approx(np.degrees(blade.blade_frame_angle()),
+                                                                       abs=1e-9)}
     with pytest.raises(ValueError, match=r"^--rotation-sense \+1 turns this blade with its trailing edge ahead"):
         run_own_blade(OwnBladeConfig(rotation_sense=1, out=str(tmp_path / "other_sense")))
     with pytest.raises(ValueError, match=r"^--rotation-sense"):
         OwnBladeConfig(rotation_sense=0)
     # the millimetre deck read as metres: refused with its mass and the likely unit (#71), unless confirmed
     deck = str(tmp_path / "example_blade_mm.inp")
+    # (a material given: the deck's own, in N-mm-t-s, is refused first as no structural material in SI)
     with pytest.raises(ValueError, match=r"^--mesh: .* the blade's mass is 6\.27e\+0?7 kg, outside 1 g - 100 kg; "
                                          r"the file is likely in mm"):
+        run_own_blade(OwnBladeConfig(mesh=SectorFile(deck, units="m", material="paper"), out=str(tmp_path / "m")))
+    with pytest.raises(ValueError, match=r"^--mesh: .* read in m units is E = 1\.8e\+05 Pa, .* are the units right"):
         run_own_blade(OwnBladeConfig(mesh=SectorFile(deck, units="m"), out=str(tmp_path / "metres")))
 
 
@@ -376,11 +391,15 @@ def _mirrored_deck(deck, path):
     reordered to keep a positive volume, its node sets kept."""
     import meshio
 
+    from rotor37_rom.fem.sector import deck_material_lines
+
     mesh = meshio.read(deck)
     points = mesh.points * np.array([1.0, -1.0, 1.0])
     (block,) = mesh.cells
     cells = block.data[:, [0, 2, 1, 3]] if block.type == "tetra" else block.data[:, [0, 2, 1, 3, 6, 5, 4, 7, 9, 8]]
     meshio.write(path, meshio.Mesh(points, [(block.type, cells)], point_sets=mesh.point_sets))
+    with open(path, "a") as out:
+        out.write(deck_material_lines(Material(), "mm", len(cells)))
     return path
 
 
@@ -443,11 +462,11 @@ def _deck_with_include_and_boundary(deck, folder, material=None):
     mesh_part, sets = lines[:starts[0]], lines[starts[0]:]
     (folder / "mesh.inp").write_text("\n".join(line for line in mesh_part if not line.startswith("*HEADING")) + "\n")
     blocks, current = {}, None
-    for line in sets:
+    for line in sets:                                # the node sets (the deck's material after them left out)
         if line.startswith("*"):
-            current = line.split("=")[-1].strip()
-            blocks[current] = []
-        else:
+            current = line.split("=")[-1].strip() if line.upper().startswith("*NSET") else None
+            blocks.setdefault(current, [])
+        elif current is not None:
             blocks[current] += [int(v) for v in line.replace(",", " ").split()]
     main = ["*HEADING", "a blade from another code", "*INCLUDE, INPUT=mesh.inp", "*NSET, NSET=TIP"]
     main += [", ".join(str(v) for v in blocks["TIP"][k:k + 16]) for k in range(0, len(blocks["TIP"]), 16)]
@@ -555,7 +574,7 @@ def test_a_users_bladed_disk_from_a_deck(ci_disk, tmp_path):
         _one_line(e, *words)
     with pytest.raises(ValueError) as e:
         fem.create_sector_from_file(deck, clamp="CLAMP", units="mm", verbose=False, cyclic=("LEFT", "RIGHT", 36),
-                                    blade="ROTOR")
+                                    blade="ROTOR", material=STEEL)
     _one_line(e, "blade", "no element set", "'ROTOR'", "BLADE", "DISK")
 
 
@@ -573,7 +592,7 @@ def test_bad_inputs_to_a_users_mesh_are_one_line_each(tmp_path, capsys):
     ring = dict(left="ROOT", right="END", n_sectors=12)
 
     def read(**kwargs):
-        return fem.create_sector_from_file(bar, **{"clamp": "ROOT", "verbose": False, **kwargs})
+        return fem.create_sector_from_file(bar, **{"clamp": "ROOT", "verbose": False, "material": STEEL, **kwargs})
 
     cases = [
         ("a missing file", lambda: SectorFile(tmp_path / "missing.inp"), ("--mesh", "does not exist")),
@@ -600,7 +619,7 @@ def test_bad_inputs_to_a_users_mesh_are_one_line_each(tmp_path, capsys):
         ("a reversed box", lambda: read(clamp=(1, 1, 1, 0, 0, 0)), ("clamp", "box")),
         ("a contact group the file lacks", lambda: read(tip="END", contact="LE_NODES"), ("contact", "'LE_NODES'")),
         ("metres read as millimetres", lambda: fem.create_sector_from_file(bar, clamp="ROOT", units="mm",
-                                                                          verbose=False),
+                                                                          verbose=False, material=STEEL),
          ("mass", "outside 1 g - 100 kg", "likely in m")),
         ("a negative scale", lambda: read(scale=-1.0), ("scale", "> 0")),
         ("a clamped face as a cyclic face", lambda: read(cyclic=("END", "ROOT", 12)),
@@ -608,7 +627,8 @@ def test_bad_inputs_to_a_users_mesh_are_one_line_each(tmp_path, capsys):
         ("faces that are no cyclic pair", lambda: read(clamp=(0, 0, 0, 0.05, 0.01, 1e-4), cyclic=("END", "ROOT", 12)),
          ("cyclic faces do not match under a rotation by 360/12 degrees",)),
         ("a deck without nodes", lambda: fem.create_sector_from_file(tmp_path / "empty.inp", clamp="ROOT",
-                                                                     verbose=False), ("empty.inp", "no nodes")),
+                                                                     verbose=False, material=STEEL),
+         ("empty.inp", "no nodes")),
     ]
     outcomes = []
     for what, call, words in cases:
@@ -637,7 +657,8 @@ def test_a_nastran_files_mat1_is_its_material(tmp_path, capsys):
     bdf = tmp_path / "bar.bdf"
     meshio.write(bdf, meshio.Mesh(mesh.points, tets), file_format="nastran")
     root = (-1.0, -1.0, -1.0, 1e-3, 11.0, 11.0)                                   # x = 0, in mm
-    reference = fem.create_sector_from_file(bdf, clamp=root, units="mm", verbose=False, mass_check=False)
+    reference = fem.create_sector_from_file(bdf, clamp=root, units="mm", verbose=False, mass_check=False,
+                                            material=STEEL)
     w0 = fem.compute_clamped_modes(reference, 2).omega
     text = bdf.read_text().replace("ENDDATA", "{card}\nENDDATA")
     cards = {"free": "MAT1,1,210000.,,0.3,9.-9",

@@ -130,7 +130,8 @@ def test_full_order_newmark_with_casing_contact(ci_blade, ci_ops):
     omega, h, n, duration = 3000.0, 2e-6, 400, 1e-3
     res = fem.solve_repeating_newmark(ci_blade, 1, None, None, h, n, nonlinear=False, ops=ci_ops, casing=casing,
                                       omega=omega, duration=duration, snapshot_every=n)
-    normals, _, theta0 = contact_frames(ci_blade.tip_nodes, casing.direction, casing.rotation_sense)
+    normals, _, theta0 = contact_frames(ci_blade.tip_nodes, casing.direction, casing.rotation_sense,
+                                        frame_angle=ci_blade.blade_frame_angle())
     t = res.t[:, None]
     clearance = casing_clearance(theta0[None, :] + casing.rotation_sense * omega * t, t, casing.c0, casing.p0,
                                  ramp_rate(duration, casing.ramp_fraction, casing.ramp_level), casing.width)

@@ -176,7 +176,7 @@ def disk_node_map(sector_nodes, n_sectors: int, r_s: int):
     return NodeMap(tuple(sector_nodes.names) * n_sectors, np.repeat(np.arange(n_sectors), n),
                    np.tile(sector_nodes.coordinates, (n_sectors, 1)),
                    np.concatenate([sector_nodes.q_index + s * r_s for s in range(n_sectors)]),
-                   2 * np.pi / n_sectors)
+                   2 * np.pi / n_sectors, sector_nodes.frame_angle)
 
 
 def face_shapes(Pi: np.ndarray, omega: np.ndarray, n_sectors: int, count: int) -> tuple[np.ndarray, np.ndarray]:

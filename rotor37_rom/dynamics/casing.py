@@ -13,8 +13,8 @@ import numpy as np
 from rotor37_rom.checks import real_number
 
 __all__ = ["Casing", "blade_hand", "check_hand", "casing_profile", "casing_clearance", "node_angles", "friction_power",
-           "contact_frames", "contact_matrices", "ramp_rate", "ContactSolver", "ContactSetError", "CONE_SLOPE",
-           "DIRECTIONS"]
+           "contact_frames", "contact_matrices", "check_node_hand", "ramp_rate", "ContactSolver", "ContactSetError",
+           "CONE_SLOPE", "DIRECTIONS"]
 
 
 def casing_profile(theta: np.ndarray, c0: float, p0: float, width: float = 0.15) -> np.ndarray:
@@ -68,16 +68,19 @@ def check_hand(tip_nodes: np.ndarray, rotation_sense: int, option: str = "--rota
     stagger = blade_hand(tip_nodes)
     if abs(stagger) >= below and stagger * rotation_sense > 0:
         raise ValueError(f"{option} {rotation_sense:+d} turns this blade with its trailing edge ahead of its leading "
-                         f"edge (theta(TE) - theta(LE) = {np.degrees(stagger):+.1f} deg at the tip: the hand of a "
-                         f"mirrored rotor 37); its hand asks for {option} {-rotation_sense:+d}")
+                         f"edge (theta(TE) - theta(LE) = {np.degrees(stagger):+.1f} deg at the tip); this blade's "
+                         f"hand asks for {option} {-rotation_sense:+d}")
     return stagger
 
 
-def contact_frames(nodes: np.ndarray, direction: str = "x", rotation_sense: int = -1, cone_slope: float = CONE_SLOPE):
+def contact_frames(nodes: np.ndarray, direction: str = "x", rotation_sense: int = -1, cone_slope: float = CONE_SLOPE,
+                   frame_angle: float = 0.0):
     """Unit normal (outward) and sliding direction of each tip node at rest, in the frame of its blade.
 
-    direction 'x': the blade frame's e_x for every node, as the paper does (§2.3); 'radial': (x, y, 0)/|(x, y)|;
-    'cone': the normal of the conical casing r = r_0 - cone_slope z over the tip, e_r + cone_slope e_z normalised
+    direction 'x': the blade frame's e_x for every node, as the paper does (§2.3): the radial direction of the plane
+    at ``frame_angle`` about e_z (rad) in the nodes' frame, which holds the blade's centre of mass
+    (``fem.Sector.blade_frame_angle``, kept as ``NodeMap.frame_angle``; 0: the file's own x);
+    'radial': (x, y, 0)/|(x, y)|; 'cone': the normal of the conical casing r = r_0 - cone_slope z over the tip, e_r + cone_slope e_z normalised
     (rotor 37: tilted 15.3 deg from radial towards +z, downstream).
     Returns (normals (n, 3), slide (n, 3), theta0 (n,)): ``slide`` is the direction in which the node moves
     relative to the casing (rotation_sense * e_theta, in the casing's tangent plane for 'radial' and 'cone');
@@ -86,8 +89,9 @@ def contact_frames(nodes: np.ndarray, direction: str = "x", rotation_sense: int 
     nodes = np.asarray(nodes, float).reshape(-1, 3)
     theta0 = np.arctan2(nodes[:, 1], nodes[:, 0])
     if direction == "x":
-        normals = np.tile([1.0, 0.0, 0.0], (len(nodes), 1))
-        slide = np.tile([0.0, float(rotation_sense), 0.0], (len(nodes), 1))
+        c, s = np.cos(frame_angle), np.sin(frame_angle)
+        normals = np.tile([c, s, 0.0], (len(nodes), 1))
+        slide = np.tile([-rotation_sense * s, rotation_sense * c, 0.0], (len(nodes), 1))
     elif direction in ("radial", "cone"):
         normals = np.column_stack([np.cos(theta0), np.sin(theta0), np.full(len(nodes), 0.0)])
         if direction == "cone":
@@ -99,8 +103,23 @@ def contact_frames(nodes: np.ndarray, direction: str = "x", rotation_sense: int 
     return normals, slide, theta0
 
 
+def check_node_hand(nodes, rotation_sense: int, option: str = "rotation_sense") -> float | None:
+    """``check_hand`` on a model's node map: the stagger of its nodes 'LE' and 'TE' of sector 0 (None where it has
+    not both, e.g. a structure without a named tip), after refusing a sense that turns the blade with its trailing
+    edge ahead (ValueError naming ``option``)."""
+    names = [(n, s) for n, s in zip(nodes.names, nodes.sector.tolist())]
+    if ("LE", 0) not in names or ("TE", 0) not in names:
+        return None
+    ends = nodes.coordinates[[nodes.row("LE"), nodes.row("TE")]]
+    return check_hand(ends, rotation_sense, option)
+
+
 def contact_matrices(nodes, r: int, casing: "Casing | None", rows=None):
     """Normal and sliding directions of contact nodes as rows over the reduced coordinates: u_n = N q, u_s = S q.
+
+    The casing's rotation sense is checked against the blade's hand (``check_node_hand``: a sense that turns the
+    blade with its trailing edge ahead, e.g. a mirrored blade given rotor 37's sense, is refused in one line), so
+    every caller, not only the scenes, gets the check.
 
     Args:
         nodes: the model's ``model.nodes.NodeMap`` (which entries of q are which node, in which sector frame). r: size
@@ -116,8 +135,10 @@ def contact_matrices(nodes, r: int, casing: "Casing | None", rows=None):
     if rows.size and (rows.min() < 0 or rows.max() >= len(nodes)):
         raise ValueError(f"node rows must be in [0, {len(nodes) - 1}], got {rows.tolist()}")
     direction, sense = ("x", -1) if casing is None else (casing.direction, casing.rotation_sense)
+    if casing is not None:
+        check_node_hand(nodes, sense, "casing rotation_sense")
     slope = CONE_SLOPE if casing is None else casing.cone_slope
-    normals, slide, theta_local = contact_frames(nodes.coordinates[rows], direction, sense, slope)
+    normals, slide, theta_local = contact_frames(nodes.coordinates[rows], direction, sense, slope, nodes.frame_angle)
     if casing is None:
         slide = np.zeros_like(slide)
     theta0 = theta_local + nodes.angles[rows]

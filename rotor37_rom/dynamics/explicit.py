@@ -48,7 +48,11 @@ from rotor37_rom.interruption import checkpointing, requested, stop_if_requested
 __all__ = ["CentralDifference", "SimulationResult", "SimulationDiverged", "capped_mass", "gnl_time_step",
            "gnl_step_report", "step_outliers", "tangent_frequencies",
            "highest_frequency", "largest_states", "probe_states", "simulate", "tangent_highest_frequency",
-           "discrete_energy", "WORK_TERMS"]
+           "discrete_energy", "WORK_TERMS", "BLOWUP_LIMIT"]
+
+#: the largest boundary displacement (m) a run may reach before it counts as blown up (the maps' limit: 40 times
+#: the paper's 0.5 mm clearance)
+BLOWUP_LIMIT = 0.02
 
 
 class SimulationDiverged(RuntimeError):
@@ -449,7 +453,7 @@ def simulate(scheme: CentralDifference, omega: Sequence[float] | float, casing: 
              revolutions: float | None = None, n_steps: int | Sequence[int] | None = None,
              forcing: Callable[[float], np.ndarray] | None = None, initial: tuple | None = None,
              record_every: int = 1, record_q: bool = False, energy: bool = False, on_blowup: str = "raise",
-             blowup_limit: float = 0.02, check_every: int = 200, duration: float | Sequence[float] | None = None,
+             blowup_limit: float = BLOWUP_LIMIT, check_every: int = 200, duration: float | Sequence[float] | None = None,
              progress: Callable[[int], None] | None = None, on_finish: Callable[[int, dict], None] | None = None,
              state: LoopState | None = None, checkpoint: Callable[[LoopState], None] | None = None,
              checkpoint_seconds: float = 60.0, phase: float | Sequence[float] = 0.0,

@@ -43,7 +43,8 @@ from .operators import (JIT_PARAMS, MASS_DIAGONAL, SvkOperators, assemble_coriol
                         free_dofs, gather_dof_values, patch_load, petsc_to_scipy, quadrature_gradients,
                         scipy_to_petsc, tip_patch_interface)
 from .periodic import RepeatingSectors, sector_harmonic_load, solve_repeating_newmark
-from .sector import (Sector, build_on_rank0, clamp_cell_group, create_blade_sector, create_sector_from_file,
+from .sector import (MissingMaterial, Sector, build_on_rank0, clamp_cell_group, create_blade_sector,
+                     create_sector_from_file,
                      create_sector_from_gmsh, create_sector_from_mesh, locate_cyclic_pairs, tip_node_names,
                      write_sector_mesh)
 from .solvers import (ModalResult, StaticResult, compute_clamped_modes, mumps_solver, reduced_coriolis,
@@ -52,7 +53,8 @@ from .solvers import (ModalResult, StaticResult, compute_clamped_modes, mumps_so
 
 __all__ = [
     "Sector", "SvkOperators", "ModalResult", "StaticResult",
-    "create_blade_sector", "create_sector_from_file", "create_sector_from_gmsh", "create_sector_from_mesh",
+    "create_blade_sector", "create_sector_from_file", "MissingMaterial", "create_sector_from_gmsh",
+    "create_sector_from_mesh",
     "tip_node_names", "create_svk_operators", "assemble_stiffness", "assemble_mass", "assemble_vector",
     "assemble_scalar", "gather_dof_values", "free_dofs", "petsc_to_scipy", "scipy_to_petsc",
     "assemble_free_operators", "evaluate_forces", "evaluate_second_derivative", "assemble_tangent_scipy",

@@ -24,8 +24,8 @@ from typing import Callable
 import numpy as np
 import scipy.sparse as sp
 
-from rotor37_rom.dynamics.casing import (Casing, casing_clearance, contact_frames, friction_power, node_angles,
-                                         ramp_rate)
+from rotor37_rom.dynamics.casing import (Casing, casing_clearance, check_hand, contact_frames, friction_power,
+                                         node_angles, ramp_rate)
 from rotor37_rom.disk.symmetry import repeating_sector_maps
 from rotor37_rom.dynamics.newmark import Newmark, StepContact
 from rotor37_rom.interruption import checkpointing, requested, stop_if_requested
@@ -121,8 +121,9 @@ class RepeatingSectors:
         if (tip < 0).any():
             raise ValueError("the tip nodes' DOFs must all be on this rank (a serial sector)")
         C = _contact_interface(sector, interface)
+        check_hand(sector.tip_nodes, casing.rotation_sense, "casing rotation_sense")
         normals, slide, theta_local = contact_frames(sector.tip_nodes[rows], casing.direction, casing.rotation_sense,
-                                                     casing.cone_slope)
+                                                     casing.cone_slope, sector.blade_frame_angle())
         pitch = 0.0 if sector.cyclic is None else 2.0 * np.pi / sector.cyclic.n_sectors
         N, S, theta0, labels = [], [], [], []
         for s, P in enumerate(self.maps):

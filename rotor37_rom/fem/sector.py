@@ -24,10 +24,11 @@ from rotor37_rom.geometry.abaqus import deck_material, read_deck
 from rotor37_rom.geometry.nastran import bulk_material
 from rotor37_rom.geometry.mesh_import import UNITS, check_blade_mass
 from rotor37_rom.geometry.tables import read_blade_table
+from rotor37_rom.interruption import Interrupted
 
 from .operators import assemble_scalar
 
-__all__ = ["Sector", "create_blade_sector", "create_sector_from_file", "create_sector_from_gmsh",
+__all__ = ["Sector", "create_blade_sector", "create_sector_from_file", "MissingMaterial", "create_sector_from_gmsh",
            "create_sector_from_mesh", "tip_node_names", "clamp_cell_group", "build_on_rank0", "locate_cyclic_pairs",
            "write_sector_mesh"]
 
@@ -91,6 +92,22 @@ class Sector:
 
     def total_mass(self) -> float:
         return assemble_scalar(self.material.rho * ufl.dx(domain=self.mesh), self.comm)
+
+    def blade_frame_angle(self) -> float:
+        """The angle (rad) about e_z of the blade's frame: the plane through the rotation axis and the blade's centre
+        of mass (of its 'blade' volume in a bladed-disk sector). A blade stacked on its sections' centroids along a
+        radial line (rotor 37) has that line in this plane, so the frame comes from the blade, not from where it sits
+        in its file: turned by any angle about e_z, its frame turns with it. Collective (every rank calls it)."""
+        x = ufl.SpatialCoordinate(self.mesh)
+        tags = self.cell_tags
+        several = tags is not None and len(set(np.unique(tags.values).tolist())) > 1 and "blade" in self.groups
+        dx = ufl.Measure("dx", domain=self.mesh, subdomain_data=tags)(self.groups["blade"]) if several else \
+            ufl.dx(domain=self.mesh)
+        cx, cy = (assemble_scalar(x[i] * dx, self.comm) for i in (0, 1))
+        if np.hypot(cx, cy) <= 1e-9 * assemble_scalar(ufl.sqrt(x[0] ** 2 + x[1] ** 2) * dx, self.comm):
+            raise ValueError(f"{self.source}: the blade's centre of mass lies on the rotation axis (e_z): it has no "
+                             "radial direction to take its frame from (is the axis right?)")
+        return float(np.arctan2(cy, cx))
 
 
 def _locate_point_dofs(V, points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
@@ -173,6 +190,8 @@ def build_on_rank0(comm: MPI.Comm, build, material: Material, degree: int, prese
                 info = build()
             except ValueError as exc:
                 error = str(exc)
+            except Interrupted:                     # SIGTERM or SIGINT while meshing: a stop, not a gmsh failure
+                raise
             except Exception as exc:  # gmsh's own failures: one line, naming the step
                 error = f"gmsh failed on {what} ({str(exc).splitlines()[0]})"
             comm.Ibarrier().Wait()                  # matches the other ranks' polled barrier
@@ -247,27 +266,39 @@ def create_sector_from_file(path: str | Path, clamp, tip=None, comm: MPI.Comm = 
     return sector
 
 
+class MissingMaterial(ValueError):
+    """A user's file states no material and none was given: a default steel would be a silent guess."""
+
+
 def file_material(path, material: Material | None, units: str | None, scale: float, verbose: bool) -> Material:
     """The material of a user's file: ``material`` where given, else the material of an Abaqus/CalculiX deck
     (``*MATERIAL``/``*ELASTIC``/``*DENSITY``, in SI for a deck in metres, N-mm-t-s for one in millimetres:
-    ``geometry.abaqus.deck_material``) or of a NASTRAN file's first MAT1 (``geometry.nastran.bulk_material``), else
-    the paper's maraging steel; printed with ``verbose``, and where the deck
-    states another material than the one given."""
+    ``geometry.abaqus.deck_material``) or of a NASTRAN file's first MAT1 (``geometry.nastran.bulk_material``);
+    a file that states none and no ``material`` given is refused (``MissingMaterial``: ``material=Material()``
+    confirms the paper's maraging steel). Printed with ``verbose``, and where the deck states another material than
+    the one given."""
     deck = None
     suffix = Path(path).suffix.lower()
     if suffix in (".inp", ".bdf", ".nas", ".fem"):
         unit = units if units is not None else {1.0: "m", 1e-3: "mm"}.get(float(scale), f"scale {scale:g}")
-        found = deck_material(read_deck(path), unit) if suffix == ".inp" else bulk_material(path, unit)
+        try:
+            found = deck_material(read_deck(path), unit) if suffix == ".inp" else bulk_material(path, unit)
+        except ValueError:
+            if material is None:
+                raise
+            found = None                # the given material stands; the file's, unreadable in these units, aside
         if found is not None:
             deck = Material(E=found[0], nu=found[1], rho=found[2])
 
     def stated(m: Material) -> str:
         return f"E = {m.E / 1e9:.4g} GPa, nu = {m.nu:g}, rho = {m.rho:.5g} kg/m^3"
 
-    chosen = material or deck or Material()
+    if material is None and deck is None:
+        raise MissingMaterial(f"{Path(path).name} states no material: give material=Material(E, nu, rho), or "
+                              "material=Material() to confirm the paper's maraging steel")
+    chosen = material or deck
     if verbose:
-        where = "given" if material is not None else "the deck's" if deck is not None else \
-            "the paper's maraging steel (the file states none: give material=)"
+        where = "given" if material is not None else "the deck's"
         other = f"; the deck states {stated(deck)}" if material is not None and deck is not None and deck != material \
             else ""
         print(f"material: {stated(chosen)} ({where}){other}", flush=True)
@@ -389,6 +420,7 @@ def write_sector_mesh(sector: Sector, path: str | Path, units: str = "m") -> Pat
         raise ValueError("write_sector_mesh runs on one process (the mesh is distributed here)")
     if units not in UNITS:
         raise ValueError(f"units must be one of {', '.join(UNITS)}, got {units!r}")
+    deck_material_lines(sector.material, units, 1)              # units the material can be written in
     path = Path(path)
     if path.suffix.lower() != ".inp":
         raise ValueError(f"write_sector_mesh writes an Abaqus/CalculiX .inp deck (the exchange format that keeps named "
@@ -417,4 +449,21 @@ def write_sector_mesh(sector: Sector, path: str | Path, units: str = "m") -> Pat
             if int(tag) in names:
                 cell_sets[names[int(tag)].upper()] = [sector.cell_tags.find(tag).astype(np.int64)]
     meshio.write(path, meshio.Mesh(x, [(kind, cells)], point_sets=point_sets, cell_sets=cell_sets))
+    with open(path, "a") as deck:                       # the material, so that the deck reads back as it was
+        deck.write(deck_material_lines(sector.material, units, len(cells)))
     return path
+
+
+def deck_material_lines(material: Material, units: str, n_cells: int) -> str:
+    """``*MATERIAL`` / ``*ELASTIC`` / ``*DENSITY`` and a ``*SOLID SECTION`` over the ``n_cells`` elements of a deck in
+    ``units`` ('m': N, Pa, kg/m^3; 'mm': N, MPa, t/mm^3, ``geometry.abaqus.MATERIAL_UNITS``); ValueError for units
+    with no consistent system."""
+    from rotor37_rom.geometry.abaqus import MATERIAL_UNITS
+
+    if units not in MATERIAL_UNITS:
+        raise ValueError(f"units must be one of {', '.join(MATERIAL_UNITS)} for a deck that keeps its material (a "
+                         f"material in {units!r} has no consistent unit system), got {units!r}")
+    stress, mass = MATERIAL_UNITS[units]
+    return (f"*ELSET, ELSET=EALL, GENERATE\n1, {n_cells}, 1\n*MATERIAL, NAME=SECTOR_MATERIAL\n*ELASTIC\n"
+            f"{material.E / stress!r}, {material.nu!r}\n*DENSITY\n{material.rho / mass!r}\n"
+            "*SOLID SECTION, ELSET=EALL, MATERIAL=SECTOR_MATERIAL\n")

@@ -30,6 +30,9 @@ class NodeMap:
         coordinates: (n, 3) rest position in the node's sector frame (m).
         q_index: (n, 3) entries of q with the node's x, y, z displacement (sector frame).
         sector_angle: angle between consecutive sector frames (rad); 0 for a single blade.
+        frame_angle: the blade frame's angle about e_z in its sector's frame (rad): the plane through the axis and
+            the blade's centre of mass (``fem.Sector.blade_frame_angle``), whose radial direction is the contact
+            normal 'x' (the paper's e_x of the blade frame), whatever the blade's angular position in its file.
     """
 
     names: tuple
@@ -37,6 +40,7 @@ class NodeMap:
     coordinates: np.ndarray
     q_index: np.ndarray
     sector_angle: float = 0.0
+    frame_angle: float = 0.0
 
     def __post_init__(self):
         n = len(self.names)
@@ -54,16 +58,19 @@ class NodeMap:
         object.__setattr__(self, "sector", sector)
         object.__setattr__(self, "coordinates", coordinates)
         object.__setattr__(self, "q_index", q_index)
+        if not (isinstance(self.frame_angle, (int, float, np.floating)) and abs(self.frame_angle) <= np.pi):
+            raise ValueError(f"node map: frame_angle must be an angle in [-pi, pi] rad, got {self.frame_angle!r}")
+        object.__setattr__(self, "frame_angle", float(self.frame_angle))
 
     @classmethod
-    def for_nodes(cls, coordinates: np.ndarray, q_index: np.ndarray, names: Sequence[str] | None = None
-                  ) -> "NodeMap":
+    def for_nodes(cls, coordinates: np.ndarray, q_index: np.ndarray, names: Sequence[str] | None = None,
+                  frame_angle: float = 0.0) -> "NodeMap":
         """One sector's nodes; default names 'LE', 'tip1', ..., 'TE' (the nodes must then be ordered LE -> TE)."""
         coordinates = np.asarray(coordinates, float).reshape(-1, 3)
         n = len(coordinates)
         if names is None:
             names = ["LE"] + [f"tip{k}" for k in range(1, n - 1)] + (["TE"] if n > 1 else [])
-        return cls(tuple(names), np.zeros(n, np.int64), coordinates, q_index)
+        return cls(tuple(names), np.zeros(n, np.int64), coordinates, q_index, frame_angle=frame_angle)
 
     def __len__(self) -> int:
         return len(self.names)
@@ -112,9 +119,13 @@ class NodeMap:
         """The map as named arrays (for .npz files); ``from_arrays`` reads them back."""
         return {prefix + "names": np.array(self.names, dtype=str), prefix + "sector": self.sector,
                 prefix + "coordinates": self.coordinates, prefix + "q_index": self.q_index,
-                prefix + "sector_angle": np.float64(self.sector_angle)}
+                prefix + "sector_angle": np.float64(self.sector_angle),
+                prefix + "frame_angle": np.float64(self.frame_angle)}
 
     @classmethod
     def from_arrays(cls, arrays: dict, prefix: str = "nodes_") -> "NodeMap":
+        """The map of ``arrays``; a file written before the blade frame was kept has the file's own x (angle 0)."""
+        frame = float(arrays[prefix + "frame_angle"]) if prefix + "frame_angle" in arrays else 0.0
         return cls(tuple(str(x) for x in arrays[prefix + "names"]), arrays[prefix + "sector"],
-                   arrays[prefix + "coordinates"], arrays[prefix + "q_index"], float(arrays[prefix + "sector_angle"]))
+                   arrays[prefix + "coordinates"], arrays[prefix + "q_index"], float(arrays[prefix + "sector_angle"]),
+                   frame)

@@ -20,9 +20,12 @@ Coriolis the gyroscopic problem on all r coordinates (``model.campbell.gyroscopi
 from __future__ import annotations
 
 import dataclasses
+import numbers
 
 import numpy as np
 import scipy.linalg
+
+from rotor37_rom.checks import real_number
 
 __all__ = ["RotationTerms", "check_spin", "centrifugal_equilibrium", "rotating_stiffness", "rotating_modes"]
 
@@ -62,13 +65,17 @@ class RotationTerms:
 
 
 def check_spin(model, spin: float) -> float:
-    """``spin`` (rad/s) if ``model`` turns there within its range, else one ValueError naming it and the range."""
+    """``spin`` (rad/s) if ``model`` turns there within its range, else one ValueError naming it and the range (a
+    speed that is not a real number, e.g. a string or a list, included: refused before NumPy sees it)."""
     terms = getattr(model, "rotation", None)
     if terms is None:
         raise ValueError("spin: this reduced model was built at rest (no rotation terms); build it with "
                          "spin_snapshots (ReductionConfig) to turn it")
-    if not (np.isfinite(spin) and spin >= 0.0):
-        raise ValueError(f"spin must be a finite speed >= 0 rad/s, got {spin}")
+    try:
+        real_number("spin", spin, 0.0, unit=" rad/s")
+    except ValueError:
+        shown = f"{spin:g}" if isinstance(spin, numbers.Real) else f"{spin!r:.60}"
+        raise ValueError(f"spin must be a finite speed >= 0 rad/s, got {shown}") from None
     if spin > terms.top_speed * (1.0 + 1e-12):
         raise ValueError(f"spin {spin:g} rad/s is outside this reduced model's range 0 ... {terms.top_speed:g} "
                          f"rad/s (the speeds of its centrifugal snapshots); rebuild it with spin_snapshots reaching it")

@@ -24,14 +24,17 @@ tangent's omega component changes sign; every point carries its stability. Pure 
 from __future__ import annotations
 
 import dataclasses
+import numbers
 from typing import Callable, Protocol, runtime_checkable
 
 import numpy as np
 import scipy.linalg
 
+from rotor37_rom.checks import real_number, whole_number
+
 __all__ = ["Harmonics", "HarmonicBalance", "PeriodicProblem", "PeriodicSolution", "Branch", "continue_branch",
            "solve_periodic", "model_force", "time_state", "backbone", "bifurcation_kind", "hill_eigenvalues",
-           "hill_exponents", "harmonic_energy"]
+           "hill_exponents", "harmonic_energy", "square_matrices"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -135,11 +138,38 @@ class PeriodicSolution:
         return float(np.abs(Harmonics(basis.H, n_samples).synthesis @ self.X[:, dof]).max())
 
 
+def square_matrices(**matrices) -> list:
+    """The matrices given by name (``M=..., K=...``) as float arrays, each a finite real square matrix of the first
+    one's size; else one TypeError (not numbers) or ValueError (not square, sizes that differ, not finite) naming
+    the matrix and what it must be.
+
+    Returns:
+        The float arrays, in the order given.
+    """
+    out, first = [], None
+    for name, value in matrices.items():
+        try:
+            A = np.asarray(value, float)
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must be a real square matrix, got {type(value).__name__} {value!r:.60}") \
+                from None
+        if A.ndim != 2 or A.shape[0] != A.shape[1] or A.shape[0] == 0:
+            raise ValueError(f"{name} must be a square (n, n) matrix with n >= 1, got shape {A.shape}")
+        if first is not None and A.shape != first[1]:
+            raise ValueError(f"{name} must be {first[1]} like {first[0]}, got shape {A.shape}")
+        if not np.isfinite(A).all():
+            raise ValueError(f"{name} must be finite, has nan or inf in {int((~np.isfinite(A)).sum())} of its "
+                             f"{A.size} entries")
+        first = first or (name, A.shape)
+        out.append(A)
+    return out
+
+
 class HarmonicBalance:
     """The harmonic balance equations of M q'' + C q' + K q + g(q) = f(tau) for one ``Harmonics`` basis.
 
     Args:
-        M, C, K: (n, n) matrices.
+        M, C, K: (n, n) matrices, finite, of one size (ValueError naming the one that is not).
         force: g and its Jacobian at a batch of states: ``force(Q)`` with Q (n, m) returns (G (n, m), J (m, n, n)),
             or None (linear).
         excitation: F (2 H + 1, n): the coefficients of f per unit amplitude (its cos tau row: a force f0 cos(omega
@@ -150,10 +180,23 @@ class HarmonicBalance:
     smooth = True              # a smooth residual: Newton may stop at its round-off floor (``_at_floor``)
 
     def __init__(self, M, C, K, force: Callable | None, excitation: np.ndarray, basis: Harmonics):
-        self.M, self.C, self.K = (np.asarray(A, float) for A in (M, C, K))
+        if not isinstance(basis, Harmonics):
+            raise TypeError(f"basis must be a Harmonics, got {type(basis).__name__}")
+        if force is not None and not callable(force):
+            raise TypeError(f"force must be a callable force(Q) -> (G, J) or None (linear), got "
+                            f"{type(force).__name__}")
+        self.M, self.C, self.K = square_matrices(M=M, C=C, K=K)
         self.n = self.K.shape[0]
         self.force, self.basis = force, basis
-        self.F = np.asarray(excitation, float).reshape(basis.size, self.n)
+        try:
+            F = np.asarray(excitation, float)
+        except (TypeError, ValueError):
+            raise TypeError(f"excitation must be real coefficients (2 H + 1, n), got {type(excitation).__name__}") \
+                from None
+        if F.size != basis.size * self.n or not np.isfinite(F).all():
+            raise ValueError(f"excitation must be finite coefficients (2 H + 1, n) = ({basis.size}, {self.n}), got "
+                             f"shape {F.shape}" + ("" if F.size != basis.size * self.n else " not finite"))
+        self.F = F.reshape(basis.size, self.n)
         self._E, self._P, self._D = basis.synthesis, basis.analysis, basis.derivative
         I = np.eye(basis.size)
         self._lin = [np.kron(I, self.K), np.kron(self._D, self.C), np.kron(self._D @ self._D, self.M)]
@@ -281,6 +324,21 @@ class PeriodicProblem(Protocol):
     def floquet_exponents(self, x: np.ndarray, omega: float, J: np.ndarray | None = None) -> np.ndarray: ...
 
 
+def _unknowns(name: str, x, hb) -> np.ndarray:
+    """``x`` as a new flat float array of ``hb``'s finite unknowns, else one TypeError/ValueError naming ``name``."""
+    try:
+        x = np.array(x, float).ravel()
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be an array of real unknowns, got {type(x).__name__}") from None
+    size = getattr(hb, "size", None)
+    if isinstance(size, numbers.Integral) and x.size != size:
+        raise ValueError(f"{name} must hold the problem's {size} unknowns, got {x.size}")
+    if not np.isfinite(x).all():
+        raise ValueError(f"{name} must be finite, has nan or inf in {int((~np.isfinite(x)).sum())} of its {x.size} "
+                         f"unknowns")
+    return x
+
+
 def _stable(exponents: np.ndarray | None, omega: float) -> bool | None:
     """Every Floquet exponent with a negative real part (round-off: 1e-9 omega); None without exponents."""
     return None if exponents is None else bool(np.all(exponents.real < 1e-9 * omega))
@@ -317,8 +375,21 @@ def solve_periodic(hb: PeriodicProblem, x0: np.ndarray, omega: float, tol: float
     """Newton on R(x, omega) = 0 at fixed omega from x0 (relative tolerance ``tol`` on the update, or a smooth
     balance's round-off floor, ``_at_floor``); an iterate whose residual is not finite (a shooting step that took
     the scheme past its stability limit) is replaced by the previous one plus half its step, up to 6 times;
-    ValueError where it does not converge."""
-    x = np.asarray(x0, float).ravel().copy()
+    ValueError where it does not converge.
+
+    Args:
+        hb: the periodic problem (``PeriodicProblem``).
+        x0: Newton's start, ``hb.size`` finite unknowns.
+        omega: the orbit's frequency (rad/s), finite and > 0 (at omega <= 0 the balance's root is the mirrored
+            orbit or the static state, not a periodic orbit of frequency omega; ValueError before any work).
+        tol: the relative tolerance on Newton's update, finite and >= 0.
+        max_iter: Newton's iterations, an integer >= 1.
+        stability: whether the orbit's Floquet exponents are computed.
+    """
+    real_number("omega", omega, 0.0, open_low=True, unit=" rad/s")
+    real_number("tol", tol, 0.0)
+    whole_number("max_iter", max_iter, 1)
+    x = _unknowns("x0", x0, hb)
     norms, last, halved = [], None, 0
     for it in range(1, max_iter + 1):
         with np.errstate(over="ignore", invalid="ignore"):
@@ -411,14 +482,47 @@ def continue_branch(hb: PeriodicProblem, start: PeriodicSolution, omega_end: flo
                     step_min: float | None = None, step_max: float | None = None, max_points: int = 2000,
                     tol: float = 1e-10, max_iter: int = 12, stability: bool = True,
                     progress: Callable[[PeriodicSolution], None] | None = None) -> Branch:
-    """Pseudo-arc-length continuation from ``start`` towards ``omega_end`` (the branch ends past it, or where the
-    step falls below ``step_min``: the end is said in ``Branch.ended``). Arc length is measured in (x / s_x, omega /
-    s_omega) with s_x the start's norm and s_omega its frequency, so that ``step`` is relative. ``progress`` is
-    called with each new point."""
-    if not step > 0:
-        raise ValueError(f"step must be > 0 (the relative arc length of a continuation step), got {step}")
+    """Pseudo-arc-length continuation from ``start`` towards ``omega_end`` (the branch ends past it, where the
+    step falls below ``step_min``, or at the boundary omega > 0: the end is said in ``Branch.ended``). Arc length is
+    measured in (x / s_x, omega / s_omega) with s_x the start's norm and s_omega its frequency, so that ``step`` is
+    relative. ``progress`` is called with each new point.
+
+    A branch lives at frequencies omega > 0 (at omega <= 0 the balance's roots are the mirrored orbits and the
+    static state): a corrector that lands at omega <= 0 (``omega_end`` <= 0, or a branch that turns back down) is
+    a failed step; the step is halved, and once it falls below ``step_min`` the branch ends there, its last point
+    the nearest omega = 0 it reached, with that reason.
+
+    Args:
+        hb: the periodic problem (``PeriodicProblem``).
+        start: the first point (a ``PeriodicSolution`` of ``hb``, omega finite and > 0).
+        omega_end: the frequency (rad/s) to reach, finite.
+        step: the relative arc length of a step, finite and > 0.
+        step_min: the least step, in (0, step] (default step / 64).
+        step_max: the largest step, finite and >= step (default 8 step).
+        max_points: the most points, an integer >= 1.
+        tol: the corrector's relative tolerance, finite and >= 0.
+        max_iter: the corrector's iterations, an integer >= 1.
+        stability: whether each point's Floquet exponents are computed.
+        progress: None or a callable, called with each new point.
+
+    Returns:
+        The Branch. ValueError or TypeError naming the argument before any work where one is outside its range.
+    """
+    if not isinstance(start, PeriodicSolution):
+        raise TypeError(f"start must be a PeriodicSolution (solve_periodic's), got {type(start).__name__}")
+    real_number("start.omega", start.omega, 0.0, open_low=True, unit=" rad/s")
+    _unknowns("start's unknowns", start.unknowns, hb)
+    real_number("omega_end", omega_end, unit=" rad/s")
+    real_number("step", step, 0.0, open_low=True)
     step_min = step / 64 if step_min is None else step_min
+    real_number("step_min", step_min, 0.0, step, open_low=True)
     step_max = 8 * step if step_max is None else step_max
+    real_number("step_max", step_max, step)
+    whole_number("max_points", max_points, 1)
+    real_number("tol", tol, 0.0)
+    whole_number("max_iter", max_iter, 1)
+    if progress is not None and not callable(progress):
+        raise TypeError(f"progress must be a callable or None, got {type(progress).__name__}")
     sx = hb.scales(start.unknowns) if hasattr(hb, "scales") else np.full(hb.size, max(np.linalg.norm(start.X),
                                                                                            1e-300))
     sw = start.omega
@@ -428,10 +532,14 @@ def continue_branch(hb: PeriodicProblem, start: PeriodicSolution, omega_end: flo
     _, J, dRw = hb.residual(y[:-1] * sx, y[-1] * sw)
     t = _tangent(J * sx[None, :], dRw * sw, np.r_[np.zeros(hb.size), direction])
     points, folds, bifurcations, h = [start], [], [], step
+    boundary = False              # a failed step since the last point landed at omega <= 0
     while len(points) < max_points:
         pred = y + h * t
         z, ok, norms = pred.copy(), False, []
         for _ in range(max_iter):
+            if not z[-1] > 0:         # past the boundary omega > 0 (and 2 pi / omega undefined at 0): a failed step
+                boundary = True
+                break
             try:                      # a shooting map refuses an omega past its step's limit: a failed corrector
                 R, J, dRw = hb.residual(z[:-1] * sx, z[-1] * sw)
             except ValueError:
@@ -445,14 +553,20 @@ def continue_branch(hb: PeriodicProblem, start: PeriodicSolution, omega_end: flo
                 break                 # the corrector left the predictor's neighbourhood: a smaller step
             if np.linalg.norm(dz) <= tol * max(np.linalg.norm(z), 1.0) or \
                     _at_floor(hb, norms, np.linalg.norm(dz), max(np.linalg.norm(z), 1.0)):
-                ok = True
+                ok = bool(z[-1] > 0)
+                boundary = boundary or not ok
                 break
         if not ok:
             h /= 2
             if h < step_min:
+                if boundary:
+                    return Branch(points, folds, f"stopped at the boundary omega > 0: the next point had omega <= 0 "
+                                                 f"past omega = {y[-1] * sw:g}, with the step at its minimum "
+                                                 f"{step_min:g}", bifurcations)
                 return Branch(points, folds, f"the corrector failed at omega = {y[-1] * sw:g} with the step at its "
                                              f"minimum {step_min:g}", bifurcations)
             continue
+        boundary = False
         R, J, dRw = hb.residual(z[:-1] * sx, z[-1] * sw)
         t_new = _tangent(J * sx[None, :], dRw * sw, t)
         if t_new[-1] * t[-1] < 0:
@@ -484,6 +598,7 @@ def backbone(hb: HarmonicBalance, dof: int, amplitudes, x0: np.ndarray, omega0: 
     conservative orbit's exponents sit on the imaginary axis)."""
     if np.any(hb.C) or np.any(hb.F):
         raise ValueError("backbone: the system must be undamped and unforced (C = 0, F = 0)")
+    real_number("omega0", omega0, 0.0, open_low=True, unit=" rad/s")
     H, n = hb.basis.H, hb.n
     cos = np.r_[0, 2 * np.arange(1, H + 1) - 1]                    # the coefficient rows 1, cos tau, cos 2 tau, ...
     keep = (cos[:, None] * n + np.arange(n)[None, :]).ravel()

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rotor37_rom.checks import real_number
 from rotor37_rom.dynamics.casing import Casing, ContactSetError, ContactSolver, casing_profile, contact_matrices
 
 __all__ = ["Shooting"]
@@ -71,7 +72,9 @@ class Shooting:
         return np.asarray(x, float).reshape(2, self.r).copy(), ()
 
     def scheme_at(self, omega: float):
-        """The scheme with the step T / n of the period 2 pi / omega; ValueError past its stability limit."""
+        """The scheme with the step T / n of the period 2 pi / omega; ValueError for an omega not finite and > 0,
+        or past the scheme's stability limit."""
+        real_number("omega", omega, 0.0, open_low=True, unit=" rad/s")
         h = 2 * np.pi / omega / self.steps
         if h > self.scheme.h_crit:
             raise ValueError(f"the step T / n = {h:.4g} s at omega = {omega:g} rad/s exceeds the scheme's stability "

@@ -33,7 +33,8 @@ import numpy as np
 import scipy.linalg
 
 from rotor37_rom.disk.harmonics import disk_blocks
-from rotor37_rom.periodic.harmonic_balance import Harmonics, harmonic_energy, hill_eigenvalues, hill_exponents
+from rotor37_rom.periodic.harmonic_balance import (Harmonics, harmonic_energy, hill_eigenvalues, hill_exponents,
+                                                   square_matrices)
 
 __all__ = ["TravellingWaveBalance", "travelling_excitation", "sector_turn"]
 
@@ -121,7 +122,8 @@ class TravellingWaveBalance:
         basis: the Harmonics (n_time > 4 H balances the cubic force exactly).
         n_diameters: k, the load's nodal diameters (its wave travels towards increasing sector index; a negative k
             the other way).
-        M, C, K: the operators (default the model's; e.g. the explicit scheme's capped mass).
+        M, C, K: the operators (default the model's; e.g. the explicit scheme's capped mass): finite (r, r)
+            matrices (ValueError naming the one that is not).
     """
 
     smooth = True              # polynomial forces: Newton may stop at its round-off floor
@@ -133,8 +135,10 @@ class TravellingWaveBalance:
             raise ValueError(f"n_diameters must be an integer in {-(N - 1)}..{N - 1}, got {n_diameters!r}")
         self.model, self.basis, self.k, self.N, self.rs = model, basis, int(n_diameters), N, rs
         self.r = model.K.shape[0]
-        self.M, self.C, self.K = (np.asarray(model_A if A is None else A, float)
-                                  for A, model_A in ((M, model.M), (C, model.C), (K, model.K)))
+        self.M, self.C, self.K = square_matrices(**{name: model_A if A is None else A for name, A, model_A in
+                                                    (("M", M, model.M), ("C", C, model.C), ("K", K, model.K))})
+        if self.K.shape[0] != self.r:
+            raise ValueError(f"M, C, K must be ({self.r}, {self.r}) like the model's, got {self.K.shape}")
         turn = self._turn_matrix(R_eta)
         for name, A in (("M", self.M), ("C", self.C), ("K", self.K)):
             if np.linalg.norm(turn.T @ A @ turn - A) > 1e-8 * max(np.linalg.norm(A), 1e-300):

@@ -87,7 +87,8 @@ def compute_modal_derivatives(sector, ops, basis: CraigBamptonBasis, pairs: np.n
 def boundary_node_map(sector, boundary_dofs: np.ndarray):
     """The NodeMap of a Craig-Bampton model whose q starts with ``boundary_dofs``: every node with its three DOFs
     among them, named as the sector's tip nodes where it is one ('LE', ..., 'TE') and 'node<k>' otherwise, its q
-    entries the DOFs' positions in ``boundary_dofs`` (whatever their order)."""
+    entries the DOFs' positions in ``boundary_dofs`` (whatever their order), its frame the blade's
+    (``Sector.blade_frame_angle``: collective)."""
     boundary_dofs = np.asarray(boundary_dofs, dtype=np.int64).ravel()
     bs = 3
     blocks, comps = boundary_dofs // bs, boundary_dofs % bs
@@ -98,7 +99,7 @@ def boundary_node_map(sector, boundary_dofs: np.ndarray):
                   if d >= 0}
     names = [tip_blocks.get(b, f"node{b}") for b in complete]
     q_index = np.array([[position[b * bs + c] for c in range(bs)] for b in complete], dtype=np.int64).reshape(-1, 3)
-    return NodeMap.for_nodes(coords[complete].reshape(-1, 3), q_index, names)
+    return NodeMap.for_nodes(coords[complete].reshape(-1, 3), q_index, names, sector.blade_frame_angle())
 
 
 SPIN_SNAPSHOT_PAIR = -(10 ** 6)     # md_pairs' row of a centrifugal snapshot (not a pair of modes: never lifted)
@@ -231,7 +232,8 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
     if not config.spin_snapshots:         # likewise for the models at rest
         del meta_config["spin_snapshots"], meta_config["spin_modes"]
     metadata = {"config": meta_config, "boundary_dofs": boundary_dofs.tolist(),
-                "mesh": mesh_signature(sector), "source": sector.source, "version": __version__}
+                "mesh": mesh_signature(sector), "source": sector.source, "version": __version__,
+                "blade_frame": "centre of mass"}        # NodeMap.frame_angle: models without it are rebuilt
     cache, cached, report, lap, operators = begin_build(sector, ops, metadata, cache_dir, "rom")
     if cached is not None:
         return cached, report

@@ -91,7 +91,7 @@ def _disk_metadata(sector, config: DiskReductionConfig) -> dict:
         config_meta.pop("spin_modes")
     metadata = {"config": config_meta, "mesh": mesh_signature(sector), "source": sector.source,
                 "version": __version__, "kind": "disk", "n_sectors": sector.cyclic.n_sectors,
-                "damping": "5e-4 on the 3 N lowest modes"}
+                "damping": "5e-4 on the 3 N lowest modes", "blade_frame": "centre of mass"}
     if config.load_patch:
         metadata["load_correction"] = "one static vector per sector, its modal derivatives among the candidates"
     else:                                    # models cached before the point load was put on node LE are not read

@@ -13,17 +13,34 @@ omega_k,0^2) / Omega^2 measured at the current estimate, until it moves by less 
 from __future__ import annotations
 
 import dataclasses
+import numbers
 import time
 from pathlib import Path
 
 import numpy as np
 
-from rotor37_rom.checks import before_work
+from rotor37_rom.checks import before_work, fits_in_memory
 from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.model.campbell import engine_order_crossings, mac, track_modes
 from rotor37_rom.npz import save_json
 
-__all__ = ["CampbellConfig", "CampbellResult", "iterate_crossing", "run_campbell", "check_sweep"]
+__all__ = ["CampbellConfig", "CampbellResult", "iterate_crossing", "run_campbell", "check_sweep",
+           "MAX_TURNING_SPEED", "MAX_SPEED_COUNT", "BLADE_DOFS", "MAX_REFINE"]
+
+#: rad/s: the fastest rotor 37 turns in this project's models (the Campbell diagrams, a turning map's model). Its
+#: blade (maraging steel, sigma_Y = 1.38 GPa) at 3,000 rad/s (1.67 x its design speed 1,800 rad/s, ~760 m/s at the
+#: tip) has its largest von Mises stress at 0.92 sigma_Y (the ci blade's centrifugal state: 1.27 GPa at its root;
+#: 1.38 GPa is reached near 3,100 rad/s, 2.3 GPa at 4,000): beyond it the elastic St. Venant-Kirchhoff blade is
+#: past its material's yield (and its burst), and Newton's centrifugal state ends in a RuntimeError further up.
+MAX_TURNING_SPEED = 3000.0
+#: speeds of a Campbell study at most: each is a full-order Newton and eigensolve (seconds for the blade, a minute
+#: for the disk at ci); 1,000 speeds are 2 rad/s apart over 0-2,000 rad/s, finer than any diagram is read
+MAX_SPEED_COUNT = 1000
+#: rad/s: the coarsest refinement of a crossing (a tolerance above it refines nothing the grid does not give)
+MAX_REFINE = 100.0
+#: DOF of the rotor 37 blade per mesh preset, rounded up over the parametric and the Table IV blades
+#: (docs/results-blade.md: 13,836-14,013, 33,474-33,489, 59,202-59,247): what a speed's mode shapes hold
+BLADE_DOFS = {"ci": 14_100, "coarse": 33_500, "paper": 59_300}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -32,10 +49,12 @@ class CampbellConfig:
 
     Attributes:
         preset: mesh preset of the rotor 37 blade: ci, coarse or paper.
-        speeds: (start, stop, n): n >= 2 speeds (rad/s) from start >= 0 to stop > start.
+        speeds: (start, stop, n): n speeds (2..``MAX_SPEED_COUNT``, within this machine's memory) (rad/s) from
+            start >= 0 to stop > start, at most ``MAX_TURNING_SPEED``.
         n_modes: modes followed (1..20).
         orders: engine orders drawn and crossed (integers 1..100).
-        refine: each crossing iterated on the blade to this (rad/s, > 0), or 0: interpolated on the grid only.
+        refine: each crossing iterated on the blade to this (rad/s, in (0, ``MAX_REFINE``]), or 0: interpolated on
+            the grid only.
         coriolis: include the Coriolis force (the turning frame's gyroscopic coupling), solved on 3 n_modes modes
             of the problem without it (``fem.reduced_coriolis``, ``model.campbell.gyroscopic_frequencies``).
         out: output folder (the chart and summary.json).
@@ -51,31 +70,54 @@ class CampbellConfig:
 
     def __post_init__(self):
         check_sweep(self, max_order=100)
-        if not 1 <= self.n_modes <= 20:
+        if not (isinstance(self.n_modes, numbers.Integral) and 1 <= self.n_modes <= 20):
             raise ValueError(f"--modes must be in [1, 20], got {self.n_modes}")
+        # what the study keeps per speed: the shapes of its modes (with Coriolis the 3 n_modes computed)
+        columns = self.n_modes * (3 if self.coriolis else 1)
+        check_speeds_memory(self.speeds[2], 8.0 * BLADE_DOFS[self.preset] * columns,
+                            f"{BLADE_DOFS[self.preset]:,} DOF x {columns} mode shapes a speed, {self.preset} blade")
 
     @property
     def speed_grid(self) -> np.ndarray:
         return np.linspace(*self.speeds)
 
 
+def _real(value) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and bool(np.isfinite(value))
+
+
 def check_sweep(config, max_order: int) -> None:
     """The options a Campbell study shares, checked and normalised in place on a frozen ``config``: its preset, its
-    speeds (start, stop, n), its engine orders (1..max_order), its refine tolerance, its output folder."""
+    speeds (start, stop, n: finite, 0 <= start < stop <= ``MAX_TURNING_SPEED``, n an integer in
+    2..``MAX_SPEED_COUNT``), its engine orders (1..max_order), its refine tolerance (0..``MAX_REFINE``), its output
+    folder (a path, not empty)."""
     if config.preset not in MESH_PRESETS:
         raise ValueError(f"--preset must be one of {', '.join(MESH_PRESETS)}, got {config.preset!r}")
+    if not (isinstance(config.speeds, (tuple, list, np.ndarray)) and len(config.speeds) == 3):
+        raise ValueError(f"--speeds START STOP N: give three numbers, got {config.speeds!r}")
     start, stop, n = config.speeds
-    if not (np.isfinite(start) and np.isfinite(stop) and start >= 0 and stop > start):
-        raise ValueError(f"--speeds START STOP N: need 0 <= START < STOP (rad/s), got {start:g} {stop:g}")
-    if int(n) != n or n < 2:
-        raise ValueError(f"--speeds START STOP N: N must be an integer >= 2, got {n}")
-    if not config.orders or any(int(e) != e or not 1 <= e <= max_order for e in config.orders):
+    if not (_real(start) and _real(stop) and 0 <= start < stop <= MAX_TURNING_SPEED):
+        raise ValueError(f"--speeds START STOP N: need finite 0 <= START < STOP <= {MAX_TURNING_SPEED:g} rad/s "
+                         f"(rotor 37's range: its blade yields above), got {start:g} {stop:g}")
+    if not (_real(n) and float(n).is_integer() and 2 <= n <= MAX_SPEED_COUNT):
+        raise ValueError(f"--speeds START STOP N: N must be an integer in 2..{MAX_SPEED_COUNT}, got {n:g}")
+    if not config.orders or any(not (_real(e) and float(e).is_integer() and 1 <= e <= max_order)
+                                for e in config.orders):
         raise ValueError(f"--orders must be integers in [1, {max_order}], got {list(config.orders)}")
-    if not (np.isfinite(config.refine) and config.refine >= 0):
-        raise ValueError(f"--refine must be >= 0 rad/s (0: no refinement), got {config.refine}")
+    if not (_real(config.refine) and 0 <= config.refine <= MAX_REFINE):
+        raise ValueError(f"--refine must be in [0, {MAX_REFINE:g}] rad/s (0: no refinement), got {config.refine}")
+    if not isinstance(config.out, (str, Path)) or not str(config.out).strip():
+        raise ValueError(f"--out must be a folder's path, got {config.out!r}")
     object.__setattr__(config, "speeds", (float(start), float(stop), int(n)))
     object.__setattr__(config, "orders", tuple(sorted({int(e) for e in config.orders})))
     object.__setattr__(config, "out", Path(config.out))
+
+
+def check_speeds_memory(n_speeds: int, per_speed: float, what: str) -> None:
+    """Refused naming --speeds where ``n_speeds`` speeds of ``per_speed`` bytes each (``what``) would not fit in
+    this machine's memory (``checks.fits_in_memory``): what a study keeps of every speed until its diagram."""
+    fits_in_memory("--speeds", n_speeds * per_speed, f"{n_speeds} speeds x {per_speed / 2**20:.3g} MiB: {what}",
+                   hint="fewer speeds or modes")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -107,10 +149,10 @@ class CampbellResult:
 
 def run_campbell(config: CampbellConfig, sector=None) -> CampbellResult:
     """The Campbell diagram of ``config`` (``sector``: a blade sector already built, else the preset's)."""
+    before_work({"--out": config.out})                          # before any import of the FE adapter
     from rotor37_rom import fem
     from rotor37_rom.model.modes import classify_blade_modes
 
-    before_work({"--out": config.out})
     t0 = time.perf_counter()
     sector = sector if sector is not None else fem.create_blade_sector(preset=config.preset)
     ops = fem.create_svk_operators(sector)

@@ -26,17 +26,25 @@ from rotor37_rom.dynamics.turning import CLEARANCES
 from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.model.reduced import ReducedModel
 from rotor37_rom.reduction.config import DiskReductionConfig, ReductionConfig
+from rotor37_rom.studies.campbell import MAX_TURNING_SPEED
 from rotor37_rom.studies.sector_file import SECTOR_OPTIONS, SectorFile, add_sector_options
 from rotor37_rom.studies.sweep import SweepSpec
 
 __all__ = ["ContactMapConfig", "MapModel", "MapScheme", "MapContinuation", "OPTIONS", "build_parser", "parse_options",
-           "map_model",
+           "map_model", "refuse_idle_options", "saved_model_info", "MAX_MAP_SPEEDS",
            "continued_revolutions", "GNL_SETTINGS", "PRECISIONS", "N_SECTORS"]
 
 GNL_SETTINGS = {"off": (False,), "on": (True,), "both": (False, True)}
 PRECISIONS = ("double", "single")
 N_SECTORS = 36                                     # rotor 37's blades (the disk sector of fem.create_disk_sector)
 MAX_SPEED = 1e5                                    # rad/s (about 1 million rpm): above any bladed rotor's
+#: speeds of a map at most: each is a run of its revolutions from rest (seconds to minutes), its record file and, on
+#: rank 0, its records read back for the map (``ContactMapConfig`` checks their memory too)
+MAX_MAP_SPEEDS = 10_000
+#: the options that build the model (``MapModel``): with --model (a saved model, read as it is) they do nothing;
+#: --preset and --disk still name the mesh --stress recovers the disk's stress on
+BUILD_OPTIONS = ("preset", "disk", "r_c", "r_md", "global_md", "contact_patch", "r_cyclic", "mistuning", "seed")
+STRESS_MESH_OPTIONS = ("preset", "disk")
 
 
 def map_model(tolerance: float, gnl: bool, fallback: bool = False, disk: bool = False):
@@ -60,6 +68,34 @@ def _study(stamp: int | None) -> dict:
     from rotor37_rom.studies.model_choice import load_study
 
     return load_study()
+
+
+def saved_model_info(option: str, path) -> dict:
+    """What a saved reduced model (.npz) is, read from its small entries alone (the matrices are not read): {'key',
+    'metadata', 'sizes', 'disk' (a bladed disk's model), 'n_sectors' (1 for a blade), 'forces' (its force's kind,
+    'none' for a linear model), 'nodes' (its contact nodes' names), 'top_speed' (rad/s: the top of a turning
+    model's range, None for a model at rest)}. ValueError naming ``option`` for a file that is
+    missing, unreadable or not a reduced model (``model.reduced.saved_model_key``)."""
+    import json
+
+    from rotor37_rom.model.reduced import saved_model_key
+
+    key = flagged(option, lambda: saved_model_key(path))
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            info = json.loads(str(data["meta"]))
+            forces = str(data["forces"]) if "forces" in data.files else "none"
+            nodes = tuple(str(x) for x in data["nodes_names"]) if "nodes_names" in data.files else ()
+            sectors = "sectors_Pi" in data.files
+            top = float(np.max(data["rotation_speeds"])) if "rotation_speeds" in data.files else None
+    except Exception as exc:
+        raise ValueError(f"{option}: reduced model file {path} is corrupted or not a reduced model "
+                         f"({exc.__class__.__name__})") from None
+    metadata, sizes = info.get("metadata", {}), info.get("sizes") or {}
+    disk = sectors or "n_sectors" in sizes or metadata.get("kind") == "disk"
+    n = sizes.get("n_sectors", metadata.get("n_sectors", 1)) if disk else 1
+    return {"key": key, "metadata": metadata, "sizes": sizes, "disk": bool(disk), "n_sectors": int(n),
+            "forces": forces, "nodes": nodes, "top_speed": top}
 
 
 def continued_revolutions(revolutions: float) -> float:
@@ -103,7 +139,7 @@ class MapModel:
             model built here, not a saved one or the disk's).
         r_cyclic: the disk's interface modes (eq. 51, >= 1; the paper's 144).
         mistuning: the disk's blade-to-blade stiffness scatter, a standard deviation in [0, 1) (0: tuned).
-        seed: of the mistuning's random factors.
+        seed: of the mistuning's random factors (a seed other than 0 needs ``mistuning`` > 0).
         mesh: a user's sector (``studies.sector_file.SectorFile``) to build the model on instead of rotor 37's: a
             blade, or with its cyclic faces and count a bladed disk (``disk`` is then set); None: rotor 37.
     """
@@ -146,6 +182,9 @@ class MapModel:
                     open_high=True)
         if self.mistuning > 0 and not self.disk:
             raise ValueError("--mistuning needs --disk (it scatters the disk's blades)")
+        if self.seed != 0 and self.mistuning == 0:
+            raise ValueError(f"--seed needs --mistuning > 0 (it seeds the mistuning's random factors; a tuned disk "
+                             f"has none), got --seed {self.seed}")
         for name in ("contact_patch", "mistuning"):
             object.__setattr__(self, name, float(getattr(self, name)))
         if self.path is not None:
@@ -280,10 +319,12 @@ class MapContinuation:
 
     Attributes:
         step: speed step (rad/s; option ``continuation``); 0: none.
-        range: (LOW, HIGH) speeds (rad/s; option ``continuation_range``); None: the map's range.
+        range: (LOW, HIGH) speeds (rad/s; option ``continuation_range``); None: the map's range. Needs ``step`` or
+            ``periodic`` > 0 (it is their range).
         steady_window: a continued run is steady when its max over the last N revolutions and the N before agree.
         unsteady_step: the continuation's point when no halving is steady: 'smallest' (the paper read literally:
-            the step stays divided) or 'full' (the full step, marked not steady).
+            the step stays divided) or 'full' (the full step, marked not steady). Either, other than its default
+            (1, 'smallest'), needs ``step`` > 0.
         periodic: relative arc-length step of the periodic orbits' continuation over the same range (option
             ``periodic``; ``studies.periodic_map``: the map's scheme and casing by shooting, with their stability);
             0: none. A blade's model only.
@@ -307,6 +348,14 @@ class MapContinuation:
             raise ValueError(f"--unsteady-step must be 'smallest' or 'full', got {self.unsteady_step!r}")
         real_number("--periodic (the relative arc-length step of the periodic orbits; 0: none)", self.periodic, 0,
                     0.5)
+        if self.range is not None and self.step == 0 and self.periodic == 0:
+            raise ValueError("--continuation-range needs --continuation STEP > 0 or --periodic STEP > 0 (it is the "
+                             "speed range of their branches)")
+        for name, value, default in (("steady_window", self.steady_window, 1),
+                                     ("unsteady_step", self.unsteady_step, "smallest")):
+            if self.step == 0 and value != default:
+                raise ValueError(f"{_flag(name)} needs --continuation STEP > 0 (it shapes the continuation's runs), "
+                                 f"got {_flag(name)} {value}")
         object.__setattr__(self, "step", float(self.step))
         object.__setattr__(self, "periodic", float(self.periodic))
         if self.range is not None:
@@ -346,7 +395,10 @@ class ContactMapConfig:
     configuration of them, ``options`` gives them back and ``with_options`` changes some.
 
     Attributes:
-        speeds: (START, STOP, N): N angular speeds (rad/s) from START to STOP.
+        speeds: (START, STOP, N): N angular speeds (rad/s) from START to STOP: 0 < START <= STOP <= ``MAX_SPEED``
+            (with ``scheme.rotation``, a model built on rotor 37: <= ``studies.campbell.MAX_TURNING_SPEED``, its
+            continuation's range too), N in 1..``MAX_MAP_SPEEDS``, the records of all N read back within this
+            machine's memory.
         gnl: geometric nonlinearity: 'off', 'on' or 'both' (one map each).
         sector: the sector whose node LE makes the map and the NFRC (0 .. 35; the blade: 0).
         stress: a disk's von Mises stress at t_max of each map's largest response, every sector rebuilt from q (the
@@ -426,9 +478,10 @@ class ContactMapConfig:
         speeds = self.speeds
         if not (isinstance(speeds, (tuple, list)) and len(speeds) == 3
                 and all(isinstance(w, numbers.Real) and np.isfinite(w) for w in speeds)
-                and 0 < speeds[0] <= speeds[1] <= MAX_SPEED and speeds[2] >= 1 and float(speeds[2]).is_integer()):
-            raise ValueError(f"--speeds: need 0 < START <= STOP <= {MAX_SPEED:g} rad/s and an integer N >= 1, got "
-                             f"{list(speeds)}")
+                and 0 < speeds[0] <= speeds[1] <= MAX_SPEED and 1 <= speeds[2] <= MAX_MAP_SPEEDS
+                and float(speeds[2]).is_integer()):
+            raise ValueError(f"--speeds: need 0 < START <= STOP <= {MAX_SPEED:g} rad/s and an integer N in "
+                             f"1..{MAX_MAP_SPEEDS}, got {list(speeds)}")
         if self.gnl not in GNL_SETTINGS:
             raise ValueError(f"--gnl must be one of {', '.join(GNL_SETTINGS)}, got {self.gnl!r}")
         # what a batch holds: every record_dt, per run the monitored nodes' normal displacements and the contact
@@ -439,6 +492,14 @@ class ContactMapConfig:
         fits_in_memory("--revolutions", 8.0 * rows * records * batch,
                        f"{batch} runs x {records:.3g} records x {rows} values, at {speeds[0]:g} rad/s",
                        hint="fewer revolutions or a smaller --batch")
+        # what the whole map holds on rank 0 once its speeds are run: every speed's record read back (its time and
+        # the monitored nodes' displacements: a blade's 8, a disk's LE of every sector and TE) and its spectrum
+        kept = 1 + (8 if not (self.rom.disk or self.rom.path is not None) else self.rom.n_sectors + 1)
+        n = int(speeds[2])
+        fits_in_memory("--speeds", n * (8.0 * kept * records + 8.0 * 600 + 1024),
+                       f"{n} speeds x {records:.3g} records x {kept} values read back for the map, at most (at "
+                       f"{speeds[0]:g} rad/s)", hint="fewer speeds or revolutions, or the speed range split over "
+                                                     "several maps")
         limit = self.rom.n_sectors - 1
         if not (isinstance(self.sector, numbers.Integral) and 0 <= self.sector <= limit):
             raise ValueError(f"--sector must be in [0, {limit}] ({'the disk' if limit else 'a single blade'}'s "
@@ -458,6 +519,13 @@ class ContactMapConfig:
         if self.scheme.rotation is not None and self.continuation.periodic > 0:
             raise ValueError("--rotation: not with --periodic (the periodic orbits of a turning blade are not "
                              "implemented; its map and continuation are)")
+        if (self.scheme.rotation is not None and self.rom.path is None and self.rom.mesh is None
+                and self.top_speed > MAX_TURNING_SPEED):
+            option, top = (("--speeds", "STOP") if speeds[1] >= self.continuation_span[1] else
+                           ("--continuation-range", "HIGH"))
+            raise ValueError(f"{option}: the turning model is built up to {self.top_speed:g} rad/s, above rotor 37's "
+                             f"{MAX_TURNING_SPEED:g} rad/s (its blade yields above: studies.campbell."
+                             f"MAX_TURNING_SPEED); need {top} <= {MAX_TURNING_SPEED:g} rad/s with --rotation")
         half = continued_revolutions(self.sweep.revolutions) / 2
         if not self.continuation.steady_window <= half:
             raise ValueError(f"--steady-window must be in 1..{int(half)} revolutions (half of a continued run), got "
@@ -501,9 +569,13 @@ class ContactMapConfig:
         object.__setattr__(self, "speeds", (float(start), float(stop), int(n)))
         if self.tolerance is not None:
             object.__setattr__(self, "tolerance", float(self.tolerance))
-        object.__setattr__(self, "out", Path(self.out))
-        if self.cache is not None:
-            object.__setattr__(self, "cache", Path(self.cache))
+        for name in ("out", "cache"):                    # Path('') is the current folder: refused, not written in
+            value = getattr(self, name)
+            if value is None and name == "cache":
+                continue
+            if not isinstance(value, (str, Path)) or not str(value).strip():
+                raise ValueError(f"{_flag(name)} must be a folder's path, got {value!r}")
+            object.__setattr__(self, name, Path(value))
 
     @property
     def modes(self) -> tuple[int, int]:
@@ -608,27 +680,33 @@ def build_parser() -> ArgumentParser:
     parser = ArgumentParser(description="interaction maps of the reduced blade with casing contact",
                             argument_default=argparse.SUPPRESS)
     parser.add_argument("--preset", help=f"mesh preset: {', '.join(MESH_PRESETS)} (default ci)")
-    parser.add_argument("--model", type=Path, help="load this reduced model (.npz) instead of building one")
+    parser.add_argument("--model", type=Path, help="load this reduced model (.npz) instead of building one (not with "
+                                                   "the options that build one: --preset and --disk only with "
+                                                   "--stress)")
     parser.add_argument("--disk", action="store_true",
                         help="the 36-sector bladed disk (every blade's 8 tip nodes in contact) instead of the blade")
     parser.add_argument("--r-c", type=int, help="fixed-interface modes (per sector) of the model built (default 15; "
                                                 "disk 10)")
     parser.add_argument("--r-md", type=int, help="modal derivatives (per sector) of the model built (default 0; disk "
                                                  "10, by MI 2b)")
-    parser.add_argument("--global-md", type=int, help="modal derivatives of the first N clamped modes (default 3)")
+    parser.add_argument("--global-md", type=int, help="modal derivatives of the first N clamped modes (default 3; the "
+                                                       "blade's)")
     parser.add_argument("--contact-patch", type=float, metavar="RADIUS",
                         help="spread each tip node's contact force over the tip facets within RADIUS (m, <= 0.01; "
                              "default 0: point contact)")
-    parser.add_argument("--r-cyclic", type=int, help="the disk's interface modes (default 144, the paper's)")
+    parser.add_argument("--r-cyclic", type=int, help="the disk's interface modes (default 144, the paper's; needs "
+                                                      "--disk)")
     parser.add_argument("--mistuning", type=float, metavar="SIGMA",
                         help="the disk's blade stiffness scatter: standard deviation in [0, 1) of log-normal factors "
                              "(default 0: tuned)")
-    parser.add_argument("--seed", type=int, help="seed of the mistuning factors (default 0)")
+    parser.add_argument("--seed", type=int, help="seed of the mistuning factors (default 0; needs --mistuning)")
     parser.add_argument("--sector", type=int, help="sector whose node LE makes the map (0..35; default 0)")
     parser.add_argument("--stress", action="store_true",
                         help="the disk's von Mises stress at t_max of each map's largest response (all sectors)")
     parser.add_argument("--speeds", type=float, nargs=3, metavar=("START", "STOP", "N"),
-                        help="N angular speeds (rad/s) from START to STOP (default 1200 1600 21)")
+                        help=f"N angular speeds (rad/s) from START to STOP, 0 < START <= STOP <= {MAX_SPEED:g} (with "
+                             f"--rotation and the model built here <= {MAX_TURNING_SPEED:g}: rotor 37's range), N in "
+                             f"1..{MAX_MAP_SPEEDS} and within this machine's memory (default 1200 1600 21)")
     parser.add_argument("--revolutions", type=float, help="revolutions per speed (default 20)")
     parser.add_argument("--gnl", choices=list(GNL_SETTINGS), help="geometric nonlinearity (default both)")
     parser.add_argument("--safety", type=float, help="h = safety * 2 / omega_max (linear model; default 0.5)")
@@ -693,15 +771,16 @@ def build_parser() -> ArgumentParser:
                         help="run the continuation over this speed range (rad/s) instead of the map's: up from LOW, "
                              "down from HIGH (each first run as long as the map's, 15 %% of it after); a higher "
                              "HIGH with the same LOW extends the saved up branch from its last point (a lower LOW "
-                             "with the same HIGH, the down branch)")
+                             "with the same HIGH, the down branch); the --periodic orbits' range too; needs "
+                             "--continuation or --periodic")
     parser.add_argument("--steady-window", type=int, metavar="N",
                         help="a continued run is steady when its max over the last N revolutions and the N before "
                              "agree to 2 %% (1, the paper's and the default: periodic with the rotor; N: periods up to "
-                             "N T)")
+                             "N T); needs --continuation")
     parser.add_argument("--unsteady-step", choices=["smallest", "full"],
                         help="the continuation's point where no halved step is steady: smallest (the paper read "
                              "literally, the default: the step stays divided) or full (the full step, marked not "
-                             "steady: 8 times fewer points across an unsteady stretch)")
+                             "steady: 8 times fewer points across an unsteady stretch); needs --continuation")
     parser.add_argument("--periodic", type=float, metavar="STEP",
                         help="also the periodic orbits of the map's scheme and casing over the continuation's range "
                              "(its --continuation-range, else the map's speeds), continued by arc length with this "
@@ -717,10 +796,41 @@ def build_parser() -> ArgumentParser:
 
 def parse_options(argv=None) -> dict:
     """The flat options (``OPTIONS``) of a command line (``build_parser``): those given, a user's sector's options
-    gathered into ``mesh`` (a ``SectorFile``)."""
+    gathered into ``mesh`` (a ``SectorFile``). An option given that does nothing with the others given is refused
+    (ValueError naming it and what it needs: ``refuse_idle_options``)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     mesh = SectorFile.from_args(args, parser)
     options = {k: v for k, v in vars(args).items() if k not in SECTOR_OPTIONS}
-    return options | ({"mesh": mesh} if mesh is not None else {})
+    options |= {"mesh": mesh} if mesh is not None else {}
+    refuse_idle_options(options)
+    return options
+
+
+def refuse_idle_options(given: dict) -> None:
+    """ValueError naming the first option of ``given`` (the flat options a command line gave, defaults left out)
+    that would do nothing: a model-building option with --model (the saved model is read as it is; --preset and
+    --disk only with --stress, whose mesh they name), --seed without --mistuning, --continuation-range without
+    --continuation or --periodic, --steady-window or --unsteady-step without --continuation, --r-cyclic (the disk's)
+    without --disk, --global-md (the blade's) with --disk."""
+    if given.get("model") is not None:
+        for name in BUILD_OPTIONS:
+            if name in given and not (name in STRESS_MESH_OPTIONS and given.get("stress")):
+                why = ("names the mesh of --stress only" if name in STRESS_MESH_OPTIONS else "builds the model")
+                raise ValueError(f"{_flag(name)} {why}: not with --model (the saved model is read as it is)")
+    if "seed" in given and given.get("mistuning", 0) == 0:
+        raise ValueError("--seed needs --mistuning > 0 (it seeds the mistuning's random factors; a tuned disk has "
+                         "none)")
+    if "continuation_range" in given and not (given.get("continuation", 0) or given.get("periodic", 0)):
+        raise ValueError("--continuation-range needs --continuation STEP > 0 or --periodic STEP > 0 (it is the speed "
+                         "range of their branches)")
+    for name in ("steady_window", "unsteady_step"):
+        if name in given and not given.get("continuation", 0):
+            raise ValueError(f"{_flag(name)} needs --continuation STEP > 0 (it shapes the continuation's runs)")
+    mesh = given.get("mesh")
+    if "r_cyclic" in given and not given.get("disk") and (mesh is None or getattr(mesh, "cyclic", None) is None):
+        raise ValueError("--r-cyclic (the disk's interface modes) needs --disk (or --mesh with a disk's sector)")
+    if "global_md" in given and (given.get("disk") or getattr(mesh, "cyclic", None) is not None):
+        raise ValueError("--global-md (the blade's modal derivatives of its clamped modes) does nothing with --disk "
+                         "(its modal derivatives are --r-md's)")
 

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
-import json
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Sequence
@@ -22,22 +21,22 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 import scipy.linalg
 
-from rotor37_rom.checks import before_work, flagged
+from rotor37_rom.checks import before_work, flagged, output_lock
 from rotor37_rom.disk.assembly import mistuning_factors
 from rotor37_rom.disk.harmonics import sector_harmonics
 from rotor37_rom.dynamics.casing import Casing, check_hand, contact_matrices
 from rotor37_rom.dynamics.explicit import CentralDifference, simulate
 from rotor37_rom.dynamics.friction import sprag_slip_friction
 from rotor37_rom.model.reduced import ReducedModel, load_reduced_model, save_reduced_model, saved_model_key
-from rotor37_rom.npz import save_json
+from rotor37_rom.npz import load_json, save_json, set_aside
 from rotor37_rom.studies.contact_config import (GNL_SETTINGS, N_SECTORS, PRECISIONS, ContactMapConfig, MapContinuation,
     MapModel, MapScheme, build_parser, continued_revolutions, map_model, parse_options)
 from rotor37_rom.studies.contact_scheme import (capped_gnl_step, capped_probe, capped_probe_states, cubature_model,
     print_step_outliers, setting_names, time_scheme)
 from rotor37_rom.studies.periodic_map import PeriodicBranch, describe_against, periodic_branch
-from rotor37_rom.studies.sweep import (ContinuationPoint, InteractionMap, compute_seconds, continuation,
-    interaction_map, idle_barrier, load_speed, load_sweep, record_row, rerun_diverged, run_sweep, sector_maxima,
-    sweep_folder)
+from rotor37_rom.studies.sweep import (ContinuationPoint, InteractionMap, SavedRecord, compute_seconds,
+    continuation, interaction_map, idle_barrier, load_speed, load_sweep, record_row, rerun_diverged, run_sweep,
+    sector_maxima, sweep_folder)
 from rotor37_rom.viz.charts import plot_interaction_map, plot_nfrc, plot_periodic_nfrc, plot_time_history
 
 if TYPE_CHECKING:
@@ -46,6 +45,7 @@ if TYPE_CHECKING:
 __all__ = ["run_contact_map", "ContactMapResult", "MapResult", "Branch", "reduced_model", "build_model",
            "eigenfrequencies", "eo4_frequency", "sprag_slip_onsets", "carry_on", "carry_on_record", "stress_mesh",
            "disk_stress_of", "disk_peak_stress", "merge_earlier_runs", "write_summary", "world_comm", "PAPER",
+           "check_summary", "check_output",
            "ContactMapConfig", "MapModel", "MapScheme", "MapContinuation", "build_parser", "parse_options", "map_model",
            "continued_revolutions", "GNL_SETTINGS", "PRECISIONS", "N_SECTORS", "time_scheme", "setting_names",
            "cubature_model", "capped_probe", "capped_gnl_step", "capped_probe_states", "print_step_outliers",
@@ -173,6 +173,8 @@ def build_model(config: ContactMapConfig) -> ReducedModel:
     r_c, r_md = config.modes
     t0 = time.perf_counter()
     sector = config.rom.create_sector(MPI.COMM_SELF)
+    if len(sector.tip_nodes) >= 2:                       # a sense the blade's hand refuses costs no model build
+        check_hand(sector.tip_nodes, config.sweep.casing.rotation_sense)
     if config.rom.disk:
         from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model
 
@@ -497,12 +499,43 @@ def print_map(result: MapResult, linear_resonance: float) -> None:
             print(f"         {describe_against(name, comparison)}")
 
 
+def check_summary(summary) -> None:
+    """ValueError (KeyError, TypeError) unless ``summary`` (a summary.json, read) is what ``write_summary`` writes as
+    far as a later call reads it back: an object whose 'runs', if any, are objects with as many 'nfrc' values as
+    'speeds'."""
+    if not isinstance(summary, dict):
+        raise ValueError(f"a JSON object expected, got {type(summary).__name__}")
+    runs = summary.get("runs", {})
+    if not isinstance(runs, dict):
+        raise ValueError(f"its 'runs' must be an object, got {type(runs).__name__}")
+    for label, run in runs.items():
+        if not isinstance(run, dict) or not isinstance(run.get("speeds"), list) or \
+                not isinstance(run.get("nfrc"), list) or len(run["speeds"]) != len(run["nfrc"]):
+            raise ValueError(f"its run {label!r} has no list of speeds with as many nfrc values")
+
+
+def check_output(out: Path) -> None:
+    """The files of an earlier run in the map's folder ``out`` that this one reads back, checked before it works: a
+    damaged summary.json is moved aside (``summary.json.damaged-<n>``; this run writes a new one, without the
+    earlier runs it held), a damaged continuation branch too (that branch runs again). A warning names each."""
+    load_json(out / "summary.json", check_summary,
+              "this run writes a new one (the earlier runs it held are not carried over)")
+    for path in sorted((out / "continuation").glob("*/continuation_*.npz")):
+        try:
+            missing = [k for k in ("points", "q", "q_prev", "phase", "omega", "finished") if k not in SavedRecord(path)]
+            if missing:
+                raise ValueError(f"no {', '.join(missing)}")
+        except Exception as exc:
+            set_aside(path, " ".join(f"{exc.__class__.__name__}: {exc}".split()), "its branch runs again")
+
+
 def merge_earlier_runs(summary: dict, previous: Path) -> None:
     """Add to ``summary['runs']`` the runs of an earlier summary.json of the same model, speeds and revolutions
-    (this call's entries win, key by key)."""
-    if not previous.is_file():
+    (this call's entries win, key by key). A damaged one is moved aside with a warning and nothing merged
+    (``run_contact_map`` checks it before it works: ``check_output``)."""
+    old = load_json(previous, check_summary, "the new summary holds this call's runs only")
+    if old is None:
         return
-    old = json.loads(previous.read_text())
     if (old.get("r"), old.get("speeds"), old.get("revolutions")) != (summary["r"], summary["speeds"],
                                                                       summary["revolutions"]):
         return
@@ -538,6 +571,15 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
     stability limit, ...)."""
     before_work({"--out": config.out, "--cache": config.cache_dir},                         # before any work
                 {"--model": (config.rom.path, saved_model_key)})
+    # the folder's lock (rank 0's: a second run on it is refused at once), then the files of an earlier run that this
+    # one reads back checked (a damaged summary.json moved aside), before any work
+    with output_lock(config.out, "--out", comm, check=lambda: check_output(config.out)):
+        return _run_contact_map(config, comm, schemes)
+
+
+def _run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None,
+                     schemes: dict[bool, CentralDifference] | None) -> ContactMapResult:
+    """``run_contact_map``'s work (its folder locked and checked)."""
     rank = 0 if comm is None else comm.rank
     if comm is not None:
         # rank 0 alone imports dolfinx for its serial work (the build, the cubature, the stress) and PETSc's
@@ -567,10 +609,14 @@ def run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None = None,
     resonance = summary["linear_resonance"] if resonance is None else resonance
     summary["frame"] = {"axis": "+z", "file_axis": "+z" if config.rom.mesh is None else config.rom.mesh.axis,
                         "rotation_sense": casing.rotation_sense, "contact_normal": casing.direction,
-                        "tip_stagger_deg": float(np.degrees(stagger))}
+                        "tip_stagger_deg": float(np.degrees(stagger)),
+                        "blade_frame": "the plane through the axis and the blade's centre of mass",
+                        "blade_frame_theta_deg": float(np.degrees(model.nodes.frame_angle))}
     if rank == 0 and not config.quiet:
         print(f"frame: rotation about +z, sense {casing.rotation_sense:+d} (towards "
-              f"{'-' if casing.rotation_sense < 0 else '+'}theta), contact normal {casing.direction}; the tip's "
+              f"{'-' if casing.rotation_sense < 0 else '+'}theta), contact normal {casing.direction}"
+              + (f" (the blade frame's e_x: radial through its centre of mass, "
+                 f"{np.degrees(model.nodes.frame_angle):+.3f} deg)" if casing.direction == "x" else "") + "; the tip's "
               f"trailing edge {abs(np.degrees(stagger)):.1f} deg behind its leading edge")
     if rank == 0 and not config.quiet:
         where = f" turning at {config.top_speed:g} rad/s" if turning else ""

@@ -23,6 +23,7 @@ double mode's shape whatever the mix of its members), by MAC.
 from __future__ import annotations
 
 import dataclasses
+import numbers
 import time
 from pathlib import Path
 
@@ -33,11 +34,14 @@ from rotor37_rom.model.campbell import (engine_order_crossings, excited_directio
                                         pair_envelope, track_modes, travelling_direction)
 from rotor37_rom.npz import save_json
 
-from .campbell import check_sweep, iterate_crossing
+from .campbell import MAX_TURNING_SPEED, check_speeds_memory, check_sweep, iterate_crossing
 
-__all__ = ["DiskCampbellConfig", "DiskCampbellResult", "run_disk_campbell", "DISK_SECTORS"]
+__all__ = ["DiskCampbellConfig", "DiskCampbellResult", "run_disk_campbell", "DISK_SECTORS", "DISK_DOFS"]
 
 DISK_SECTORS = 36                 # the rotor 37 bladed disk
+#: DOF of the rotor 37 disk sector per mesh preset, rounded up (ci measured: 23,700; coarse 52,440 and paper
+#: 111,333: docs/results-disk.md): what a speed's families hold
+DISK_DOFS = {"ci": 23_800, "coarse": 52_500, "paper": 111_400}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -46,13 +50,15 @@ class DiskCampbellConfig:
 
     Attributes:
         preset: mesh preset of the rotor 37 disk sector: ci, coarse or paper.
-        speeds: (start, stop, n): n >= 2 speeds (rad/s) from start >= 0 to stop > start.
+        speeds: (start, stop, n): n speeds (2..``studies.campbell.MAX_SPEED_COUNT``, within this machine's memory)
+            (rad/s) from start >= 0 to stop > start, at most ``studies.campbell.MAX_TURNING_SPEED``.
         families: harmonic indices (nodal diameters) drawn, each in 0 ... 18; empty: all.
         n_modes: modes per family (1..10).
         orders: engine orders (integers 1..200); each crosses the family it excites.
-        zzenf_speed: the interference diagram's speed (rad/s, one of the grid's or any >= 0); None: the last speed.
-        refine: each crossing iterated on the disk to this (rad/s, > 0; its family solved again at each estimate),
-            or 0: interpolated on the grid only.
+        zzenf_speed: the interference diagram's speed (rad/s, one of the grid's or any in 0 ...
+            ``MAX_TURNING_SPEED``); None: the last speed.
+        refine: each crossing iterated on the disk to this (rad/s, in (0, 100]; its family solved again at each
+            estimate), or 0: interpolated on the grid only.
         coriolis: the turning frame's Coriolis coupling (forward and backward waves), on each family's modes.
         prestress: the centrifugal equilibrium's stiffening (False: spin softening alone).
         out: output folder (the charts and summary.json).
@@ -72,13 +78,22 @@ class DiskCampbellConfig:
     def __post_init__(self):
         check_sweep(self, max_order=200)
         half = DISK_SECTORS // 2
-        if any(int(k) != k or not 0 <= k <= half for k in self.families):
+        if any(not (isinstance(k, numbers.Real) and np.isfinite(k) and int(k) == k and 0 <= k <= half)
+               for k in self.families):
             raise ValueError(f"--families must be integers in [0, {half}], got {list(self.families)}")
-        if not 1 <= self.n_modes <= 10:
+        if not (isinstance(self.n_modes, numbers.Integral) and 1 <= self.n_modes <= 10):
             raise ValueError(f"--modes must be in [1, 10], got {self.n_modes}")
-        if self.zzenf_speed is not None and not (np.isfinite(self.zzenf_speed) and self.zzenf_speed >= 0):
-            raise ValueError(f"--zzenf-speed must be a speed >= 0 rad/s, got {self.zzenf_speed}")
+        if self.zzenf_speed is not None and not (isinstance(self.zzenf_speed, numbers.Real)
+                                                 and np.isfinite(self.zzenf_speed)
+                                                 and 0 <= self.zzenf_speed <= MAX_TURNING_SPEED):
+            raise ValueError(f"--zzenf-speed must be a speed in [0, {MAX_TURNING_SPEED:g}] rad/s (rotor 37's range), "
+                             f"got {self.zzenf_speed}")
         object.__setattr__(self, "families", tuple(sorted({int(k) for k in self.families})) or tuple(range(half + 1)))
+        # what the study keeps per speed: each family's mode shapes (a^2 + b^2 over the sector)
+        dofs, shapes = DISK_DOFS[self.preset], len(self.families) * self.n_modes
+        check_speeds_memory(self.speeds[2], 8.0 * dofs * shapes,
+                            f"{dofs:,} DOF x {len(self.families)} families x {self.n_modes} modes a speed, "
+                            f"{self.preset} disk sector")
 
     @property
     def speed_grid(self) -> np.ndarray:
@@ -133,9 +148,9 @@ class DiskCampbellResult:
 def run_disk_campbell(config: DiskCampbellConfig, sector=None) -> DiskCampbellResult:
     """The Campbell and interference diagrams of ``config`` (``sector``: a cyclic sector already built, else the
     preset's rotor 37 disk sector)."""
+    before_work({"--out": config.out})                          # before any import of the FE adapter
     from rotor37_rom import fem
 
-    before_work({"--out": config.out})
     t0 = time.perf_counter()
     name = f"rotor 37 bladed disk ({config.preset}" if sector is None else f"{sector.source} ("
     sector = sector if sector is not None else fem.create_disk_sector(preset=config.preset)

@@ -48,6 +48,9 @@ class OwnBladeConfig:
     def __post_init__(self):
         if self.mesh is not None and not isinstance(self.mesh, SectorFile):
             raise TypeError(f"mesh must be a SectorFile (the file and its groups) or None, got {self.mesh!r}")
+        if self.mesh is not None and self.mesh.tip is None:
+            raise ValueError("--tip none: this scene rubs the blade's tip on the casing; give --tip, the tip group "
+                             "whose camber line carries the contact nodes")
         if self.mesh is not None and self.mesh.cyclic is not None:
             raise ValueError("--left/--right/--n-sectors make a bladed-disk sector: demos/bladed_disk.py --mesh takes "
                              "it")
@@ -117,6 +120,10 @@ def run_own_blade(config: OwnBladeConfig) -> dict:
     model, _ = build_reduced_model(blade, ReductionConfig(r_c=config.r_c, r_md=0, global_md_modes=3,
                                                           forces="intrusive", keep_basis=True))
     print(f"reduced model: r = {model.r} {model.sizes}")
+    frame_deg = float(np.degrees(model.nodes.frame_angle))
+    if config.direction == "x":
+        print(f"contact normal x: the blade frame's e_x, radial through the blade's centre of mass at "
+              f"theta = {frame_deg:+.3f} deg in the file")
     casing = config.casing
     N, S, _, _ = contact_matrices(model.nodes, model.r, casing)
     per_node = [sprag_slip_friction(model.K, N, S, [k]) for k in range(N.shape[0])]
@@ -136,7 +143,9 @@ def run_own_blade(config: OwnBladeConfig) -> dict:
         "revolutions": config.revolutions, "diverged": diverged,
         "frame": {"axis": "+z", "file_axis": "+z" if config.mesh is None else config.mesh.axis,
                   "rotation_sense": config.rotation_sense, "contact_normal": config.direction,
-                  "tip_stagger_deg": float(np.degrees(stagger))},
+                  "tip_stagger_deg": float(np.degrees(stagger)),
+                  "blade_frame": "the plane through the axis and the blade's centre of mass",
+                  "blade_frame_theta_deg": frame_deg},
         "le_max_radial_mm": None if diverged else 1e3 * float(np.max(run.u_r[0][le])),
         "wall_s": time.perf_counter() - t0,
     }

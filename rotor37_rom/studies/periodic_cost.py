@@ -21,7 +21,9 @@ import time
 
 import numpy as np
 
+from rotor37_rom.checks import before_work
 from rotor37_rom.dynamics.explicit import CentralDifference, simulate
+from rotor37_rom.model.reduced import saved_model_key
 from rotor37_rom.studies.contact_map import ContactMapConfig, reduced_model
 from rotor37_rom.studies.contact_scheme import time_scheme
 from rotor37_rom.studies.periodic_map import PeriodicBranch, periodic_branch
@@ -78,7 +80,8 @@ def nfrc_against_map(config: ContactMapConfig, start_revolutions: float = 30.0, 
     """The GNL periodic orbits of ``config``'s map (``--periodic``'s branch over its continuation range; Newton's
     start the run from rest at the low end, ``start_revolutions`` long) and the cost of the map itself (GNL, its
     speeds x revolutions) from ``batch`` of its speeds run ``probe_revolutions`` in one batch; ValueError for a
-    configuration the orbits do not take (a disk, a turning blade, no --periodic step, GNL off); ``progress(point)``
+    configuration the orbits do not take (a disk, a turning blade, no --periodic step, GNL off), or for its folders
+    and model file, checked before any work (``checks.before_work``: a dry run stops there); ``progress(point)``
     after each orbit of the branch."""
     if config.continuation.periodic <= 0:
         raise ValueError("the NFRC needs --periodic STEP (> 0, the relative arc-length step)")
@@ -90,6 +93,8 @@ def nfrc_against_map(config: ContactMapConfig, start_revolutions: float = 30.0, 
             raise ValueError(f"{name} must be > {low:g}, got {value}")
     if not (batch >= 1 and ranks >= 1):
         raise ValueError(f"batch and ranks must be >= 1, got {batch}, {ranks}")
+    before_work({"--out": config.out, "--cache": config.cache_dir},              # before the hours of work
+                {"--model": (config.rom.path, saved_model_key)})
     setting = config.setting(True)
     model, _ = reduced_model(config, None)
     scheme = time_scheme(setting, model, True, None)                  # the map's: its forces, precision and step

@@ -8,6 +8,11 @@ unstable branches a run from rest never shows.
 The orbit has the casing's own period, pi / Omega (two lobes), and a fixed number of steps n per period over the
 whole branch (so that the period map is smooth in Omega): n = ceil(pi / (Omega_low h)), h the map's step, so every
 point's step T / n is at most the map's. Its amplitude is the map's: max |u_n| of the map's node over the period.
+
+An orbit that moves a node further than the maps' blow-up limit (``BLOWUP_LIMIT``: a run whose node displacement
+passes it is stopped and flagged as diverged, its NFRC point left out) is flagged alike (``PeriodicBranch.blown_up``,
+in the summary and the one-line description) and its amplitude left out (NaN, as the map's NFRC of a diverged run):
+the reduced model is not meant for such motions, and the orbit is not a result.
 """
 from __future__ import annotations
 
@@ -17,9 +22,29 @@ import time
 import numpy as np
 
 from rotor37_rom.dynamics.casing import contact_matrices
+from rotor37_rom.dynamics.explicit import BLOWUP_LIMIT
 from rotor37_rom.periodic import Shooting, continue_branch, solve_periodic
 
-__all__ = ["PeriodicBranch", "against_continuation", "describe_against", "periodic_branch"]
+__all__ = ["BLOWUP_LIMIT", "PeriodicBranch", "against_continuation", "describe_against", "orbit_blowup",
+           "periodic_branch"]
+
+
+def orbit_blowup(states: np.ndarray, rows) -> tuple[float, bool]:
+    """Whether an orbit goes past the maps' blow-up limit, by the maps' own test (``dynamics.explicit``: a node
+    displacement above ``BLOWUP_LIMIT`` or not finite).
+
+    Args:
+        states: (m, r) the orbit's states q over its period.
+        rows: the entries of q that hold node displacements (``NodeMap.boundary_rows``).
+
+    Returns:
+        (the largest |node displacement| over the orbit (m; NaN where one is not finite), whether it is blown up).
+    """
+    u = np.abs(np.asarray(states, float)[:, np.asarray(rows, dtype=np.int64)])
+    if not np.isfinite(u).all():
+        return float("nan"), True
+    largest = float(u.max(initial=0.0))
+    return largest, largest > BLOWUP_LIMIT
 
 
 @dataclasses.dataclass(frozen=True)
@@ -37,6 +62,10 @@ class PeriodicBranch:
         ended: why the branch ended (reached its speed, or a corrector that failed with the step at its minimum).
         steps: explicit steps per period; wall_s: wall time (s).
         continuation: {name: ``against_continuation``'s comparison} of the map's sequential continuation branches.
+        blown_up: whether each orbit moves a node past the maps' blow-up limit (``BLOWUP_LIMIT``; its amplitude is
+            then NaN, as a diverged run's NFRC point).
+        largest_displacement: the largest |node displacement| of each orbit (m), any entry of q holding one (the
+            maps' blow-up test's).
     """
 
     speeds: np.ndarray
@@ -49,11 +78,28 @@ class PeriodicBranch:
     steps: int
     wall_s: float
     continuation: dict = dataclasses.field(default_factory=dict)
+    blown_up: np.ndarray | None = None
+    largest_displacement: np.ndarray | None = None
+
+    def __post_init__(self):
+        n = len(self.speeds)
+        if self.blown_up is None:
+            object.__setattr__(self, "blown_up", np.zeros(n, bool))
+        if self.largest_displacement is None:
+            object.__setattr__(self, "largest_displacement", np.full(n, np.nan))
+        object.__setattr__(self, "blown_up", np.asarray(self.blown_up, bool))
+        if len(self.blown_up) != n or len(self.largest_displacement) != n:
+            raise ValueError(f"blown_up and largest_displacement must have one entry per orbit ({n}), got "
+                             f"{len(self.blown_up)} and {len(self.largest_displacement)}")
 
     def summary(self) -> dict:
-        """Its entry in summary.json."""
+        """Its entry in summary.json (an orbit past the blow-up limit: ``blown_up`` true, its amplitude NaN, its
+        speed in ``blown_up_speeds``)."""
         return {"speeds": self.speeds.tolist(), "amplitude": self.amplitude.tolist(),
                 "stable": self.stable.tolist(), "largest_multiplier": self.multiplier.tolist(),
+                "blown_up": self.blown_up.tolist(), "blown_up_speeds": self.speeds[self.blown_up].tolist(),
+                "blowup_limit": BLOWUP_LIMIT, "largest_displacement": np.asarray(self.largest_displacement,
+                                                                                  float).tolist(),
                 "bifurcations": self.bifurcations, "folds": self.folds, "ended": self.ended,
                 "steps_per_period": self.steps, "wall_s": self.wall_s,
                 **{f"continuation_{name}": c for name, c in self.continuation.items()}}
@@ -68,9 +114,14 @@ class PeriodicBranch:
         first = self.bifurcations[0] if self.bifurcations else None
         lost = (f"; stable up to {self.speeds[first['index'] - 1]:.1f} rad/s, then {first['kind']} at "
                 f"{first['speed']:.1f} rad/s (|mu| {first['modulus']:.4f})" if first and self.stable[0] else "")
+        past = self.speeds[self.blown_up]
+        blown = (f"; {len(past)} BLOWN UP (a node past the maps' blow-up limit {BLOWUP_LIMIT * 1e3:g} mm; not "
+                 f"results, amplitude left out) at "
+                 + (f"{past[0]:.1f}" if len(past) == 1 else f"{past.min():.1f}-{past.max():.1f}") + " rad/s"
+                 if len(past) else "")
         return (f"periodic orbits ({self.steps} steps a period, {self.wall_s:.0f} s): {len(self.speeds)} points, "
-                f"{int(self.stable.sum())} stable, {len(self.folds)} folds; stability changes: {counts}{lost}; "
-                f"{self.ended}")
+                f"{int(self.stable.sum())} stable, {len(self.folds)} folds; stability changes: {counts}{lost}"
+                f"{blown}; {self.ended}")
 
 
 def against_continuation(shooting: Shooting, points: list, row: np.ndarray, continued) -> dict:
@@ -81,7 +132,8 @@ def against_continuation(shooting: Shooting, points: list, row: np.ndarray, cont
     changes somewhere between): its relative distance to the nearest stable one, with that
     orbit's largest |multiplier| (a continued run of n periods is left |mu|^n of the distance it started at). A steady
     point where no stable orbit is (a torus past a Neimark-Sacker point, another period, a branch the orbits did not
-    reach) is listed apart. ``points``: the branch's PeriodicSolutions; ``row``: the map node's normal row."""
+    reach) is listed apart. ``points``: the branch's PeriodicSolutions; ``row``: the map node's normal row. A
+    compared orbit past the maps' blow-up limit is flagged (``blown_up`` in its row)."""
     w = np.array([p.omega / 2 for p in points])
     stable = [bool(p.stable) for p in points]
     rows, elsewhere = [], []
@@ -97,14 +149,16 @@ def against_continuation(shooting: Shooting, points: list, row: np.ndarray, cont
                 except ValueError:
                     continue
                 if orbit.stable:
-                    amp = float(np.abs(shooting.orbit(orbit) @ row).max())
-                    found.append((amp, float(np.abs(orbit.multipliers).max())))
+                    states = shooting.orbit(orbit)
+                    amp = float(np.abs(states @ row).max())
+                    found.append((amp, float(np.abs(orbit.multipliers).max()),
+                                  orbit_blowup(states, shooting.scheme.boundary_rows)[1]))
         if not found:
             elsewhere.append(float(c.omega))
             continue
-        amp, mu = min(found, key=lambda f: abs(f[0] - c.amplitude))
+        amp, mu, blown = min(found, key=lambda f: abs(f[0] - c.amplitude))
         rows.append({"speed": float(c.omega), "continuation": float(c.amplitude), "orbit": amp, "multiplier": mu,
-                     "period": int(c.period), "difference": abs(c.amplitude - amp) / amp})
+                     "period": int(c.period), "difference": abs(c.amplitude - amp) / amp, "blown_up": blown})
     worst = max((r["difference"] for r in rows), default=None)
     return {"compared": rows, "no_stable_orbit": elsewhere, "largest_difference": worst}
 
@@ -117,6 +171,10 @@ def describe_against(name: str, comparison: dict) -> str:
     line = f"continuation {name} against the periodic orbits: {len(rows)} steady points on a stable orbit"
     if rows:
         line += f" (largest difference {100 * comparison['largest_difference']:.3g} %)"
+    blown = [r["speed"] for r in rows if r.get("blown_up")]
+    if blown:
+        line += (f"; {len(blown)} on orbits BLOWN UP (past the blow-up limit {BLOWUP_LIMIT * 1e3:g} mm): "
+                 + ", ".join(f"{w:.0f}" for w in blown) + " rad/s")
     if other:
         line += f"; {len(other)} where no stable orbit is: " + ", ".join(f"{w:.0f}" for w in other) + " rad/s"
     return line
@@ -128,8 +186,10 @@ def periodic_branch(config, scheme, continued: dict | None = None, max_points: i
     at the low end of ``config.continuation_span`` continued by arc length (relative step
     ``config.continuation.periodic``) to its high end; with ``continued`` ({name: list of
     ``sweep.ContinuationPoint``}, the map's sequential continuation) each branch compared with the stable orbits
-    (``against_continuation``); ``progress(point)`` after each new point of the branch. ValueError for a disk's model (shooting marches a blade's 2 r states; a tuned disk's
-    travelling wave is ``periodic.TravellingWaveBalance``)."""
+    (``against_continuation``); ``progress(point)`` after each new point of the branch. An orbit that moves a node
+    past the maps' blow-up limit is flagged (``orbit_blowup``; ``PeriodicBranch.blown_up``) and its amplitude left
+    out (NaN). ValueError for a disk's model (shooting marches a blade's 2 r states; a tuned disk's travelling wave
+    is ``periodic.TravellingWaveBalance``)."""
     model = scheme.model
     if model.sectors is not None:
         raise ValueError("--periodic: periodic orbits by shooting take a blade's model, not a disk's")
@@ -150,7 +210,14 @@ def periodic_branch(config, scheme, continued: dict | None = None, max_points: i
     branch = continue_branch(shooting, start, 2 * high, config.continuation.periodic, tol=1e-9,
                              max_points=max_points, progress=progress)
     Nn = contact_matrices(model.nodes, model.r, casing, rows=[model.nodes.row("LE", config.sector)])[0]
-    amplitude = np.array([np.abs(shooting.orbit(p) @ Nn[0]).max() for p in branch.points])
+    amplitude, largest, blown_up = [], [], []
+    for p in branch.points:
+        states = shooting.orbit(p)
+        tip, blown = orbit_blowup(states, scheme.boundary_rows)
+        # past the maps' blow-up limit: flagged, its amplitude left out as a diverged run's NFRC point
+        amplitude.append(np.nan if blown else float(np.abs(states @ Nn[0]).max()))
+        largest.append(tip)
+        blown_up.append(blown)
     against = {name: against_continuation(shooting, branch.points, Nn[0], points)
                for name, points in (continued or {}).items()}
     bifurcations = [{"index": int(i), "speed": branch.points[i].omega / 2, "kind": kind, "modulus": float(abs(mu)),
@@ -159,8 +226,9 @@ def periodic_branch(config, scheme, continued: dict | None = None, max_points: i
     ended = (f"reached {high:g} rad/s" if branch.ended.startswith("reached") else
              f"the corrector failed at {last:.1f} rad/s with the step at its minimum"
              if branch.ended.startswith("the corrector") else f"{branch.ended}, at {last:.1f} rad/s")
-    return PeriodicBranch(speeds=branch.omega / 2, amplitude=amplitude,
+    return PeriodicBranch(speeds=branch.omega / 2, amplitude=np.array(amplitude),
                           stable=np.array([bool(p.stable) for p in branch.points]),
                           multiplier=np.array([float(np.abs(p.multipliers).max()) for p in branch.points]),
                           bifurcations=bifurcations, folds=[float(branch.points[i].omega / 2) for i in branch.folds],
-                          ended=ended, steps=steps, wall_s=time.perf_counter() - t0, continuation=against)
+                          ended=ended, steps=steps, wall_s=time.perf_counter() - t0, continuation=against,
+                          blown_up=np.array(blown_up, bool), largest_displacement=np.array(largest))

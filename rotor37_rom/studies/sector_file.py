@@ -37,8 +37,9 @@ class SectorFile:
             built-in sector's: the SAFE diagram's labels); None: the modes are not labelled blade or disk.
         units: the file's length unit (m, mm, cm, in).
         contact: contact nodes along the tip camber line (2..40).
-        material: (E Pa, nu, rho kg/m^3); None: an Abaqus deck's own *MATERIAL, else the paper's maraging steel
-            (which is said).
+        material: (E Pa, nu, rho kg/m^3); 'paper': the paper's maraging steel, confirmed; None: the file's own
+            material (an Abaqus deck's *MATERIAL, a NASTRAN MAT1); a file that states none is then refused, naming
+            --material (a default steel would be a silent guess: a user's plate came out 6.3 % off).
         mass_check: refuse a sector whose mass is outside 1 g - 100 kg (a unit slip) with the likely units.
         axis: the rotation axis in the file's frame ('+z', the project's; '-z', '+x', '-x', '+y', '-y'): the mesh is
             turned so that it is +z, and the results are in that turned frame (said when it is read).
@@ -53,7 +54,7 @@ class SectorFile:
     blade: str | None = None
     units: str = "mm"
     contact: int = 8
-    material: tuple[float, float, float] | None = None
+    material: tuple[float, float, float] | str | None = None
     mass_check: bool = True
     axis: str = "+z"
 
@@ -80,9 +81,9 @@ class SectorFile:
         if self.units not in UNITS:
             raise ValueError(f"--units must be one of {', '.join(UNITS)}, got {self.units!r}")
         whole_number("--contact (nodes along the tip camber line)", self.contact, 2, 40)
-        if self.material is not None:
+        if self.material is not None and self.material != "paper":
             if not (isinstance(self.material, (tuple, list)) and len(self.material) == 3):
-                raise ValueError(f"--material takes E (Pa), nu and rho (kg/m^3), got {self.material!r}")
+                raise ValueError(f"--material takes E (Pa), nu and rho (kg/m^3), or 'paper', got {self.material!r}")
             flagged("--material", lambda: Material(*self.material))
             object.__setattr__(self, "material", tuple(float(v) for v in self.material))
         if not isinstance(self.mass_check, bool):
@@ -103,18 +104,39 @@ class SectorFile:
 
         from rotor37_rom import fem
 
+        material = None if self.material is None else Material() if self.material == "paper" else \
+            Material(*self.material)
         try:
             return fem.create_sector_from_file(
                 self.path, clamp=self.clamp, tip=self.tip, comm=comm or MPI.COMM_WORLD, preset="ci",
                 units=self.units, contact=self.contact if self.tip is not None else None, verbose=verbose,
                 mass_check=self.mass_check, cyclic=self.cyclic, blade=self.blade, axis=self.axis,
-                material=None if self.material is None else Material(*self.material))
+                material=material)
+        except fem.MissingMaterial:
+            raise ValueError(f"--material: {self.path.name} states no material: give --material E NU RHO (Pa, -, "
+                             f"kg/m^3), or --material paper to run on the paper's maraging steel") from None
         except ValueError as exc:
             raise ValueError(f"--mesh: {exc}") from None
 
     def as_dict(self) -> dict:
         """What a summary records of the input."""
         return {k: (str(v) if isinstance(v, Path) else v) for k, v in dataclasses.asdict(self).items()}
+
+    @staticmethod
+    def material_option(words) -> tuple[float, float, float] | str | None:
+        """--material's words: None, ['paper'] or three numbers E NU RHO; ValueError naming --material otherwise."""
+        if words is None:
+            return None
+        if [str(w).lower() for w in words] == ["paper"]:
+            return "paper"
+        try:
+            values = tuple(float(w) for w in words)
+        except ValueError:
+            values = ()
+        if len(values) != 3:
+            raise ValueError(f"--material takes E (Pa), nu and rho (kg/m^3), or 'paper' (the paper's maraging "
+                             f"steel), got {' '.join(map(str, words))!r}")
+        return values
 
     @classmethod
     def from_args(cls, args: argparse.Namespace, parser: argparse.ArgumentParser) -> "SectorFile | None":
@@ -130,7 +152,7 @@ class SectorFile:
         return cls(path=args.mesh, clamp=args.clamp, tip=tip, left=getattr(args, "left", None),
                    right=getattr(args, "right", None), n_sectors=getattr(args, "n_sectors", None),
                    blade=getattr(args, "blade", None), units=args.units, contact=args.contact,
-                   material=None if args.material is None else tuple(args.material),
+                   material=cls.material_option(args.material),
                    mass_check=args.mass_check == "on", axis=args.axis)
 
 
@@ -151,8 +173,9 @@ def add_sector_options(parser: argparse.ArgumentParser, cyclic: bool = True) -> 
                                                          "disk)")
     group.add_argument("--units", default="mm", help=f"the file's length unit: {', '.join(UNITS)} (default mm)")
     group.add_argument("--contact", type=int, default=8, help="contact nodes along the tip camber line (2..40)")
-    group.add_argument("--material", type=float, nargs=3, metavar=("E", "NU", "RHO"), default=None,
-                       help="E (Pa), nu, rho (kg/m^3); default: the deck's own, else the paper's maraging steel")
+    group.add_argument("--material", nargs="+", metavar="E NU RHO | paper", default=None,
+                       help="E (Pa), nu, rho (kg/m^3), or 'paper' for the paper's maraging steel; default: the "
+                            "file's own (a file that states none is refused)")
     group.add_argument("--mass-check", choices=["on", "off"], default="on",
                        help="refuse a mass outside 1 g - 100 kg (a unit slip; default on)")
     group.add_argument("--axis", choices=list(AXES), default="+z",

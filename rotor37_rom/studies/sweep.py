@@ -3,7 +3,9 @@
 Pure NumPy (mpi4py optional, only to split a sweep over ranks). Each speed's result is written atomically as soon as
 it finishes (``<out>/<key>/omega_<speed>.npz``); a batch in flight also checkpoints its whole loop state, so a killed
 sweep resumes where it stopped and nothing already computed is recomputed. The key hashes the model, the scheme and
-the scenario: files of another set-up are never mixed in.
+the scenario: files of another set-up are never mixed in. A sweep holds its folder's lock while it runs (a second run
+on the same folder is refused at once), and checks the folder's files before it works: a damaged spec, result or
+checkpoint is named in a warning and moved aside (or removed, a checkpoint), and what it held computed again.
 """
 from __future__ import annotations
 
@@ -18,13 +20,14 @@ from typing import Sequence
 
 import numpy as np
 
-from rotor37_rom.checks import real_number, whole_number
+from rotor37_rom.checks import output_lock, real_number, whole_number
 from rotor37_rom.dynamics.casing import Casing
 from rotor37_rom.dynamics.explicit import CentralDifference, simulate
 from rotor37_rom.dynamics.recorder import LoopState, loop_state, save_loop_state
-from rotor37_rom.npz import save_json, save_npz
+from rotor37_rom.npz import load_json, save_json, save_npz, set_aside
 
 __all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "compute_seconds", "load_speed", "sweep_folder",
+           "read_spec", "check_spec",
            "interaction_map", "InteractionMap", "engine_order_resonance", "record_row", "last_revolution_max",
            "sector_maxima", "sector_rows", "continuation", "ContinuationPoint", "is_steady", "response_period",
            "engine_order_content"]
@@ -69,20 +72,65 @@ def _speed_file(folder: Path, omega: float) -> Path:
     return folder / f"omega_{omega:012.4f}.npz"
 
 
+RESULT_KEYS = ("omega", "t", "u_r", "diverged_step")     # what every speed's record holds (and a map reads)
+
+
+def check_spec(spec) -> None:
+    """ValueError unless ``spec`` (a sweep folder's spec.json, read) is what ``run_sweep`` writes: an object with the
+    step 'h' (s, > 0) and the 'model' key."""
+    if not isinstance(spec, dict):
+        raise ValueError(f"a JSON object expected, got {type(spec).__name__}")
+    h = spec.get("h")
+    if isinstance(h, bool) or not isinstance(h, (int, float)) or not 0 < h < float("inf"):
+        raise ValueError(f"its step 'h' must be a number > 0, got {h!r}")
+    if not isinstance(spec.get("model"), str):
+        raise ValueError(f"its 'model' must be a model's key, got {spec.get('model')!r}")
+
+
+def read_spec(folder: str | Path, then: str = "its sweep writes a new one when it runs") -> dict | None:
+    """The spec.json of a sweep folder (``check_spec``); None where it is absent or damaged: a damaged one is moved
+    aside with a warning naming it and ``then``, what the caller does instead (``npz.load_json``)."""
+    return load_json(Path(folder) / "spec.json", check_spec, then)
+
+
+def _named_step(name: str, scheme: CentralDifference, spec: SweepSpec) -> float | None:
+    """The step whose key (with ``scheme`` and ``spec``) names a folder ``name``: the scheme's, or a step one unit
+    apart in its 12th digit (the same run's step from another BLAS: ``sweep_folder``); None if neither."""
+    if name == _key(scheme, spec):
+        return scheme.h
+    h12 = float(f"{scheme.h:.12g}")
+    unit = 10.0 ** (np.floor(np.log10(h12)) - 11)
+    near = (float(f"{h12 + k * unit:.12g}") for k in (-1, 1))
+    return next((h for h in near if name == _key(scheme, spec, h)), None)
+
+
 def sweep_folder(scheme: CentralDifference, spec: SweepSpec, out: str | Path) -> Path:
     """The folder under ``out`` where ``run_sweep`` writes the speeds of ``scheme`` and ``spec``: the one its key
     names or, if that does not exist, an existing folder of the same run whose step differs by round-off only (its
     name is the key of everything else at its own step, within 1e-9 of ours). The step from the highest frequency
     differs in its last digits with the BLAS threads; the key rounds it to 12 digits, and two such steps can round
-    apart (2.6525823848459e-06 and ...8440e-06: a restarted run would start over)."""
+    apart (2.6525823848459e-06 and ...8440e-06: a restarted run would start over). A folder whose step rounded one
+    unit apart is found by its name, even where its spec.json is damaged; another folder's damaged spec.json is named
+    in a warning."""
     out = Path(out)
     folder = out / _key(scheme, spec)
     if folder.exists() or not out.is_dir():
         return folder
     for other in sorted(out.iterdir()):
+        if not other.is_dir():
+            continue
+        if _named_step(other.name, scheme, spec) is not None:
+            return other
+        path = other / "spec.json"
+        if not path.is_file():
+            continue
         try:
-            h = float(json.loads((other / "spec.json").read_text())["h"])
-        except (OSError, ValueError, KeyError, TypeError):
+            saved = json.loads(path.read_text())
+            check_spec(saved)
+            h = float(saved["h"])
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            LOG.warning("%s is damaged (%s): its folder is not taken for this sweep (a run of its own sweep moves "
+                        "it aside and writes a new one)", path, " ".join(str(exc).split()))
             continue
         if abs(h - scheme.h) <= 1e-9 * scheme.h and other.name == _key(scheme, spec, h):
             return other
@@ -139,9 +187,55 @@ def _load_result(path: Path) -> SavedRecord | None:
     caller computes it again; files are written whole by ``save_npz``, so a member that opens reads)."""
     try:
         return SavedRecord(path)
-    except Exception:
-        LOG.warning("ignoring unreadable result %s", path)
+    except Exception as exc:
+        LOG.warning("ignoring the damaged file %s (%s: %s)", path, exc.__class__.__name__, " ".join(str(exc).split()))
         return None
+
+
+def _result_damage(path: Path) -> str | None:
+    """Why the speed file ``path`` cannot be used (it does not open, a small entry does not read, an entry every
+    record holds is missing, or it holds another speed than its name's); None when it can. Reads what ``SavedRecord``
+    reads when it opens (the entries under 1 MB; the larger ones' zip entries are listed, not read)."""
+    try:
+        record = SavedRecord(path)
+        missing = [k for k in RESULT_KEYS if k not in record]
+        if missing:
+            return f"no {', '.join(missing)}"
+        if _speed_file(path.parent, float(record["omega"])) != path:
+            return f"it holds the speed {float(record['omega'])!r} rad/s"
+    except Exception as exc:
+        return " ".join(f"{exc.__class__.__name__}: {exc}".split())
+    return None
+
+
+def _check_folder(folder: Path, scheme: CentralDifference, spec: SweepSpec, speeds: np.ndarray) -> None:
+    """Before a sweep works in ``folder`` (rank 0, its lock held): every file the sweep and its reader read back is
+    checked, and a damaged one named in a warning with what is done about it. The spec.json is moved aside and
+    written again; a damaged speed file is moved aside (``<name>.damaged-<n>``) and, if it is one of ``speeds``,
+    computed again (a speed not among them: by a sweep of its speed, or its batch run again for a lost batch-mate); a
+    damaged batch checkpoint is removed (its batch starts over)."""
+    step = _named_step(folder.name, scheme, spec)
+    saved = read_spec(folder, "a new one is written")
+    if saved is None:                                   # absent or just moved aside; a folder found by round-off
+        save_json(folder / "spec.json", {                # keeps its own step (its name's)
+            "h": scheme.h if step is None else step, "nonlinear": scheme.nonlinear, "model": scheme.model.key,
+            "r": scheme.r, "spec": dataclasses.asdict(spec),
+            "rotation": None if scheme.rotation is None else dataclasses.asdict(scheme.rotation)},
+            default=str, indent=1)
+    wanted = {_speed_file(folder, w).name for w in speeds}
+    for path in sorted(p for p in folder.glob("omega_*.npz") if ".tmp" not in p.name):
+        why = _result_damage(path)
+        if why is not None:
+            set_aside(path, why, "its speed is computed again" if path.name in wanted
+                      else "not read (a sweep of its speed computes it again)")
+    for ckpt in sorted(p for p in folder.glob("batch_*.ckpt.npz") if ".tmp" not in p.name):
+        try:
+            with np.load(ckpt, allow_pickle=False) as data:
+                np.asarray(data["speeds"], float)
+        except Exception as exc:
+            LOG.warning("%s is damaged (%s: %s): removed; its batch starts over", ckpt, exc.__class__.__name__,
+                        " ".join(str(exc).split()))
+            ckpt.unlink(missing_ok=True)
 
 
 def idle_barrier(comm, poll: float = 0.05) -> None:
@@ -162,17 +256,16 @@ def run_sweep(scheme: CentralDifference, speeds: Sequence[float], spec: SweepSpe
     speeds = np.unique(np.asarray(speeds, float))
     if speeds.size == 0 or speeds.min() <= 0:
         raise ValueError("speeds: give at least one angular speed Omega > 0 rad/s")
-    rank, size = (comm.rank, comm.size) if comm is not None else (0, 1)
     folder = sweep_folder(scheme, spec, out)
-    if rank == 0:
-        folder.mkdir(parents=True, exist_ok=True)
-        if not (folder / "spec.json").exists():          # a folder found by round-off keeps its own step
-            save_json(folder / "spec.json", {"h": scheme.h, "nonlinear": scheme.nonlinear, "model": scheme.model.key,
-                                             "r": scheme.r, "spec": dataclasses.asdict(spec),
-                                             "rotation": None if scheme.rotation is None
-                                             else dataclasses.asdict(scheme.rotation)}, default=str, indent=1)
-    if comm is not None:
-        idle_barrier(comm)
+    # the folder's lock (rank 0's), then its files checked, before any work: a second run on it is refused at once
+    with output_lock(folder, "sweep folder", comm, check=lambda: _check_folder(folder, scheme, spec, speeds)):
+        return _run_sweep(scheme, speeds, spec, folder, comm, progress, checkpoint_seconds)
+
+
+def _run_sweep(scheme: CentralDifference, speeds: np.ndarray, spec: SweepSpec, folder: Path, comm, progress: bool,
+               checkpoint_seconds: float) -> Path:
+    """``run_sweep``'s work in ``folder`` (locked and checked)."""
+    rank, size = (comm.rank, comm.size) if comm is not None else (0, 1)
     # batches interrupted earlier resume first (their speeds stay together); then the speeds not done yet
     pending = sorted(p for p in folder.glob("batch_*.ckpt.npz") if ".tmp" not in p.name)
     resumed = []

@@ -58,7 +58,7 @@ def render_mode_shapes(sector, modes: Sequence, titles: Sequence[str], folder: s
     topology, cell_types, x = plot.create_vtk_mesh(sector.V)
     span = np.ptp(np.hypot(x[:, 0], x[:, 1]))
     scene = {"topology": topology, "cell_types": cell_types, "points": x, "n_frames": len(modes),
-             "scalar_name": "|u| (normalised)"}
+             "scalar_name": "|u| (normalised)", "clim": np.array([0.0, 1.0])}     # a colour bar from 0
     paths = []
     for k, (f, title) in enumerate(zip(modes, titles)):
         values = f.x.array.reshape(-1, 3)
@@ -132,8 +132,8 @@ def render_stress(sector, u, cell_values: np.ndarray, path: str | Path, title: s
              "points": np.vstack(pts), "n_frames": 1, "scalar_name": "von Mises (MPa)", "cell_scalars": True,
              "cmap": "jet", "u_0": np.vstack(us), "s_0": np.concatenate(vals) / 1e6, "title_0": title,
              "path_0": str(path), "factor_0": factor, "no_ghost": n_sectors > 1}
-    if clim is not None:
-        scene["clim"] = np.asarray(clim, float) / 1e6
+    # von Mises is >= 0: its colour bar starts at 0 (not at the field's smallest value, ~1e-18 Pa at a free edge)
+    scene["clim"] = np.asarray((0.0, float(values.max())) if clim is None else clim, float) / 1e6
     if n_sectors > 1:
         scene.update(view=(0.0, 0.0, 1.0), viewup=(0.0, 1.0, 0.0))
     run_render(scene, path.with_suffix(".scene.npz"))
@@ -173,7 +173,8 @@ def render_cyclic_mode(sector, a, b, k: int, path: str | Path, title: str, ampli
     radius = np.hypot(x[:, 0], x[:, 1]).max()
     scene = {"topology": np.concatenate(tops), "cell_types": np.tile(cell_types, n),
              "points": np.vstack([_rotate_z(x, 2 * np.pi * s / n) for s in range(n)]), "n_frames": 1,
-             "scalar_name": "|u| (normalised)", "u_0": u.reshape(-1, 3), "s_0": (magnitude / magnitude.max()).ravel(),
+             "scalar_name": "|u| (normalised)", "clim": np.array([0.0, 1.0]), "u_0": u.reshape(-1, 3),
+             "s_0": (magnitude / magnitude.max()).ravel(),
              "title_0": title, "path_0": str(path), "factor_0": amplitude * radius / magnitude.max(),
              "no_ghost": True, "view": (0.55, -0.45, 0.7), "viewup": (0.0, 0.0, 1.0)}
     run_render(scene, path.with_suffix(".scene.npz"))

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rotor37_rom.npz import save_json
+from rotor37_rom.npz import load_json, save_json
 from rotor37_rom.studies.speed_accuracy.context import MAP, StudyContext
 
 __all__ = ["MapRun", "model_file", "run_map", "study_training_speeds", "held_out_options", "held_out_choices",
@@ -84,11 +84,18 @@ def run_map(ctx: StudyContext, name: str, gnl: bool, options: dict, speeds=MAP["
                                                  "gnl": "on" if gnl else "off", "out": out, **opts})
     setting = json.dumps([str(model_path), opts] + ([] if setup == MAP else [setup]), sort_keys=True, default=str)
     key = saved_model_key(model_path)
-    info = json.loads(done.read_text()) if done.is_file() else {}
-    # stale: another setting, or the model file rewritten since (another builder). The map records the key of the
-    # file it was given: its sweep's spec holds the key of the model the map derived from it (a cubature, a
-    # perturbation)
-    if info.get("setting") != setting or info.get("model_file_key") != key:
+    # the files read back, checked before any work: a damaged one is moved aside with a warning and the map run again
+    # (its sweeps resume: only what the damaged files held is computed again)
+    info = load_json(done, _check_run, "the map is run again") or {}
+    specs = _sweep_specs(out / "sweeps", "the map is run again (its sweep writes a new one)")
+    # the sweeps read below: the map's; with retries every sweep of the folder with results (told apart by their specs)
+    sweeps = sorted((out / "sweeps").iterdir()) if (out / "sweeps").is_dir() else []
+    read = [p for p in sweeps if any(p.glob("omega_*.npz"))] if base is not None else \
+        [Path(info["folder"])] if "folder" in info else []
+    # stale: another setting, or the model file rewritten since (another builder), or the spec of a sweep read below
+    # lost. The map records the key of the file it was given: its sweep's spec holds the key of the model the map
+    # derived from it (a cubature, a perturbation)
+    if info.get("setting") != setting or info.get("model_file_key") != key or any(p not in specs for p in read):
         shared = ctx.work / "cubature_cache"          # one cubature training per model and casing, shared by candidates
         shared.mkdir(parents=True, exist_ok=True)
         out.mkdir(parents=True, exist_ok=True)
@@ -107,8 +114,7 @@ def run_map(ctx: StudyContext, name: str, gnl: bool, options: dict, speeds=MAP["
     grid = config.speed_grid
     # each speed's record: the map's, or the bounded one of its retries at a smaller step (their own sweep folders)
     records = {}
-    specs = {p: json.loads((p / "spec.json").read_text()) for p in (out / "sweeps").iterdir()
-             if (p / "spec.json").is_file()}
+    specs = _sweep_specs(out / "sweeps", "its sweep is not read")
     main = specs[Path(info["folder"])]
     retries = [] if base is None else sorted(      # the base's retries: its model, a smaller step
         p for p, spec in specs.items() if spec["model"] == main["model"] and spec["h"] < main["h"])
@@ -129,6 +135,25 @@ def run_map(ctx: StudyContext, name: str, gnl: bool, options: dict, speeds=MAP["
           f"({1e6 * info['sweep_wall'] / steps:.1f} us/sim-step), diverged {int(imap.diverged.sum())}")
     return MapRun(imap.nfrc, imap.speeds, imap.diverged, records, info["wall"], info["sweep_wall"], steps, info["h"],
                   config, record_h)
+
+
+def _check_run(info) -> None:
+    """ValueError unless ``info`` (a map's study_run.json, read) is the object ``run_map`` writes."""
+    if not isinstance(info, dict) or not {"wall", "sweep_wall", "h", "folder", "setting"} <= info.keys():
+        raise ValueError("not the object of a map's run (wall, sweep_wall, h, folder, setting)")
+
+
+def _sweep_specs(sweeps: Path, then: str) -> dict[Path, dict]:
+    """{sweep folder: its spec} of the map's sweeps under ``sweeps`` whose spec.json reads (``sweep.read_spec``: a
+    damaged one is moved aside with a warning ending in ``then``, what is done instead)."""
+    from rotor37_rom.studies.sweep import read_spec
+
+    specs = {}
+    for folder in sorted(sweeps.iterdir()) if sweeps.is_dir() else []:
+        spec = read_spec(folder, then) if folder.is_dir() else None
+        if spec is not None:
+            specs[folder] = spec
+    return specs
 
 
 def study_training_speeds(setup: dict = MAP) -> tuple[float, ...]:
