@@ -272,7 +272,6 @@ MPI_SWEEP = textwrap.dedent("""
     import sys
     from pathlib import Path
     from mpi4py import MPI
-    sys.path.insert(0, sys.argv[2])
     from test_output_folder import SPEC, fake_scheme, fake_simulate
     from rotor37_rom.studies import sweep as sweep_mod
     calls = []
@@ -296,11 +295,12 @@ def test_mpi_ranks_take_the_lock_on_rank_0(tmp_path, held):
     script = tmp_path / "mpi_sweep.py"
     script.write_text(MPI_SWEEP)
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1", PYTHONPATH=str(ROOT),
+               OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1",
+               PYTHONPATH=os.pathsep.join([str(ROOT), str(ROOT / "tests")]),
                MPLBACKEND="Agg")
 
     def mpirun(out):
-        proc = subprocess.run(["mpirun", "-n", "2", sys.executable, str(script), str(out), str(ROOT / "tests")],
+        proc = subprocess.run(["mpirun", "-n", "2", sys.executable, str(script), str(out)],
                               capture_output=True, text=True, env=env, timeout=120)
         assert proc.returncode == 0, proc.stderr[-2000:]
         return [(out / f"rank{r}.txt").read_text() for r in range(2)]
