@@ -4,6 +4,7 @@ changes, in the summary and on a chart."""
 import json
 
 import numpy as np
+import pytest
 
 from rotor37_rom.model.reduced import save_reduced_model
 from rotor37_rom.studies import contact_map
@@ -35,9 +36,29 @@ def test_contact_map_draws_the_periodic_orbits(ci_rom, tmp_path):
     assert [b["index"] for b in branch.bifurcations] == changes.tolist()
     assert all(b["kind"] in ("fold", "period doubling", "Neimark-Sacker") for b in branch.bifurcations)
     summary = json.loads((out / "summary.json").read_text())
-    np.testing.assert_equal(summary["runs"][run.label]["periodic"], json.loads(json.dumps(branch.summary())))
+    saved = summary["runs"][run.label]["periodic"]
+    assert saved.pop("file") == f"orbits_{run.tag}.npz"
+    np.testing.assert_equal(saved, json.loads(json.dumps(branch.summary())))
     chart = out / f"nfrc_periodic_{run.tag}.png"
     assert chart in result.files and chart.is_file()
+    # the orbits read back from their file are the branch's, and the file says how to march them: each start returns
+    # to itself after one period of the map's scheme (Newton's 1e-9), the blown-up ones included
+    from rotor37_rom.periodic import Shooting
+    from rotor37_rom.studies.contact_scheme import time_scheme
+    from rotor37_rom.studies.periodic_map import load_orbits
+
+    orbits = load_orbits(out / f"orbits_{run.tag}.npz")
+    np.testing.assert_array_equal(orbits["states"], branch.states)
+    np.testing.assert_array_equal(orbits["speeds"], branch.speeds)
+    assert tuple(orbits["node_labels"]) == ci_rom.nodes.labels and "[q_0, q_-1]" in str(orbits["layout"])
+    shooting = Shooting(time_scheme(config.setting(False), ci_rom, False, None), config.sweep.casing,
+                        steps=int(orbits["steps"]))
+    for k in (0, len(branch.speeds) // 2, len(branch.speeds) - 1):
+        z = orbits["states"][k].ravel()
+        back = shooting.march(z, 2 * orbits["speeds"][k], tangent=False)[0]
+        assert np.abs(back - z).max() <= 1e-8 * np.abs(z).max(), k
+    with pytest.raises(ValueError, match="is no orbits file"):
+        load_orbits(out / "summary.json")
 
 
 def test_sequential_continuation_sits_on_the_stable_orbits(ci_rom, tmp_path):

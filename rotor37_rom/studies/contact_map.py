@@ -33,7 +33,7 @@ from rotor37_rom.studies.contact_config import (GNL_SETTINGS, N_SECTORS, PRECISI
     MapModel, MapScheme, build_parser, continued_revolutions, map_model, parse_options)
 from rotor37_rom.studies.contact_scheme import (capped_gnl_step, capped_probe, capped_probe_states, cubature_model,
     print_step_outliers, setting_names, time_scheme)
-from rotor37_rom.studies.periodic_map import PeriodicBranch, describe_against, periodic_branch
+from rotor37_rom.studies.periodic_map import PeriodicBranch, describe_against, periodic_branch, save_orbits
 from rotor37_rom.studies.sweep import (ContinuationPoint, InteractionMap, SavedRecord, compute_seconds,
     continuation, interaction_map, idle_barrier, load_speed, load_sweep, record_row, rerun_diverged, run_sweep,
     sector_maxima, sweep_folder)
@@ -649,6 +649,9 @@ def _run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None,
                                          scheme.h_crit, retried, wall, branches, periodic)
         files += chart_map(setting, result, records, omega, model.r, resonance)
         summary["runs"][label] = summary_entry(setting, scheme, result, records)
+        if periodic is not None and len(periodic.speeds):             # the orbits, to be read back (load_orbits)
+            files.append(save_orbits(periodic, model, config.out / f"orbits_{tag}.npz"))
+            summary["runs"][label]["periodic"]["file"] = files[-1].name
         if turning:                                       # the turning blade's crossing and clearance, per run
             summary["runs"][label]["rotation"] = rotation
         if config.tolerance is not None:

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -26,7 +27,14 @@ from rotor37_rom.dynamics.explicit import BLOWUP_LIMIT
 from rotor37_rom.periodic import Shooting, continue_branch, solve_periodic
 
 __all__ = ["BLOWUP_LIMIT", "PeriodicBranch", "against_continuation", "describe_against", "orbit_blowup",
-           "periodic_branch"]
+           "periodic_branch", "save_orbits", "load_orbits", "ORBITS_LAYOUT"]
+
+#: what an orbits file holds (``save_orbits``): written into it, so that the file says how to read it
+ORBITS_LAYOUT = ("states (n, 2, r): each orbit's start [q_0, q_-1], the central-difference scheme's two-step state in "
+                 "the model's reduced coordinates (node_labels / node_q_index: which entries are which node, m); "
+                 "speeds (n,): the rotor speed Omega (rad/s), the period pi / Omega (two bumps a revolution; "
+                 "periodic.Shooting(scheme, casing, steps).march(states[k].ravel(), 2 Omega) marches it); steps: "
+                 "explicit steps a period (h = pi / (Omega steps)); stable, largest_multiplier, blown_up (n,)")
 
 
 def orbit_blowup(states: np.ndarray, rows) -> tuple[float, bool]:
@@ -66,6 +74,9 @@ class PeriodicBranch:
             then NaN, as a diverged run's NFRC point).
         largest_displacement: the largest |node displacement| of each orbit (m), any entry of q holding one (the
             maps' blow-up test's).
+        states: (n, 2, r) each orbit's start as the explicit scheme's two-step state [q_0, q_-1] (reduced
+            coordinates; ``model.nodes`` says which entries are which node): ``Shooting(scheme, casing, steps)
+            .march(states[k].ravel(), 2 * speeds[k])`` marches it one period (``save_orbits``, ``load_orbits``).
     """
 
     speeds: np.ndarray
@@ -80,6 +91,7 @@ class PeriodicBranch:
     continuation: dict = dataclasses.field(default_factory=dict)
     blown_up: np.ndarray | None = None
     largest_displacement: np.ndarray | None = None
+    states: np.ndarray | None = None
 
     def __post_init__(self):
         n = len(self.speeds)
@@ -231,4 +243,35 @@ def periodic_branch(config, scheme, continued: dict | None = None, max_points: i
                           multiplier=np.array([float(np.abs(p.multipliers).max()) for p in branch.points]),
                           bifurcations=bifurcations, folds=[float(branch.points[i].omega / 2) for i in branch.folds],
                           ended=ended, steps=steps, wall_s=time.perf_counter() - t0, continuation=against,
-                          blown_up=np.array(blown_up, bool), largest_displacement=np.array(largest))
+                          blown_up=np.array(blown_up, bool), largest_displacement=np.array(largest),
+                          states=np.array([p.X for p in branch.points]))
+
+
+def save_orbits(branch: PeriodicBranch, model, path) -> Path:
+    """Write the branch's orbits (``PeriodicBranch.states`` and what each is) as an .npz file at ``path`` that
+    ``load_orbits`` reads back, its layout written into it (``ORBITS_LAYOUT``); atomic (``npz.save_npz``)."""
+    from rotor37_rom.npz import save_npz
+
+    if branch.states is None or len(branch.states) != len(branch.speeds):
+        raise ValueError("the branch holds no orbit states to save (a branch made before they were kept)")
+    return save_npz(path, states=branch.states, speeds=branch.speeds, steps=np.int64(branch.steps),
+                    stable=branch.stable, largest_multiplier=branch.multiplier, blown_up=branch.blown_up,
+                    node_labels=np.array(model.nodes.labels, dtype=str), node_q_index=model.nodes.q_index,
+                    r=np.int64(model.r), layout=np.array(ORBITS_LAYOUT))
+
+
+def load_orbits(path) -> dict:
+    """The orbits of a file ``save_orbits`` wrote: {name: array} with the names of ``ORBITS_LAYOUT``; ValueError
+    naming the file where it is no such file."""
+    names = ("states", "speeds", "steps", "stable", "largest_multiplier", "blown_up", "node_labels", "node_q_index",
+             "r", "layout")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            saved = {name: data[name] for name in names}
+    except Exception as exc:                          # missing, not an .npz, truncated, a name missing
+        raise ValueError(f"{path} is no orbits file of the map's --periodic ({type(exc).__name__}: "
+                         f"{' '.join(str(exc).split())})") from None
+    n, r = len(saved["speeds"]), int(saved["r"])
+    if saved["states"].shape != (n, 2, r):
+        raise ValueError(f"{path}: states of shape {saved['states'].shape}, expected ({n}, 2, {r})")
+    return saved
