@@ -113,5 +113,10 @@ def test_the_library_checks_the_sense_and_asks_for_a_material(ci_rom, ci_deck, t
     steel = fem.create_sector_from_file(bare, clamp="CLAMP", units="mm", verbose=False, material=Material())
     kept = fem.create_sector_from_file(ci_deck, clamp="CLAMP", units="mm", verbose=False)
     assert steel.material == Material()
+    # a material given stands whatever the deck's says in the units given (a mm deck's N-mm-t-s material read as
+    # metres is no structural material: it used to refuse the file, "give material=", although it was given)
+    given = fem.create_sector_from_file(ci_deck, clamp="CLAMP", units="m", verbose=False, material=Material(),
+                                        mass_check=False)
+    assert given.material == Material()
     np.testing.assert_allclose([kept.material.E, kept.material.nu, kept.material.rho],
                                [Material().E, Material().nu, Material().rho], rtol=1e-12)
