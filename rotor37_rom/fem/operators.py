@@ -41,6 +41,9 @@ class SvkOperators:
         f_int, g_nl: internal and nonlinear force 1-forms at u.
         tangent: exact tangent K_T(u) 2-form; stiffness: K; mass: M.
         d2: D^2 f_int(u)[w1, w2] 1-form; d3: D^3 f_int[w1, w2, w3] 1-form.
+        law: the hyperelastic law of f_int, g_nl and tangent ('svk', the paper's: f_int exactly cubic, d3
+            constant; or 'neo-hookean', ``forms.HYPERELASTIC_LAWS``, for the full order: d2 and d3 None, as the
+            reduced models that need them take SVK's alone); stiffness and mass are the same for both.
     """
 
     u: object
@@ -55,10 +58,14 @@ class SvkOperators:
     d2: object
     d3: object
     constants: dict
+    law: str = "svk"
 
 
-def create_svk_operators(sector: Sector, quadrature_degree: int | None = None) -> SvkOperators:
-    """Compile the forms of :mod:`forms.svk` for ``sector`` with material constants as fem.Constant."""
+def create_svk_operators(sector: Sector, quadrature_degree: int | None = None, law: str = "svk") -> SvkOperators:
+    """Compile the forms of the hyperelastic ``law`` (:mod:`forms.svk` by default; 'neo-hookean':
+    :mod:`forms.neo_hookean`, one ValueError for a law not known) for ``sector`` with material constants as
+    fem.Constant."""
+    forms_of = forms.hyperelastic_law(law)
     V, mesh = sector.V, sector.mesh
     lmbda_value, mu_value = sector.material.lame
     lmbda = fem.Constant(mesh, PETSc.ScalarType(lmbda_value))
@@ -72,16 +79,19 @@ def create_svk_operators(sector: Sector, quadrature_degree: int | None = None) -
     def compile_(form):
         return fem.form(form, jit_params=JIT_PARAMS)
 
+    d2 = d3 = None                 # another law's: the full order's alone, which needs no higher derivative
+    if law == "svk":
+        d2 = compile_(forms.second_derivative(u, v, w1, w2, lmbda, mu, dx))
+        d3 = compile_(forms.third_derivative(u, v, w1, w2, w3, lmbda, mu, dx))
     return SvkOperators(
         u=u, w1=w1, w2=w2, w3=w3,
-        f_int=compile_(forms.internal_force(u, v, lmbda, mu, dx)),
-        g_nl=compile_(forms.nonlinear_force(u, v, lmbda, mu, dx)),
-        tangent=compile_(forms.tangent_stiffness(u, v, du, lmbda, mu, dx)),
+        f_int=compile_(forms_of.internal_force(u, v, lmbda, mu, dx)),
+        g_nl=compile_(forms_of.nonlinear_force(u, v, lmbda, mu, dx)),
+        tangent=compile_(forms_of.tangent_stiffness(u, v, du, lmbda, mu, dx)),
         stiffness=compile_(forms.linear_stiffness(v, du, lmbda, mu, dx)),
         mass=compile_(forms.mass(v, du, rho, dx)),
-        d2=compile_(forms.second_derivative(u, v, w1, w2, lmbda, mu, dx)),
-        d3=compile_(forms.third_derivative(u, v, w1, w2, w3, lmbda, mu, dx)),
-        constants={"lambda": lmbda, "mu": mu, "rho": rho},
+        d2=d2, d3=d3,
+        constants={"lambda": lmbda, "mu": mu, "rho": rho}, law=law,
     )
 
 

@@ -195,7 +195,11 @@ def cached_model(metadata: dict, cache_dir: str | Path | None, prefix: str):
 
 def begin_build(sector, ops, metadata: dict, cache_dir: str | Path | None, prefix: str):
     """The start of a build: (cache path, the cached model or None, the report, its ``Laps``, the free operators
-    (K_f, M_f, free) or None when the model is cached)."""
+    (K_f, M_f, free) or None when the model is cached). ValueError for operators of another law than SVK: a reduced
+    model's forces are SVK's exact cubic ones (tensors, or a cubature of them); the other laws are the full order's."""
+    if getattr(ops, "law", "svk") != "svk":
+        raise ValueError(f"ops: a reduced model holds St. Venant-Kirchhoff's cubic forces; operators of the law "
+                         f"{ops.law!r} are for the full order (fem.solve_static, fem.solve_repeating_newmark)")
     cache, cached = cached_model(metadata, cache_dir, prefix)
     if cached is not None:
         return cache, cached, {"cached": True}, None, None
