@@ -478,6 +478,27 @@ def _tangent(J: np.ndarray, dR_domega: np.ndarray, previous: np.ndarray | None) 
     return t
 
 
+def _branch_arguments(hb, start, omega_end, step, step_min, step_max, max_points, tol, max_iter, progress):
+    """``continue_branch``'s arguments checked (ValueError or TypeError naming the one outside its range); returns
+    (step_min, step_max) with their defaults."""
+    if not isinstance(start, PeriodicSolution):
+        raise TypeError(f"start must be a PeriodicSolution (solve_periodic's), got {type(start).__name__}")
+    real_number("start.omega", start.omega, 0.0, open_low=True, unit=" rad/s")
+    _unknowns("start's unknowns", start.unknowns, hb)
+    real_number("omega_end", omega_end, unit=" rad/s")
+    real_number("step", step, 0.0, open_low=True)
+    step_min = step / 64 if step_min is None else step_min
+    real_number("step_min", step_min, 0.0, step, open_low=True)
+    step_max = 8 * step if step_max is None else step_max
+    real_number("step_max", step_max, step)
+    whole_number("max_points", max_points, 1)
+    real_number("tol", tol, 0.0)
+    whole_number("max_iter", max_iter, 1)
+    if progress is not None and not callable(progress):
+        raise TypeError(f"progress must be a callable or None, got {type(progress).__name__}")
+    return step_min, step_max
+
+
 def continue_branch(hb: PeriodicProblem, start: PeriodicSolution, omega_end: float, step: float,
                     step_min: float | None = None, step_max: float | None = None, max_points: int = 2000,
                     tol: float = 1e-10, max_iter: int = 12, stability: bool = True,
@@ -508,21 +529,8 @@ def continue_branch(hb: PeriodicProblem, start: PeriodicSolution, omega_end: flo
     Returns:
         The Branch. ValueError or TypeError naming the argument before any work where one is outside its range.
     """
-    if not isinstance(start, PeriodicSolution):
-        raise TypeError(f"start must be a PeriodicSolution (solve_periodic's), got {type(start).__name__}")
-    real_number("start.omega", start.omega, 0.0, open_low=True, unit=" rad/s")
-    _unknowns("start's unknowns", start.unknowns, hb)
-    real_number("omega_end", omega_end, unit=" rad/s")
-    real_number("step", step, 0.0, open_low=True)
-    step_min = step / 64 if step_min is None else step_min
-    real_number("step_min", step_min, 0.0, step, open_low=True)
-    step_max = 8 * step if step_max is None else step_max
-    real_number("step_max", step_max, step)
-    whole_number("max_points", max_points, 1)
-    real_number("tol", tol, 0.0)
-    whole_number("max_iter", max_iter, 1)
-    if progress is not None and not callable(progress):
-        raise TypeError(f"progress must be a callable or None, got {type(progress).__name__}")
+    step_min, step_max = _branch_arguments(hb, start, omega_end, step, step_min, step_max, max_points, tol, max_iter,
+                                           progress)
     sx = hb.scales(start.unknowns) if hasattr(hb, "scales") else np.full(hb.size, max(np.linalg.norm(start.X),
                                                                                            1e-300))
     sw = start.omega
