@@ -27,6 +27,7 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from rotor37_rom.dynamics.casing import ContactSetError, ContactSolver
+from rotor37_rom.dynamics.damping import LowRankDamping, woodbury
 
 __all__ = ["Newmark", "StepContact", "dense_newmark", "simulate_newmark", "simulate_linear_newmark", "ROUNDOFF"]
 
@@ -57,7 +58,8 @@ class Newmark:
 
     Args:
         M: mass (n, n), any matrix with ``@`` that ``factorise`` and ``tangent(x)`` add to. C: viscous damping
-            (n, n), or None (undamped). internal: x -> internal force (n,); tangent: x -> its derivative (n, n).
+            (n, n), or a ``damping.LowRankDamping`` (solved by Woodbury on the factorisation without it), or None
+            (undamped). internal: x -> internal force (n,); tangent: x -> its derivative (n, n).
             factorise: A -> solve, solve(B) = A^-1 B for B (n,) or (n, m) (e.g. ``fem.mumps_solver``). force: t ->
             load (n,).
         rtol, atol: a step has converged when |residual| <= max(rtol x scale, atol), scale the largest of the
@@ -122,9 +124,12 @@ class Newmark:
     def _refactorise(self, y, h):
         """The iteration matrix at y, factorised; with contact also its response to unit multipliers."""
         A = (1 - self.alpha_m) / (self.beta * h * h) * self.M + (1 - self.alpha_f) * self.tangent(y)
-        if self.C is not None:
-            A = A + (1 - self.alpha_f) * self.gamma / (self.beta * h) * self.C
-        self.solve = self.factorise(A)
+        c_damp = (1 - self.alpha_f) * self.gamma / (self.beta * h)
+        if isinstance(self.C, LowRankDamping):      # C = S + U D U^T: (A + c S)'s factorisation + Woodbury
+            A = A if self.C.S is None else A + c_damp * self.C.S
+            self.solve = woodbury(self.factorise(A), self.C.U, c_damp * self.C.d)
+        else:
+            self.solve = self.factorise(A if self.C is None else A + c_damp * self.C)
         self.h = h
         self.refreshes += 1
         if self.contact is not None:

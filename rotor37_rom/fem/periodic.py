@@ -27,6 +27,7 @@ import scipy.sparse as sp
 from rotor37_rom.dynamics.casing import (Casing, casing_clearance, check_hand, contact_frames, friction_power,
                                          node_angles, ramp_rate)
 from rotor37_rom.disk.symmetry import repeating_sector_maps
+from rotor37_rom.dynamics.damping import LowRankDamping, ModalLaw
 from rotor37_rom.dynamics.newmark import Newmark, StepContact
 from rotor37_rom.interruption import checkpointing, requested, stop_if_requested
 from rotor37_rom.npz import save_npz
@@ -34,7 +35,7 @@ from rotor37_rom.npz import save_npz
 from .operators import (SvkOperators, _require_serial, assemble_mass, assemble_stiffness, assemble_tangent_scipy,
                         create_svk_operators, evaluate_forces, free_dofs, petsc_to_scipy)
 from .sector import Sector
-from .solvers import mumps_solver
+from .solvers import mumps_solver, slepc_eigenpairs
 
 __all__ = ["RepeatingSectors", "RepeatingSectorResult", "ContactOperators", "solve_repeating_newmark",
            "sector_harmonic_load"]
@@ -106,6 +107,7 @@ class RepeatingSectors:
         K_s = petsc_to_scipy(assemble_stiffness(sector, self.ops, clamped=False))
         M_s = petsc_to_scipy(assemble_mass(sector, self.ops, clamped=False))
         self.K, self.M = self._sum(K_s), self._sum(M_s)
+        self._modes = {}
 
     def _sum(self, A_sector):
         return sum(P.T @ self._restrict @ A_sector @ self._restrict @ P for P in self.maps).tocsr()
@@ -137,6 +139,30 @@ class RepeatingSectors:
         radius = np.tile(np.hypot(sector.tip_nodes[rows, 0], sector.tip_nodes[rows, 1]), len(self.maps))
         return ContactOperators(N=sp.vstack(N).tocsr(), S=sp.vstack(S).tocsr(), theta0=np.array(theta0),
                                 radius=radius, labels=tuple(labels))
+
+    def modes(self, n_modes: int) -> tuple[np.ndarray, np.ndarray]:
+        """The lowest n_modes eigenpairs of the carried linear model (omega (n,) rad/s, Phi (n_x, n), Phi^T M Phi
+        = I), computed once per count."""
+        if n_modes not in self._modes:
+            self._modes[n_modes] = slepc_eigenpairs(self.K, self.M, n_modes)
+        return self._modes[n_modes]
+
+    def damping(self, law: ModalLaw) -> LowRankDamping:
+        """The damping law's matrix on x (``dynamics.damping``: rank law.n_modes)."""
+        omega, phi = self.modes(law.n_modes)
+        return law.operator(self.M, omega, phi, self.K)
+
+    def project_damping(self, law: ModalLaw, basis: np.ndarray) -> np.ndarray:
+        """The law's matrix on a reduced model of one blade whose basis is ``basis`` (n_dofs, r) in the sector's
+        DOFs (zero on the clamp): V^T C V with V = P^T basis, P the blade's map (n_repeat = 1 only)."""
+        if len(self.maps) != 1:
+            raise ValueError("project_damping: a blade's model only (n_repeat = 1)")
+        basis = np.asarray(basis, float)
+        if basis.ndim != 2 or basis.shape[0] != self.sector.n_dofs:
+            raise ValueError(f"basis must be ({self.sector.n_dofs}, r), got {basis.shape}")
+        if np.abs(basis[~self.free]).max(initial=0.0) > 0:
+            raise ValueError("basis must vanish on the clamped DOFs")
+        return self.damping(law).project(np.asarray(self.maps[0].T @ basis))
 
     def fields(self, x: np.ndarray) -> np.ndarray:
         """(n_repeat, n_dofs): each sector's displacement in its own frame."""
@@ -184,7 +210,7 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
                             checkpoint: str | Path | None = None, checkpoint_seconds: float = 60.0,
                             casing: Casing | None = None, omega: float | None = None,
                             duration: float | None = None, rho_inf: float | None = None,
-                            contact_interface=None) -> RepeatingSectorResult:
+                            contact_interface=None, damping: ModalLaw | None = None) -> RepeatingSectorResult:
     """Implicit Newmark (beta = 1/4, gamma = 1/2, undamped) of n_repeat sectors closed on themselves (or of one
     blade), from rest; with ``rho_inf`` the generalised-alpha scheme (Chung & Hulbert 1993) instead.
 
@@ -212,6 +238,8 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
         contact_interface: None, the casing touches the tip nodes; or a (3 n_tip, n_dofs) matrix C, the casing
             touches the patch means C u (``fem.tip_patch_interface``) and pushes with C^T lambda; the result's
             ``tip`` then records C u.
+        damping: None (undamped), or a ``dynamics.damping.ModalLaw`` on the carried model's lowest modes
+            (``RepeatingSectors.damping``): the reduced models get the same law by projection.
     """
     if not (dt > 0 and n_steps >= 1):
         raise ValueError(f"dt must be > 0 s and n_steps >= 1, got {dt}, {n_steps}")
@@ -221,6 +249,8 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
         raise ValueError("give load_dof and load together (or neither)")
     if rho_inf is not None and not 0.0 <= rho_inf <= 1.0:
         raise ValueError(f"rho_inf must be in [0, 1] (or None: Newmark), got {rho_inf}")
+    if damping is not None and not isinstance(damping, ModalLaw):
+        raise ValueError(f"damping must be a dynamics.damping.ModalLaw or None, got {type(damping).__name__}")
     load_key = -1.0
     if load_dof is not None:
         if np.ndim(load_dof) == 0:
@@ -258,6 +288,7 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
     stepper = Newmark(M, system.internal if nonlinear else (lambda x: system.K @ x),
                       system.tangent if nonlinear else (lambda x: system.K), lambda A: mumps_solver(A.tocsr()), force,
                       rho_inf=rho_inf, rtol=rtol, atol=atol, max_iterations=max_iterations, linear=not nonlinear,
+                      C=None if damping is None else system.damping(damping),
                       contact=None if contact is None else StepContact(contact.N, contact.S, casing.mu, clearance))
     x, v = np.zeros(keep.size), np.zeros(keep.size)
     a = stepper.acceleration_at_rest()
@@ -280,7 +311,8 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
                                                        "xrc".index(casing.direction[0]), casing.rotation_sense,
                                                        casing.ramp_fraction, casing.ramp_level, casing.width,
                                                        casing.cone_slope, n_c, float(contact.theta0.sum())])
-                         + fingerprint)
+                         + fingerprint + ([] if damping is None else [-4.0, damping.low, damping.high,
+                                                                     damping.n_low, damping.n_modes]))
     start, saved = 1, time.perf_counter()
     if checkpoint is not None and Path(checkpoint).is_file():
         with np.load(checkpoint) as data:

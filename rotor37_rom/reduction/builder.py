@@ -18,6 +18,7 @@ from rotor37_rom.forces.cubature import train_ecsw
 from rotor37_rom.model.modes import normalise_signs
 from rotor37_rom.forces.tensors import QuadratureForces, compute_polynomial_forces
 from rotor37_rom.reduction.config import ReductionConfig
+from rotor37_rom.reduction.pod import boundary_coordinates
 from rotor37_rom.reduction.craig_bampton import (CraigBamptonBasis, craig_bampton,
     fixed_interface_correction, lift_states, modal_damping, select_pairs, selection_weights)
 from rotor37_rom.model.nodes import NodeMap
@@ -26,7 +27,8 @@ from rotor37_rom.model.rotating import RotationTerms
 from rotor37_rom.dynamics.newmark import simulate_linear_newmark
 from rotor37_rom.forces.step import identify_step
 
-__all__ = ["ReductionConfig", "build_reduced_model", "hyper_reduce", "release_freed_memory", "mesh_signature",
+__all__ = ["ReductionConfig", "build_reduced_model", "build_from_basis", "galerkin_operators", "exact_quadrature",
+           "hyper_reduce", "release_freed_memory", "mesh_signature",
            "compute_modal_derivatives", "boundary_node_map",
            "training_states", "clearance_consumption_study"]
 
@@ -40,6 +42,41 @@ def mesh_signature(sector: fem.Sector) -> str:
     h.update(np.ascontiguousarray(sector.V.dofmap.list.array).tobytes())
     h.update(repr(sector.material).encode())
     return h.hexdigest()[:24]
+
+
+def _n_dofs(sector) -> int:
+    """The number of DOFs of the sector's mesh (the full vectors' length, clamped DOFs included)."""
+    return sector.V.dofmap.index_map.size_local * sector.V.dofmap.index_map_bs
+
+
+def _boundary_positions(boundary_dofs: np.ndarray, free: np.ndarray, n_full: int) -> np.ndarray:
+    """The positions of ``boundary_dofs`` among the free DOFs ``free``; ValueError unless they are indices in
+    [0, n_full) of DOFs that are not clamped."""
+    position = np.searchsorted(free, boundary_dofs)
+    if boundary_dofs.size == 0 or boundary_dofs.min() < 0 or boundary_dofs.max() >= n_full \
+            or not np.array_equal(free[np.minimum(position, free.size - 1)], boundary_dofs):
+        raise ValueError(f"boundary DOFs must be indices in [0, {n_full}) of DOFs on the mesh that are not clamped")
+    return position
+
+
+def galerkin_operators(Phi: np.ndarray, K_f, M_f, free: np.ndarray):
+    """(K~, M~, C~, omega): the reduced stiffness and mass Phi^T K Phi, Phi^T M Phi over the free DOFs
+    (symmetrised, refused unless symmetric positive definite), the blade's modal damping on them (``modal_damping``:
+    the maps' law) and the reduced model's frequencies (rad/s). The one projection of every blade basis,
+    Craig-Bampton's (``build_reduced_model``) or another's (``build_from_basis``)."""
+    K, M = Phi[free].T @ (K_f @ Phi[free]), Phi[free].T @ (M_f @ Phi[free])
+    K, M = 0.5 * (K + K.T), 0.5 * (M + M.T)
+    _check_operators(K, M)
+    C, omega = modal_damping(K, M)
+    return K, M, C, omega
+
+
+def exact_quadrature(sector, Phi: np.ndarray) -> tuple[QuadratureForces, np.ndarray]:
+    """The exact reduced St. Venant-Kirchhoff force of the basis Phi (n, r) as a quadrature over the sector's mesh
+    (``forces.tensors.QuadratureForces``; ``compute_polynomial_forces`` turns it into the exact cubic tensors) and
+    the cell of each quadrature point."""
+    H, w, cells = fem.quadrature_gradients(sector, Phi.T)
+    return QuadratureForces(H, w, *sector.material.lame), cells
 
 
 def _check_operators(K: np.ndarray, M: np.ndarray) -> None:
@@ -242,11 +279,8 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
     if cached is not None:
         return cached, report
     K_f, M_f, free = operators
-    n_full = sector.V.dofmap.index_map.size_local * sector.V.dofmap.index_map_bs
-    position = np.searchsorted(free, boundary_dofs)
-    if boundary_dofs.size == 0 or boundary_dofs.min() < 0 or boundary_dofs.max() >= n_full \
-            or not np.array_equal(free[np.minimum(position, free.size - 1)], boundary_dofs):
-        raise ValueError(f"boundary DOFs must be indices in [0, {n_full}) of DOFs on the mesh that are not clamped")
+    n_full = _n_dofs(sector)
+    position = _boundary_positions(boundary_dofs, free, n_full)
     interface = None
     if config.contact_patch:
         interface = fem.tip_patch_interface(sector, config.contact_patch)
@@ -307,18 +341,13 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
     basis = dataclasses.replace(basis, Z=Z, md_pairs=pairs)
     lap("modal_derivatives")
     Phi = basis.Phi
-    K, M = Phi[free].T @ (K_f @ Phi[free]), Phi[free].T @ (M_f @ Phi[free])
-    K, M = 0.5 * (K + K.T), 0.5 * (M + M.T)
-    _check_operators(K, M)
-    C, omega = modal_damping(K, M)
+    K, M, C, omega = galerkin_operators(Phi, K_f, M_f, free)
     report["omega"] = omega
     report["q_train"], report["md_scale"], report["linear_operators"] = q_train, md_scale, (K_lin, M_lin)
     lap("projection")
     forces = None
-    lmbda, mu = sector.material.lame
     if config.forces != "none":
-        H, w, cells = fem.quadrature_gradients(sector, Phi.T)
-        exact = QuadratureForces(H, w, lmbda, mu)
+        exact, cells = exact_quadrature(sector, Phi)
         lap("quadrature_data")
         if config.forces == "intrusive":
             forces = compute_polynomial_forces(exact)
@@ -342,6 +371,101 @@ def build_reduced_model(sector, config: ReductionConfig = ReductionConfig(), bou
     model = ReducedModel(M=M, C=C, K=K, forces=forces, boundary_dofs=boundary_dofs,
                          nodes=nodes, sizes=_sizes(basis, pairs), md_pairs=pairs,
                          Phi=Phi if config.keep_basis else None, metadata=metadata, rotation=rotation)
+    if cache is not None:
+        save_reduced_model(model, cache)
+    return model, report
+
+
+BASIS_FORCES = ("intrusive", "quadrature", "none")
+
+
+def _given_basis(sector, basis, boundary_dofs, forces: str) -> tuple[np.ndarray, np.ndarray]:
+    """``build_from_basis``'s basis (n_full, r) as floats and its boundary DOFs, checked before any FE work: a
+    one-line ValueError naming the argument otherwise."""
+    if forces not in BASIS_FORCES:
+        raise ValueError(f"forces must be one of {BASIS_FORCES}, got {forces!r}")
+    n_full = _n_dofs(sector)
+    try:
+        basis = np.asarray(basis, float)
+    except (TypeError, ValueError):
+        raise ValueError(f"basis must be a real (n_dofs = {n_full}, r) array, got {type(basis).__name__}") from None
+    if basis.ndim != 2 or basis.shape[0] != n_full or not np.isfinite(basis).all():
+        raise ValueError(f"basis must be a finite (n_dofs = {n_full}, r) array over the sector's DOFs, got shape "
+                         f"{basis.shape}{'' if np.isfinite(basis).all() else ' with NaN or inf entries'}")
+    boundary_dofs = sector.tip_dofs.ravel() if boundary_dofs is None else np.asarray(boundary_dofs).ravel()
+    if not np.issubdtype(boundary_dofs.dtype, np.integer):
+        raise ValueError(f"boundary_dofs must be integer DOF indices, got {boundary_dofs.dtype}")
+    if basis.shape[1] < boundary_dofs.size:
+        raise ValueError(f"basis has r = {basis.shape[1]} columns, fewer than the {boundary_dofs.size} boundary DOFs "
+                         f"its coordinates must hold")
+    return basis, boundary_dofs.astype(np.int64)
+
+
+def _boundary_basis(basis: np.ndarray, boundary_dofs: np.ndarray, K_f, M_f, free: np.ndarray):
+    """(Phi, T): the basis in the coordinates the explicit contact scheme reads, Phi = basis T with
+    Phi[boundary_dofs] = [I 0] (``reduction.pod.boundary_coordinates``: the same span), exactly zero on the clamp;
+    ValueError where the basis does not vanish on the clamp or cannot hold the boundary DOFs."""
+    clamped = np.setdiff1d(np.arange(basis.shape[0]), free)
+    scale = np.abs(basis).max()
+    if scale == 0 or np.abs(basis[clamped]).max(initial=0.0) > 1e-12 * scale:
+        raise ValueError("basis must be nonzero and vanish on the clamped DOFs (the clamp applied: zero rows outside "
+                         "fem.free_dofs)")
+    V = basis[free]
+    K_r, M_r = V.T @ (K_f @ V), V.T @ (M_f @ V)
+    try:
+        T = boundary_coordinates(basis[boundary_dofs], 0.5 * (K_r + K_r.T), 0.5 * (M_r + M_r.T))
+    except ValueError as exc:
+        raise ValueError(f"basis cannot hold the boundary_dofs as coordinates ({exc})") from None
+    Phi = basis @ T
+    Phi[clamped] = 0.0
+    Phi[boundary_dofs] = np.eye(boundary_dofs.size, Phi.shape[1])      # what it is to round-off
+    return Phi, T
+
+
+def build_from_basis(sector, basis, boundary_dofs: np.ndarray | None = None, ops=None, forces: str = "intrusive",
+                     label: str = "", cache_dir: str | Path | None = None) -> tuple[ReducedModel, dict]:
+    """A reduced model of the blade on any basis (e.g. POD modes of full-order snapshots, ``reduction.pod``), run by
+    the explicit contact scheme like a Craig-Bampton model: the Galerkin projection of the same operators, the same
+    damping law and the same exact forces as ``build_reduced_model`` (``galerkin_operators``, ``exact_quadrature``).
+
+    The basis's coordinates are changed within its span so that the first r_b are the boundary DOFs' displacements
+    (``reduction.pod.boundary_coordinates``: the span's constraint modes, then its fixed-interface modes), as
+    ``model.nodes.NodeMap`` and the contact scheme require; the span, hence the Galerkin model, is the basis's.
+
+    Args:
+        basis: (n_dofs, r) fields over the sector's DOFs (the builders' numbering: ``fem.free_dofs`` rows, zero on
+            the clamp), spanning the space wanted, r >= r_b; the boundary DOFs must move independently in the span.
+            POD of full-order states U (n_dofs, n_snap): ``K_f, M_f, free = fem.assemble_free_operators(sector)``,
+            ``basis = np.zeros((n_dofs, r)); basis[free] = pod_basis(U[free], M_f, r).basis``.
+        boundary_dofs: the contact nodes' DOFs (point contact), default the tip nodes' (``Sector.tip_dofs``).
+        forces: 'intrusive' (exact cubic tensors), 'quadrature' (exact, tensor-free) or 'none' (linear).
+        label: recorded in the metadata (where the basis comes from); cache_dir: as ``build_reduced_model``'s.
+    Returns (model, report): report holds 'omega' (rad/s), 'transform' T (r, r: model.Phi = basis T) and timings
+    ({'cached': True} alone for a model read from ``cache_dir``).
+    """
+    basis, boundary_dofs = _given_basis(sector, basis, boundary_dofs, forces)
+    ops = ops or fem.create_svk_operators(sector)
+    metadata = {"basis": hashlib.sha256(np.ascontiguousarray(basis).tobytes()).hexdigest()[:24], "label": str(label),
+                "forces": forces, "boundary_dofs": boundary_dofs.tolist(), "mesh": mesh_signature(sector),
+                "source": sector.source, "version": __version__, "blade_frame": "centre of mass"}
+    cache, cached, report, lap, operators = begin_build(sector, ops, metadata, cache_dir, "basis_rom")
+    if cached is not None:
+        return cached, report
+    K_f, M_f, free = operators
+    _boundary_positions(boundary_dofs, free, basis.shape[0])
+    Phi, report["transform"] = _boundary_basis(basis, boundary_dofs, K_f, M_f, free)
+    K, M, C, report["omega"] = galerkin_operators(Phi, K_f, M_f, free)
+    lap("projection")
+    force = None
+    if forces != "none":
+        exact, _ = exact_quadrature(sector, Phi)
+        force = compute_polynomial_forces(exact) if forces == "intrusive" else exact
+        lap("forces")
+    r_b = boundary_dofs.size
+    model = ReducedModel(M=M, C=C, K=K, forces=force, boundary_dofs=boundary_dofs,
+                         nodes=boundary_node_map(sector, boundary_dofs),
+                         sizes={"r_b": r_b, "r_c": Phi.shape[1] - r_b, "r_md": 0},
+                         md_pairs=np.zeros((0, 2), dtype=np.int64), Phi=Phi, metadata=metadata)
     if cache is not None:
         save_reduced_model(model, cache)
     return model, report

@@ -1,0 +1,120 @@
+"""GNL in contact at steady state: the full-order reference against reduced models under one damping law (#86).
+
+Each (speed, step) of the full order and each reduced model runs ``studies.gnl_reference`` for --revolutions at most
+and is judged steady or not (max |u_LE| over a revolution changing by < 2 % a revolution over the last two); the
+table gives the last revolution's max |u_LE|, marked "not steady" where it is not. Completed runs are kept in
+results/bench_gnl_steady.json (per case) and not repeated; full-order runs under way checkpoint in
+results/bench_gnl_steady.ckpt/ every 10 min, and the same command resumes them (SIGTERM: saved, then stops). With
+--snapshots the full order's fields (100 a revolution) are kept in results/bench_gnl_steady.ckpt/ for a POD basis.
+
+    python benchmarks/bench_gnl_steady.py --speeds 1280 --h-full 2e-6 --snapshots      # ~2-3 h a speed, 1 core
+    python benchmarks/bench_gnl_steady.py --speeds 1280 --no-full-order --r-c 25       # the maps' r = 55: minutes
+"""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from rotor37_rom.checks import before_work, real_number
+from rotor37_rom.cli import ArgumentParser, run_main
+from rotor37_rom.machine import machine_description
+
+RESULTS = Path("results/bench_gnl_steady.json")
+
+
+def parse(argv):
+    """The options and the cases, each checked (one line naming the option, exit status 2)."""
+    p = ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--speeds", type=float, nargs="+", default=[1280.0], help="rad/s, in [1, 5000]")
+    p.add_argument("--mu", type=float, default=0.0, help="Coulomb coefficient, in [0, 2]")
+    p.add_argument("--direction", default="x", help="contact normal: x, radial or cone")
+    p.add_argument("--law", default="heavy", help="damping law: maps or heavy (dynamics.damping.DAMPING_LAWS)")
+    p.add_argument("--revolutions", type=int, default=8, help="revolution limit, in [3, 200]")
+    p.add_argument("--h-full", type=float, nargs="*", default=[2e-6], help="full-order steps (s), in [1e-8, 1e-4]")
+    p.add_argument("--rho-inf", type=float, default=0.8, help="generalised alpha's rho_inf, in [0, 1]")
+    p.add_argument("--no-full-order", action="store_true", help="the reduced models only")
+    p.add_argument("--snapshots", action="store_true", help="keep the full order's fields, 100 a revolution")
+    p.add_argument("--r-c", type=int, nargs="*", default=[25], help="reduced models' fixed-interface modes, [1, 200]")
+    p.add_argument("--rom-step", type=float, default=4e-7, help="reduced models' step (s), in [1e-9, 1e-5]")
+    p.add_argument("--rom-cap", type=float, default=120.0, help="reduced models' frequency cap (kHz), in [1, 1e4]")
+    args = p.parse_args(argv)
+    for name, values, lo, hi in (("--h-full", args.h_full, 1e-8, 1e-4), ("--rho-inf", [args.rho_inf], 0.0, 1.0),
+                                 ("--r-c", args.r_c, 1, 200), ("--rom-step", [args.rom_step], 1e-9, 1e-5),
+                                 ("--rom-cap", [args.rom_cap], 1.0, 1e4)):
+        for v in values:
+            real_number(name, v, lo, hi)
+    from rotor37_rom.studies.gnl_reference import SteadyCase
+
+    options = {"speed": "--speeds", "mu": "--mu", "direction": "--direction", "damping law": "--law",
+               "revolutions": "--revolutions"}
+    try:
+        cases = [SteadyCase(w, mu=args.mu, direction=args.direction, law=args.law, revolutions=args.revolutions)
+                 for w in args.speeds]
+    except ValueError as err:                  # the config's field named as the option the user gave
+        field = next((f for f in options if str(err).startswith(f)), None)
+        raise ValueError(str(err).replace(field, options[field], 1) if field else str(err)) from None
+    return args, cases
+
+
+def main(argv=None) -> int:
+    args, cases = parse(argv)
+    before_work({"results": RESULTS.parent})
+    from rotor37_rom import fem
+    from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
+    from rotor37_rom.studies import gnl_reference as gr
+
+    store = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
+    store["machine"] = machine_description()
+    ckpts = RESULTS.with_suffix(".ckpt")           # full-order runs under way
+    ckpts.mkdir(parents=True, exist_ok=True)
+
+    def save():                  # merged with what other runs of this command saved meanwhile (one per core)
+        on_disk = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
+        for label, runs in store.items():
+            if isinstance(runs, dict) and label != "machine":
+                on_disk.setdefault(label, {}).update(runs)
+                store[label] = on_disk[label]
+        on_disk["machine"] = store["machine"]
+        tmp = RESULTS.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(json.dumps(on_disk))
+        tmp.replace(RESULTS)
+
+    sector = fem.create_blade_sector(preset="ci")
+    ops = fem.create_svk_operators(sector)
+    for case in cases:
+        runs = store.setdefault(case.label(), {})
+        for h in [] if args.no_full_order else sorted(args.h_full, reverse=True):
+            key = f"full h {h:.3g} rho {args.rho_inf:g}"
+            if key not in runs:
+                stem = ckpts / f"{case.label()} {key}".replace(" ", "_").replace("/", "")
+                run, snaps = gr.full_order_run(sector, ops, case, h, args.rho_inf, stem.with_suffix(".npz"),
+                                               100 if args.snapshots else 0)
+                if snaps is not None:
+                    np.save(stem.with_suffix(".snapshots.npy"), snaps)
+                runs[key] = run.to_json()
+                save()
+            report(case, key, runs[key])
+        for r_c in args.r_c:
+            key = f"rom r_c {r_c} cap {args.rom_cap:g} h {args.rom_step:.3g}"
+            if key not in runs:
+                config = ReductionConfig(r_c=r_c, r_md=0, criterion="MI2b", forces="intrusive")
+                model, _ = build_reduced_model(sector, config, ops=ops, cache_dir="results/cache")
+                C = gr.reduced_damping(model, sector, ops, case.damping)
+                runs[key] = gr.reduced_run(model, C, case, args.rom_step, 2e3 * np.pi * args.rom_cap).to_json()
+                save()
+            report(case, key, runs[key])
+    return 0
+
+
+def report(case, key, run):
+    maxima = " / ".join(f"{1e3 * m:.3f}" for m in run["maxima"])
+    value = f"{1e3 * run['value']:.3f} mm" + ("" if run["steady"] else " (NOT STEADY)")
+    print(f"{case.label()} | {key}: {value}; per revolution {maxima} mm; {run['reason']}; {run['wall_s']:.0f} s",
+          flush=True)
+
+
+if __name__ == "__main__":
+    raise SystemExit(run_main(main))

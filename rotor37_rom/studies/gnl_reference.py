@@ -1,0 +1,153 @@
+"""A steady-state full-order reference for the blade with GNL in casing contact, and reduced models run against it
+(issue #86).
+
+The full order is the blade's finite-element model itself (``fem.solve_repeating_newmark``: generalised alpha with
+the exact SVK tangent, each iterate corrected by the multipliers that close its penetrations), the reduced models the
+maps' explicit scheme (``dynamics.explicit``). Both carry one damping operator: a ``dynamics.damping.ModalLaw`` on the
+full order (exact ratios on its lowest modes, stiffness proportional above), and its Galerkin projection V^T C V on
+the reduced model's basis V, so the damping is the same on both sides by construction, not two modal laws on two sets of modes.
+Each run goes on to its revolution limit; its map quantity (max |u_LE| over a revolution) is judged steady or "not
+steady" by ``post.steady.steadiness`` (changing by less than 2 % a revolution over the last two), never reported as a
+steady value otherwise.
+
+The casing's ovalization ramp ends after ``SteadyCase.ramp_revolutions`` (eq. 38 reaching 99 % there), whatever the
+run length, so that runs of different lengths see the same casing.
+"""
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+
+from rotor37_rom.checks import real_number
+from rotor37_rom.dynamics.casing import DIRECTIONS, Casing
+from rotor37_rom.dynamics.damping import ModalLaw, damping_law
+from rotor37_rom.post.steady import Steadiness, steadiness
+
+__all__ = ["SteadyCase", "SteadyRun", "full_order_run", "reduced_run", "reduced_damping"]
+
+
+@dataclasses.dataclass(frozen=True)
+class SteadyCase:
+    """One steady-state question: the blade at ``speed`` (rad/s) under the paper's casing (clearance 0.5 mm, bumps
+    ``bump_mm``), Coulomb ``mu``, contact normal ``direction``, damping law ``law`` (``dynamics.damping.DAMPING_LAWS``),
+    run for ``revolutions`` at most, steady when the map quantity changes by less than ``tolerance`` a revolution."""
+
+    speed: float
+    mu: float = 0.0
+    direction: str = "x"
+    law: str = "heavy"
+    revolutions: int = 8
+    ramp_revolutions: float = 1.0
+    tolerance: float = 0.02
+    bump_mm: float = 0.625
+
+    def __post_init__(self):
+        real_number("speed", self.speed, 1.0, 5000.0, unit=" rad/s")
+        real_number("mu", self.mu, 0.0, 2.0)
+        if self.direction not in DIRECTIONS:
+            raise ValueError(f"direction must be one of {', '.join(DIRECTIONS)}, got {self.direction!r}")
+        damping_law(self.law)
+        if not (isinstance(self.revolutions, (int, np.integer)) and 3 <= self.revolutions <= 200):
+            raise ValueError(f"revolutions must be an integer in [3, 200], got {self.revolutions!r}")
+        real_number("ramp_revolutions", self.ramp_revolutions, 0.0, self.revolutions - 2, open_low=True)
+        real_number("tolerance", self.tolerance, 0.0, 0.5, open_low=True)
+        real_number("bump_mm", self.bump_mm, 0.0, 4.9)
+
+    @property
+    def duration(self) -> float:
+        return self.revolutions * 2.0 * np.pi / self.speed
+
+    @property
+    def damping(self) -> ModalLaw:
+        return damping_law(self.law)
+
+    def casing(self) -> Casing:
+        return Casing(c0=0.5e-3, h_b=self.bump_mm * 1e-3, mu=self.mu, direction=self.direction,
+                      ramp_fraction=self.ramp_revolutions / self.revolutions)
+
+    def label(self) -> str:
+        return f"{self.speed:g} rad/s mu {self.mu:g} {self.direction} {self.law} {self.revolutions} rev"
+
+
+@dataclasses.dataclass(frozen=True)
+class SteadyRun:
+    """One run's LE normal displacement (t, u_le in s, m), its verdict, its cost and the scheme's details."""
+
+    t: np.ndarray
+    u_le: np.ndarray
+    verdict: Steadiness
+    wall_s: float
+    details: dict
+
+    def to_json(self) -> dict:
+        v = self.verdict
+        return {"t": self.t.tolist(), "u_le": self.u_le.tolist(), "wall_s": self.wall_s, "details": self.details,
+                "steady": v.steady, "value": v.value, "maxima": v.maxima.tolist(), "reason": v.reason,
+                "revolution": v.revolution}
+
+
+def full_order_run(sector, ops, case: SteadyCase, h: float, rho_inf: float = 0.8, checkpoint=None,
+                   snapshots_per_revolution: int = 0) -> tuple[SteadyRun, np.ndarray | None]:
+    """The full order at ``case`` with step h (s), generalised alpha ``rho_inf``: the run and, with
+    ``snapshots_per_revolution``, its field snapshots (n_snap, n_dofs) for a POD basis (else None). ``checkpoint``:
+    an .npz path the run saves to and resumes from."""
+    from rotor37_rom.dynamics.casing import contact_frames
+    from rotor37_rom.fem.periodic import solve_repeating_newmark
+
+    real_number("h", h, 1e-8, 1e-4, unit=" s")
+    casing = case.casing()
+    n_steps = int(round(case.duration / h))
+    every = n_steps if not snapshots_per_revolution else max(1, n_steps // (case.revolutions
+                                                                            * snapshots_per_revolution))
+    t0 = time.perf_counter()
+    res = solve_repeating_newmark(sector, 1, None, None, h, n_steps, nonlinear=True, ops=ops, casing=casing,
+                                  omega=case.speed, duration=case.duration, snapshot_every=every, rtol=1e-6,
+                                  checkpoint=checkpoint, checkpoint_seconds=600.0, rho_inf=rho_inf,
+                                  damping=case.damping)
+    normal = contact_frames(sector.tip_nodes[:1], casing.direction, casing.rotation_sense, casing.cone_slope,
+                            sector.blade_frame_angle())[0][0]
+    u = res.tip[:, 0, 0, :] @ normal
+    on = res.lam > 0
+    details = {"model": "full order", "h": h, "rho_inf": rho_inf, "steps": n_steps, "dofs": int(sector.n_dofs),
+               "factorisations": int(res.refreshes), "newton_iterations": int(res.iterations.sum()),
+               "contact_steps": int(on.any(axis=1).sum()), "max_penetration": res.max_penetration,
+               "max_multiplier": float(res.lam.max()), "wall_run_s": res.wall}
+    run = SteadyRun(res.t, u, steadiness(res.t, u, case.speed, case.tolerance), time.perf_counter() - t0, details)
+    return run, (res.fields[:, 0] if snapshots_per_revolution else None)
+
+
+def reduced_damping(model, sector, ops, law: ModalLaw) -> np.ndarray:
+    """The full order's damping law projected on the reduced model's basis (model.Phi, the blade's DOFs): V^T C V
+    (r, r). The model must carry its basis."""
+    from rotor37_rom.fem.periodic import RepeatingSectors
+
+    if model.Phi is None:
+        raise ValueError("the reduced model carries no basis (Phi): the full order's damping cannot be projected on it")
+    return RepeatingSectors(sector, 1, ops).project_damping(law, model.Phi)
+
+
+def reduced_run(model, C: np.ndarray, case: SteadyCase, h: float, cap: float, record: float = 2e-6,
+                checkpoint=None) -> SteadyRun:
+    """The reduced model (its C replaced by ``C``, e.g. ``reduced_damping``) in the maps' explicit scheme at step h
+    (s) with the frequency cap ``cap`` (rad/s) at ``case``: node LE's normal displacement every ``record`` s."""
+    from rotor37_rom.dynamics.explicit import CentralDifference, simulate
+
+    C = np.asarray(C, float)
+    if C.shape != model.K.shape or not np.all(np.isfinite(C)):
+        raise ValueError(f"C must be a finite ({model.r}, {model.r}) matrix, got {C.shape}")
+    damped = dataclasses.replace(model, C=C)
+    scheme = CentralDifference(damped, nonlinear=True, damping=True, frequency_cap=cap, h=h, force=True)
+    every = max(1, int(round(record / scheme.h)))
+    n_steps = every * int(np.ceil(case.duration / (scheme.h * every)))   # the last revolution recorded whole
+    t0 = time.perf_counter()
+    res = simulate(scheme, [case.speed], case.casing(), n_steps=n_steps, duration=case.duration,
+                   record_every=every, on_blowup="flag")
+    u = np.asarray(res.u_r[0][res.row("0:LE")], float)
+    t = np.asarray(res.t[0], float)
+    if res.diverged_step[0] >= 0:
+        u = np.where(t <= res.diverged_step[0] * scheme.h, u, np.nan)
+    details = {"model": f"reduced r = {model.r}", "h": scheme.h, "cap_hz": cap / (2 * np.pi), "steps": n_steps,
+               "diverged": bool(res.diverged_step[0] >= 0), "max_penetration": float(res.max_penetration[0])}
+    return SteadyRun(t, u, steadiness(t, u, case.speed, case.tolerance), time.perf_counter() - t0, details)

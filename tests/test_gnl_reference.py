@@ -1,0 +1,60 @@
+"""The steady-state GNL reference's pieces (issue #86): the full order's damping law on a reduced model by projection
+(the ROM's 1B damped at the law's ratio to the Rayleigh-Ritz accuracy of its 1B), a reduced run ending "not steady"
+at its revolution limit instead of a number, and the cases' and runs' misuse refused in one line."""
+import dataclasses
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+from rotor37_rom.studies.gnl_reference import SteadyCase, reduced_damping, reduced_run
+
+
+def test_the_projected_law_damps_the_reduced_1b_at_the_full_orders_ratio(ci_blade, ci_ops, ci_rom):
+    """phi_r^T C_r phi_r = 2 xi omega_1 up to the ROM's 1B error: the ROM's 1B is the full one's to Rayleigh-Ritz
+    accuracy (frequency error eps, mode error ~sqrt(eps)), so the modal damping it sees is within a few sqrt(eps)."""
+    from rotor37_rom.dynamics.damping import damping_law
+    from rotor37_rom.fem.periodic import RepeatingSectors
+
+    law = damping_law("heavy")
+    C = reduced_damping(ci_rom, ci_blade, ci_ops, law)
+    assert np.allclose(C, C.T, atol=1e-12 * np.abs(C).max())
+    lam, V = scipy.linalg.eigh(ci_rom.K, ci_rom.M)
+    omega_full = RepeatingSectors(ci_blade, 1, ci_ops).modes(law.n_modes)[0]
+    eps = abs(np.sqrt(lam[0]) / omega_full[0] - 1)
+    assert eps < 1e-3                                                  # the ROM's 1B (Rayleigh-Ritz: from above)
+    zeta = V[:, 0] @ C @ V[:, 0] / (2 * np.sqrt(lam[0]))
+    assert abs(zeta - 0.02) <= 0.02 * 10 * np.sqrt(eps) + 1e-6, (zeta, eps)
+
+
+def test_a_run_that_does_not_settle_is_marked_not_steady(ci_rom):
+    """Three revolutions of an undamped model from rest under the casing: the verdict is "not steady" (or steady
+    with its reason), and a model without a basis cannot take the full order's law."""
+    case = SteadyCase(2500.0, revolutions=3, ramp_revolutions=1.0, bump_mm=0.625)
+    run = reduced_run(ci_rom, np.zeros_like(ci_rom.K), case, 4e-7, 2e3 * np.pi * 120, record=4e-6)
+    assert run.verdict.maxima.size == 3 and np.all(np.isfinite(run.verdict.maxima))
+    if not run.verdict.steady:
+        assert run.verdict.reason.startswith("not steady by revolution 3")
+    assert run.to_json()["steady"] == run.verdict.steady
+    with pytest.raises(ValueError, match="carries no basis"):
+        reduced_damping(dataclasses.replace(ci_rom, Phi=None), None, None, None)
+    with pytest.raises(ValueError, match="C must be a finite"):
+        reduced_run(ci_rom, np.zeros((3, 3)), case, 4e-7, 1e6)
+
+
+@pytest.mark.parametrize("kwargs, word", [({"speed": 0.0}, "speed"), ({"speed": float("nan")}, "speed"),
+                                          ({"mu": -0.1}, "mu"), ({"direction": "up"}, "direction"),
+                                          ({"law": "rayleigh"}, "damping law"), ({"revolutions": 2}, "revolutions"),
+                                          ({"revolutions": 8.5}, "revolutions"),
+                                          ({"ramp_revolutions": 7.0}, "ramp_revolutions"),
+                                          ({"tolerance": 0.0}, "tolerance"), ({"bump_mm": 5.0}, "bump_mm")])
+def test_bad_cases_are_refused(kwargs, word):
+    with pytest.raises(ValueError, match=word):
+        SteadyCase(**{"speed": 1280.0, **kwargs})
+
+
+def test_the_case_ramps_over_its_own_revolutions():
+    case = SteadyCase(1280.0, revolutions=10, ramp_revolutions=2.0)
+    casing = case.casing()
+    assert casing.ramp_fraction * case.duration == pytest.approx(2 * 2 * np.pi / 1280.0)
+    assert case.damping.low == 0.02 and "heavy" in case.label()
