@@ -413,3 +413,14 @@ def test_run_study_on_a_toy_scene(tmp_path, monkeypatch):
     assert text.startswith("# Page\n\nbefore\n") and text.endswith(f"{END}\nafter\n")
     assert text.split(BEGIN, 1)[1].split(END, 1)[0].strip() == render_markdown(study, ctx.img).strip()
     assert registry.expand_scenes(["modes", "disk", "modes"]) == ("modes",) + registry.DISK_SCENES
+
+
+def test_a_choice_says_what_its_error_is_measured_against():
+    """#86: a GNL scene's choice names its reference, and says when that is a reduced model, not the full order."""
+    study = load_study()
+    gnl = choose_model("map-gnl", 0.5, study)
+    assert "error against the reduced model" in gnl.describe() and "not the full order" in gnl.describe()
+    linear = choose_model("map-linear", 0.5, study)
+    assert "error against the reduced model" in linear.describe() and "not the full order" not in linear.describe()
+    forced = choose_model("disk-forced-gnl", 0.99, study)
+    assert forced.reference.startswith("full order")

@@ -23,7 +23,7 @@ from typing import Callable
 from rotor37_rom.studies.speed_accuracy.study_file import SCHEMA, config_options, read_study
 
 __all__ = ["STUDY_FILE", "SCHEMA", "ModelChoice", "load_study", "scene_floor", "expected_error",
-           "choose_model", "reference_model", "scenes"]
+           "choose_model", "reference_model", "reference_label", "scenes"]
 
 STUDY_FILE = Path(__file__).resolve().parents[1] / "data" / "speed_accuracy.json"
 
@@ -44,6 +44,7 @@ class ModelChoice:
     cost: float
     cost_unit: str
     floor: float = 0.0
+    reference: str = ""
 
     def config_options(self, config_type: type) -> dict:
         """The options as keyword arguments of the dataclass ``config_type`` (``study_file.config_options``: e.g.
@@ -56,8 +57,23 @@ class ModelChoice:
                     f" the yardstick of the others, its own error not measured), cost {self.cost:.3g} {self.cost_unit}")
         held = "not run" if self.held_out_error is None else f"{100 * self.held_out_error:.2g} %"
         floor = f", the scene's floor {100 * self.floor:.2g} %" if self.floor else ""
+        against = f"; error against {self.reference}" if self.reference else ""
         return (f"{self.scene}: {self.name} — expected error {100 * self.error:.2g} % (study "
-                f"{100 * self.study_error:.2g} %, held-out {held}{floor}), cost {self.cost:.3g} {self.cost_unit}")
+                f"{100 * self.study_error:.2g} %, held-out {held}{floor}), cost {self.cost:.3g} {self.cost_unit}"
+                f"{against}")
+
+
+def reference_label(scene: str, data: dict) -> str:
+    """What a scene's errors are measured against, in words: the full order where the study's reference is one
+    (its options name a 'model'), else the reduced model of its options — for a GNL scene flagged as not validated
+    against the full order (``docs/results-gnl-contact.md``, issue #86)."""
+    options = dict(data.get("reference", {}).get("options", {}))
+    if "model" in options:
+        return str(options["model"])
+    label = "the reduced model " + ", ".join(f"{k} {v}" for k, v in options.items())
+    if "gnl" in scene:
+        label += " (a reduced GNL reference, not the full order: see docs/results-gnl-contact.md)"
+    return label
 
 
 def load_study(path: str | Path | None = None) -> dict:
@@ -113,7 +129,8 @@ def choose_model(scene: str, tolerance: float, study: dict | None = None, fallba
         raise ValueError(f"tolerance {tolerance:g} is below every measured model of scene {scene!r} "
                          f"(smallest expected error {smallest:.4g}); allowed: tolerance >= {smallest:.4g}")
     return ModelChoice(scene, best["name"], dict(best["options"]), expected_error(best, data), float(best["error"]),
-                       best.get("held_out_error"), float(best["cost"]), data["cost_unit"], scene_floor(data))
+                       best.get("held_out_error"), float(best["cost"]), data["cost_unit"], scene_floor(data),
+                       reference_label(scene, data))
 
 
 def reference_model(scene: str, study: dict | None = None) -> ModelChoice:
