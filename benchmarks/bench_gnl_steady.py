@@ -40,10 +40,13 @@ def parse(argv):
     p.add_argument("--r-c", type=int, nargs="*", default=[25], help="reduced models' fixed-interface modes, [1, 200]")
     p.add_argument("--rom-step", type=float, default=4e-7, help="reduced models' step (s), in [1e-9, 1e-5]")
     p.add_argument("--rom-cap", type=float, default=120.0, help="reduced models' frequency cap (kHz), in [1, 1e4]")
+    p.add_argument("--pod", type=int, nargs="*", default=[], help="POD-Galerkin models of these ranks from the full "
+                   "order's snapshots at the largest --h-full (run with --snapshots first), each in [24, 400]")
     args = p.parse_args(argv)
     for name, values, lo, hi in (("--h-full", args.h_full, 1e-8, 1e-4), ("--rho-inf", [args.rho_inf], 0.0, 1.0),
                                  ("--r-c", args.r_c, 1, 200), ("--rom-step", [args.rom_step], 1e-9, 1e-5),
-                                 ("--rom-cap", [args.rom_cap], 1.0, 1e4)):
+                                 ("--rom-cap", [args.rom_cap], 1.0, 1e4),
+                                 ("--pod", args.pod, 24, 400)):
         for v in values:
             real_number(name, v, lo, hi)
     from rotor37_rom.studies.gnl_reference import SteadyCase
@@ -97,6 +100,21 @@ def main(argv=None) -> int:
                 runs[key] = run.to_json()
                 save()
             report(case, key, runs[key])
+        for r in args.pod:
+            key = f"pod r {r} cap {args.rom_cap:g} h {args.rom_step:.3g}"
+            if key not in runs:
+                h = max(args.h_full) if args.h_full else 2e-6
+                stem = ckpts / f"{case.label()} full h {h:.3g} rho {args.rho_inf:g}".replace(" ", "_").replace("/", "")
+                snaps = stem.with_suffix(".snapshots.npy")
+                if not snaps.exists():
+                    raise ValueError(f"--pod: no full-order snapshots for {case.label()} at h {h:.3g} s ({snaps}): "
+                                     f"run the full order with --snapshots first")
+                model, bound = gr.pod_model(sector, ops, np.load(snaps), r, cache_dir="results/cache")
+                C = gr.reduced_damping(model, sector, ops, case.damping)
+                runs[key] = gr.reduced_run(model, C, case, args.rom_step, 2e3 * np.pi * args.rom_cap).to_json()
+                runs[key]["details"]["pod_bound"] = bound
+                save()
+            report(case, key, runs[key])
         for r_c in args.r_c:
             key = f"rom r_c {r_c} cap {args.rom_cap:g} h {args.rom_step:.3g}"
             if key not in runs:
@@ -110,10 +128,13 @@ def main(argv=None) -> int:
 
 
 def report(case, key, run):
-    maxima = " / ".join(f"{1e3 * m:.3f}" for m in run["maxima"])
+    from rotor37_rom.studies.gnl_reference import revolution_peaks
+
+    inward, outward = revolution_peaks(run["t"], run["u_le"], case.speed)
     value = f"{1e3 * run['value']:.3f} mm" + ("" if run["steady"] else " (NOT STEADY)")
-    print(f"{case.label()} | {key}: {value}; per revolution {maxima} mm; {run['reason']}; {run['wall_s']:.0f} s",
-          flush=True)
+    print(f"{case.label()} | {key}: max |u_LE| {value}; per revolution, towards the axis / the casing (mm): "
+          + "  ".join(f"{1e3 * a:.3f}/{1e3 * b:.3f}" for a, b in zip(inward, outward))
+          + f"; {run['reason']}; {run['wall_s']:.0f} s", flush=True)
 
 
 if __name__ == "__main__":

@@ -58,3 +58,20 @@ def test_the_case_ramps_over_its_own_revolutions():
     casing = case.casing()
     assert casing.ramp_fraction * case.duration == pytest.approx(2 * 2 * np.pi / 1280.0)
     assert case.damping.low == 0.02 and "heavy" in case.label()
+
+
+def test_revolution_peaks_split_the_two_sides():
+    from rotor37_rom.studies.gnl_reference import revolution_peaks
+
+    w = 1000.0
+    t = np.linspace(0.0, 3 * 2 * np.pi / w, 3 * 512 + 1)
+    u = 0.2 + np.sin(w * t)                                 # towards the casing 1.2, towards the axis 0.8
+    inward, outward = revolution_peaks(t, u, w)
+    assert np.allclose(inward, 0.8, rtol=1e-4) and np.allclose(outward, 1.2, rtol=1e-4)
+
+
+def test_pod_model_refuses_fields_of_another_mesh(ci_blade):
+    from rotor37_rom.studies.gnl_reference import pod_model
+
+    with pytest.raises(ValueError, match="snapshots must be"):
+        pod_model(ci_blade, None, np.ones((5, ci_blade.n_dofs + 3)), 30)

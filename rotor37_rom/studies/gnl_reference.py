@@ -25,7 +25,8 @@ from rotor37_rom.dynamics.casing import DIRECTIONS, Casing
 from rotor37_rom.dynamics.damping import ModalLaw, damping_law
 from rotor37_rom.post.steady import Steadiness, steadiness
 
-__all__ = ["SteadyCase", "SteadyRun", "full_order_run", "reduced_run", "reduced_damping"]
+__all__ = ["SteadyCase", "SteadyRun", "full_order_run", "reduced_run", "reduced_damping", "pod_model",
+           "revolution_peaks"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -151,3 +152,33 @@ def reduced_run(model, C: np.ndarray, case: SteadyCase, h: float, cap: float, re
     details = {"model": f"reduced r = {model.r}", "h": scheme.h, "cap_hz": cap / (2 * np.pi), "steps": n_steps,
                "diverged": bool(res.diverged_step[0] >= 0), "max_penetration": float(res.max_penetration[0])}
     return SteadyRun(t, u, steadiness(t, u, case.speed, case.tolerance), time.perf_counter() - t0, details)
+
+
+def pod_model(sector, ops, snapshots: np.ndarray, r: int, cache_dir=None):
+    """The POD-Galerkin model of rank r of full-order fields ``snapshots`` (n_snap, n_dofs), mass-weighted
+    (``reduction.pod.pod_basis``), built on the maps' exact tensors (``reduction.builder.build_from_basis``): the
+    bound on what any basis of r vectors can do for these runs. Returns (model, the POD's relative projection error
+    of the snapshots)."""
+    from rotor37_rom import fem
+    from rotor37_rom.reduction.builder import build_from_basis
+    from rotor37_rom.reduction.pod import pod_basis
+
+    snapshots = np.asarray(snapshots, float)
+    if snapshots.ndim != 2 or snapshots.shape[1] != sector.n_dofs:
+        raise ValueError(f"snapshots must be (n_snap, {sector.n_dofs}), got {snapshots.shape}")
+    _, M_f, free = fem.assemble_free_operators(sector, ops)
+    pod = pod_basis(snapshots[:, free].T, M_f, r)
+    basis = np.zeros((sector.n_dofs, r))
+    basis[free] = pod.basis
+    model, _ = build_from_basis(sector, basis, ops=ops, label=f"POD r = {r} of {snapshots.shape[0]} full-order fields",
+                                cache_dir=cache_dir)
+    return model, float(pod.bound)
+
+
+def revolution_peaks(t, u, omega: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per whole revolution, the largest displacement on each side: (max of -u, max of u) (m); for the LE normal
+    displacement, towards the axis (where the casing pushes it) and towards the casing (the free side)."""
+    from rotor37_rom.post.steady import revolution_maxima
+
+    t, u = np.asarray(t, float), np.asarray(u, float)
+    return revolution_maxima(t, np.maximum(-u, 0.0), omega), revolution_maxima(t, np.maximum(u, 0.0), omega)
