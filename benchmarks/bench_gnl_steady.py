@@ -124,7 +124,24 @@ def main(argv=None) -> int:
                 runs[key] = gr.reduced_run(model, C, case, args.rom_step, 2e3 * np.pi * args.rom_cap).to_json()
                 save()
             report(case, key, runs[key])
+        save()                                    # merged with the other runs of this case on disk
+        runs = store[case.label()]
+        full = sorted((k for k in runs if k.startswith("full")), key=lambda k: float(k.split()[2]))
+        if full:
+            table(gr.compare_runs(case, runs, full[0]), case, full[0])
     return 0
+
+
+def table(rows, case, reference):
+    """The case's runs against the full order at its finest step, as Markdown."""
+    print(f"\n{case.label()}, against {reference}:\n\n| run | max \\|u_LE\\| (mm) | towards the casing (mm) | "
+          f"error | error towards the casing | wall per revolution (s) | cost ratio |\n|---|---|---|---|---|---|---|")
+    for r in rows:
+        def pct(e):
+            return "—" if e is None else f"{100 * e:+.1f} %"
+        flag = "" if r["steady"] else " (not steady)"
+        print(f"| {r['run']} | {1e3 * r['value']:.3f}{flag} | {1e3 * r['towards_casing']:.3f} | {pct(r['error'])} | "
+              f"{pct(r['error_towards_casing'])} | {r['wall_per_revolution_s']:.1f} | {r['cost_ratio']:.0f} |")
 
 
 def report(case, key, run):

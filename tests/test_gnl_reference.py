@@ -75,3 +75,24 @@ def test_pod_model_refuses_fields_of_another_mesh(ci_blade):
 
     with pytest.raises(ValueError, match="snapshots must be"):
         pod_model(ci_blade, None, np.ones((5, ci_blade.n_dofs + 3)), 30)
+
+
+def test_runs_are_compared_only_where_both_are_steady():
+    from rotor37_rom.post.steady import steadiness
+    from rotor37_rom.studies.gnl_reference import SteadyRun, compare_runs
+
+    case = SteadyCase(1000.0, revolutions=4)
+    t = np.linspace(0.0, case.duration, 4 * 400 + 1)
+
+    def run(amplitude, wall, growth=0.0):
+        u = amplitude * (1 + growth * t / case.duration) * np.sin(4 * 1000.0 * t)
+        return SteadyRun(t, u, steadiness(t, u, 1000.0), wall, {}).to_json()
+
+    runs = {"full": run(2e-4, 400.0), "rom": run(1.8e-4, 4.0), "drifting": run(1.8e-4, 4.0, growth=0.5)}
+    rows = {r["run"]: r for r in compare_runs(case, runs, "full")}
+    assert rows["rom"]["error"] == pytest.approx(-0.1, abs=1e-4) and rows["rom"]["cost_ratio"] == pytest.approx(100)
+    assert rows["rom"]["error_towards_casing"] == pytest.approx(-0.1, abs=1e-4)
+    assert rows["drifting"]["steady"] is False and rows["drifting"]["error"] is None
+    assert rows["full"]["error"] is None
+    with pytest.raises(ValueError, match="reference must be one of"):
+        compare_runs(case, runs, "fom")

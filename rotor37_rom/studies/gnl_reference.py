@@ -26,7 +26,7 @@ from rotor37_rom.dynamics.damping import ModalLaw, damping_law
 from rotor37_rom.post.steady import Steadiness, steadiness
 
 __all__ = ["SteadyCase", "SteadyRun", "full_order_run", "reduced_run", "reduced_damping", "pod_model",
-           "revolution_peaks"]
+           "revolution_peaks", "compare_runs"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -182,3 +182,30 @@ def revolution_peaks(t, u, omega: float) -> tuple[np.ndarray, np.ndarray]:
 
     t, u = np.asarray(t, float), np.asarray(u, float)
     return revolution_maxima(t, np.maximum(-u, 0.0), omega), revolution_maxima(t, np.maximum(u, 0.0), omega)
+
+
+def compare_runs(case: SteadyCase, runs: dict, reference: str) -> list[dict]:
+    """One row per run of ``runs`` ({key: ``SteadyRun.to_json()``}) against ``runs[reference]`` (the full order):
+    the last revolution's max |u_LE| and its peak towards the casing (m), whether steady, their relative errors
+    against the reference's (None where either is not steady: a number that is not steady is not compared), the
+    wall time per simulated revolution and the reference's over it (the cost ratio)."""
+    if reference not in runs:
+        raise ValueError(f"reference must be one of the runs ({', '.join(runs)}), got {reference!r}")
+
+    def summary(run):
+        _, outward = revolution_peaks(run["t"], run["u_le"], case.speed)
+        return run["value"], (float(outward[-1]) if outward.size else float("nan")), bool(run["steady"])
+
+    ref_value, ref_out, ref_steady = summary(runs[reference])
+    ref_cost = runs[reference]["wall_s"] / case.revolutions
+    rows = []
+    for key, run in runs.items():
+        value, out, steady = summary(run)
+        compared = steady and ref_steady and key != reference
+        cost = run["wall_s"] / case.revolutions
+        rows.append({"run": key, "value": value, "towards_casing": out, "steady": steady,
+                     "error": (value - ref_value) / ref_value if compared else None,
+                     "error_towards_casing": (out - ref_out) / ref_out if compared else None,
+                     "wall_per_revolution_s": cost, "cost_ratio": ref_cost / cost if cost > 0 else None,
+                     "pod_bound": run.get("details", {}).get("pod_bound"), "reason": run["reason"]})
+    return rows
