@@ -9,6 +9,7 @@ results/bench_gnl_steady.ckpt/ every 10 min, and the same command resumes them (
 
     python benchmarks/bench_gnl_steady.py --speeds 1280 --h-full 2e-6 --snapshots      # ~2-3 h a speed, 1 core
     python benchmarks/bench_gnl_steady.py --speeds 1280 --no-full-order --r-c 25       # the maps' r = 55: minutes
+    python benchmarks/bench_gnl_steady.py --speeds 1280 1450 --r-c 25 --global-md 3 10 --pod 55   # against it
 """
 from __future__ import annotations
 
@@ -38,6 +39,8 @@ def parse(argv):
     p.add_argument("--no-full-order", action="store_true", help="the reduced models only")
     p.add_argument("--snapshots", action="store_true", help="keep the full order's fields, 100 a revolution")
     p.add_argument("--r-c", type=int, nargs="*", default=[25], help="reduced models' fixed-interface modes, [1, 200]")
+    p.add_argument("--global-md", type=int, nargs="+", default=[3], help="the reduced models' modal derivatives of "
+                   "the first N clamped modes, each N in [0, 20] (3: the maps' r = 55; 10: r = 104)")
     p.add_argument("--rom-step", type=float, default=4e-7, help="reduced models' step (s), in [1e-9, 1e-5]")
     p.add_argument("--rom-cap", type=float, default=120.0, help="reduced models' frequency cap (kHz), in [1, 1e4]")
     p.add_argument("--pod", type=int, nargs="*", default=[], help="POD-Galerkin models of these ranks from the full "
@@ -46,7 +49,7 @@ def parse(argv):
     for name, values, lo, hi in (("--h-full", args.h_full, 1e-8, 1e-4), ("--rho-inf", [args.rho_inf], 0.0, 1.0),
                                  ("--r-c", args.r_c, 1, 200), ("--rom-step", [args.rom_step], 1e-9, 1e-5),
                                  ("--rom-cap", [args.rom_cap], 1.0, 1e4),
-                                 ("--pod", args.pod, 24, 400)):
+                                 ("--pod", args.pod, 24, 400), ("--global-md", args.global_md, 0, 20)):
         for v in values:
             real_number(name, v, lo, hi)
     from rotor37_rom.studies.gnl_reference import SteadyCase
@@ -115,10 +118,11 @@ def main(argv=None) -> int:
                 runs[key]["details"]["pod_bound"] = bound
                 save()
             report(case, key, runs[key])
-        for r_c in args.r_c:
-            key = f"rom r_c {r_c} cap {args.rom_cap:g} h {args.rom_step:.3g}"
+        for r_c, g in ((r_c, g) for r_c in args.r_c for g in args.global_md):
+            key = (f"rom r_c {r_c}" + ("" if g == 3 else f" global md {g}")
+                   + f" cap {args.rom_cap:g} h {args.rom_step:.3g}")
             if key not in runs:
-                config = ReductionConfig(r_c=r_c, r_md=0, criterion="MI2b", forces="intrusive")
+                config = ReductionConfig(r_c=r_c, r_md=0, criterion="MI2b", global_md_modes=g, forces="intrusive")
                 model, _ = build_reduced_model(sector, config, ops=ops, cache_dir="results/cache")
                 C = gr.reduced_damping(model, sector, ops, case.damping)
                 runs[key] = gr.reduced_run(model, C, case, args.rom_step, 2e3 * np.pi * args.rom_cap).to_json()
