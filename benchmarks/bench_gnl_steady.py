@@ -81,8 +81,8 @@ def main(argv=None) -> int:
         on_disk = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
         for label, runs in store.items():
             if isinstance(runs, dict) and label != "machine":
-                on_disk.setdefault(label, {}).update(runs)
-                store[label] = on_disk[label]
+                runs.update({**on_disk.get(label, {}), **runs})     # in place: the loop's `runs` is this dict
+                on_disk[label] = runs
         on_disk["machine"] = store["machine"]
         tmp = RESULTS.with_suffix(f".{os.getpid()}.tmp")
         tmp.write_text(json.dumps(on_disk))
