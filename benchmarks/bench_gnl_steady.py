@@ -95,11 +95,11 @@ def main(argv=None) -> int:
         for h in [] if args.no_full_order else sorted(args.h_full, reverse=True):
             key = f"full h {h:.3g} rho {args.rho_inf:g}"
             if key not in runs:
-                stem = ckpts / f"{case.label()} {key}".replace(" ", "_").replace("/", "")
-                run, snaps = gr.full_order_run(sector, ops, case, h, args.rho_inf, stem.with_suffix(".npz"),
+                stem = full_order_stem(ckpts, case, key)
+                run, snaps = gr.full_order_run(sector, ops, case, h, args.rho_inf, stem.with_name(stem.name + ".npz"),
                                                100 if args.snapshots else 0)
                 if snaps is not None:
-                    np.save(stem.with_suffix(".snapshots.npy"), snaps)
+                    np.save(stem.with_name(stem.name + ".snapshots.npy"), snaps)
                 runs[key] = run.to_json()
                 save()
             report(case, key, runs[key])
@@ -107,8 +107,8 @@ def main(argv=None) -> int:
             key = f"pod r {r} cap {args.rom_cap:g} h {args.rom_step:.3g}"
             if key not in runs:
                 h = max(args.h_full) if args.h_full else 2e-6
-                stem = ckpts / f"{case.label()} full h {h:.3g} rho {args.rho_inf:g}".replace(" ", "_").replace("/", "")
-                snaps = stem.with_suffix(".snapshots.npy")
+                stem = full_order_stem(ckpts, case, f"full h {h:.3g} rho {args.rho_inf:g}")
+                snaps = stem.with_name(stem.name + ".snapshots.npy")
                 if not snaps.exists():
                     raise ValueError(f"--pod: no full-order snapshots for {case.label()} at h {h:.3g} s ({snaps}): "
                                      f"run the full order with --snapshots first")
@@ -134,6 +134,12 @@ def main(argv=None) -> int:
         if full:
             table(gr.compare_runs(case, runs, full[0]), case, full[0])
     return 0
+
+
+def full_order_stem(folder: Path, case, key: str) -> Path:
+    """The files' stem of a full-order run (its checkpoint <stem>.npz, its snapshots <stem>.snapshots.npy): the case
+    and the run's key, the dots of its numbers kept (rho 0.8 and 0.9 are two runs)."""
+    return folder / f"{case.label()} {key}".replace(" ", "_").replace("/", "")
 
 
 def table(rows, case, reference):
