@@ -10,6 +10,8 @@ results/bench_gnl_steady.ckpt/ every 10 min, and the same command resumes them (
     python benchmarks/bench_gnl_steady.py --speeds 1280 --h-full 2e-6 --snapshots      # ~2-3 h a speed, 1 core
     python benchmarks/bench_gnl_steady.py --speeds 1280 --no-full-order --r-c 25       # the maps' r = 55: minutes
     python benchmarks/bench_gnl_steady.py --speeds 1280 1450 --r-c 25 --global-md 3 10 --pod 55   # against it
+    python benchmarks/bench_gnl_steady.py --speeds 1280 1450 --no-full-order --global-md 10 --cubature 1e-4
+    python benchmarks/bench_gnl_steady.py --speeds 1280 --hyperelastic neo-hookean --r-c     # the second law's full order
 """
 from __future__ import annotations
 
@@ -45,23 +47,35 @@ def parse(argv):
     p.add_argument("--rom-cap", type=float, default=120.0, help="reduced models' frequency cap (kHz), in [1, 1e4]")
     p.add_argument("--pod", type=int, nargs="*", default=[], help="POD-Galerkin models of these ranks from the full "
                    "order's snapshots at the largest --h-full (run with --snapshots first), each in [24, 400]")
+    p.add_argument("--hyperelastic", default="svk", help="the full order's law: svk or neo-hookean (the full order "
+                   "alone: the reduced models are SVK's)")
+    p.add_argument("--cubature", type=float, default=None, help="run the --r-c models on a point cubature of this "
+                   "tolerance, in (0, 0.1], trained on their own exact runs at --train-speeds (no full order)")
+    p.add_argument("--train-speeds", type=float, nargs="+", default=[1200.0, 1600.0], help="the cubature's training "
+                   "runs (rad/s, in [1, 5000]), 3 revolutions each")
     args = p.parse_args(argv)
     for name, values, lo, hi in (("--h-full", args.h_full, 1e-8, 1e-4), ("--rho-inf", [args.rho_inf], 0.0, 1.0),
                                  ("--r-c", args.r_c, 1, 200), ("--rom-step", [args.rom_step], 1e-9, 1e-5),
                                  ("--rom-cap", [args.rom_cap], 1.0, 1e4),
-                                 ("--pod", args.pod, 24, 400), ("--global-md", args.global_md, 0, 20)):
+                                 ("--pod", args.pod, 24, 400), ("--global-md", args.global_md, 0, 20),
+                                 ("--train-speeds", args.train_speeds, 1.0, 5000.0)):
         for v in values:
             real_number(name, v, lo, hi)
+    if args.cubature is not None:
+        real_number("--cubature", args.cubature, 0.0, 0.1, open_low=True)
     from rotor37_rom.studies.gnl_reference import SteadyCase
 
     options = {"speed": "--speeds", "mu": "--mu", "direction": "--direction", "damping law": "--law",
-               "revolutions": "--revolutions"}
+               "revolutions": "--revolutions", "hyperelastic": "--hyperelastic"}
     try:
-        cases = [SteadyCase(w, mu=args.mu, direction=args.direction, law=args.law, revolutions=args.revolutions)
-                 for w in args.speeds]
+        cases = [SteadyCase(w, mu=args.mu, direction=args.direction, law=args.law, revolutions=args.revolutions,
+                            hyperelastic=args.hyperelastic) for w in args.speeds]
     except ValueError as err:                  # the config's field named as the option the user gave
         field = next((f for f in options if str(err).startswith(f)), None)
         raise ValueError(str(err).replace(field, options[field], 1) if field else str(err)) from None
+    if args.hyperelastic != "svk" and (args.r_c or args.pod):
+        raise ValueError(f"--hyperelastic {args.hyperelastic}: the reduced models are SVK's; run this full order "
+                         f"alone (--r-c with no value, no --pod)")
     return args, cases
 
 
@@ -89,7 +103,8 @@ def main(argv=None) -> int:
         tmp.replace(RESULTS)
 
     sector = fem.create_blade_sector(preset="ci")
-    ops = fem.create_svk_operators(sector)
+    ops = fem.create_svk_operators(sector, law=args.hyperelastic)
+    models, cap = {}, 2e3 * np.pi * args.rom_cap      # the reduced models, their damping and cubature, by (r_c, g)
     for case in cases:
         runs = store.setdefault(case.label(), {})
         for h in [] if args.no_full_order else sorted(args.h_full, reverse=True):
@@ -114,18 +129,30 @@ def main(argv=None) -> int:
                                      f"run the full order with --snapshots first")
                 model, bound = gr.pod_model(sector, ops, np.load(snaps), r, cache_dir="results/cache")
                 C = gr.reduced_damping(model, sector, ops, case.damping)
-                runs[key] = gr.reduced_run(model, C, case, args.rom_step, 2e3 * np.pi * args.rom_cap).to_json()
+                runs[key] = gr.reduced_run(model, C, case, args.rom_step, cap).to_json()
                 runs[key]["details"]["pod_bound"] = bound
                 save()
             report(case, key, runs[key])
         for r_c, g in ((r_c, g) for r_c in args.r_c for g in args.global_md):
+            hr = "" if args.cubature is None else (f" cubature {args.cubature:g} train "
+                                                    + "/".join(f"{w:g}" for w in args.train_speeds))
             key = (f"rom r_c {r_c}" + ("" if g == 3 else f" global md {g}")
-                   + f" cap {args.rom_cap:g} h {args.rom_step:.3g}")
+                   + f"{hr} cap {args.rom_cap:g} h {args.rom_step:.3g}")
             if key not in runs:
-                config = ReductionConfig(r_c=r_c, r_md=0, criterion="MI2b", global_md_modes=g, forces="intrusive")
-                model, _ = build_reduced_model(sector, config, ops=ops, cache_dir="results/cache")
-                C = gr.reduced_damping(model, sector, ops, case.damping)
-                runs[key] = gr.reduced_run(model, C, case, args.rom_step, 2e3 * np.pi * args.rom_cap).to_json()
+                if (r_c, g) not in models:                # the cases differ by their speed alone: built once
+                    config = ReductionConfig(r_c=r_c, r_md=0, criterion="MI2b", global_md_modes=g, forces="intrusive")
+                    model, _ = build_reduced_model(sector, config, ops=ops, cache_dir="results/cache")
+                    C, info = gr.reduced_damping(model, sector, ops, case.damping), None
+                    if args.cubature is not None:
+                        train = full_order_stem(ckpts, case, f"{key} training")
+                        model, info = gr.cubature_model(model, C, sector, case, args.rom_step, cap, args.cubature,
+                                                        args.train_speeds,
+                                                        checkpoint=train.with_name(train.name + ".npz"))
+                    models[r_c, g] = model, C, info
+                model, C, info = models[r_c, g]
+                runs[key] = gr.reduced_run(model, C, case, args.rom_step, cap).to_json()
+                if info is not None:
+                    runs[key]["details"]["cubature"] = info
                 save()
             report(case, key, runs[key])
         save()                                    # merged with the other runs of this case on disk

@@ -47,7 +47,8 @@ def test_a_run_that_does_not_settle_is_marked_not_steady(ci_rom):
                                           ({"law": "rayleigh"}, "damping law"), ({"revolutions": 2}, "revolutions"),
                                           ({"revolutions": 8.5}, "revolutions"),
                                           ({"ramp_revolutions": 7.0}, "ramp_revolutions"),
-                                          ({"tolerance": 0.0}, "tolerance"), ({"bump_mm": 5.0}, "bump_mm")])
+                                          ({"tolerance": 0.0}, "tolerance"), ({"bump_mm": 5.0}, "bump_mm"),
+                                          ({"hyperelastic": "mooney-rivlin"}, "hyperelastic")])
 def test_bad_cases_are_refused(kwargs, word):
     with pytest.raises(ValueError, match=word):
         SteadyCase(**{"speed": 1280.0, **kwargs})
@@ -96,3 +97,37 @@ def test_runs_are_compared_only_where_both_are_steady():
     assert rows["full"]["error"] is None
     with pytest.raises(ValueError, match="reference must be one of"):
         compare_runs(case, runs, "fom")
+
+
+def test_the_full_order_runs_the_cases_hyperelastic_law(ci_blade, ci_ops):
+    """The case names its full order's law (the label too, where it is not SVK's), and operators of another law are
+    refused before any step; the laws a case may name are the forms layer's."""
+    from rotor37_rom import forms
+    from rotor37_rom.studies.gnl_reference import HYPERELASTIC_LAWS, full_order_run
+
+    assert sorted(HYPERELASTIC_LAWS) == sorted(forms.HYPERELASTIC_LAWS)
+    neo = SteadyCase(1280.0, hyperelastic="neo-hookean")
+    assert neo.label().endswith("neo-hookean") and "svk" not in SteadyCase(1280.0).label()
+    with pytest.raises(ValueError, match="operators' law is 'svk'"):
+        full_order_run(ci_blade, ci_ops, neo, 2e-6)
+
+
+def test_the_cubature_model_is_trained_on_its_own_runs(ci_blade, ci_rom, tmp_path):
+    """Trained on two revolutions of the model's own exact run (no full order), the point cubature keeps the
+    training forces to its tolerance with fewer points than the exact quadrature, removes its training checkpoint and
+    says what it was trained on; bad tolerances, speeds and lengths are refused in one line."""
+    from rotor37_rom.studies.gnl_reference import cubature_model
+
+    case = SteadyCase(2500.0, revolutions=3)
+    C = np.zeros_like(ci_rom.K)
+    ckpt = tmp_path / "train.npz"
+    model, info = cubature_model(ci_rom, C, ci_blade, case, 4e-7, 2e3 * np.pi * 120, 1e-3, [2500.0],
+                                 train_revolutions=2, checkpoint=ckpt)
+    assert info["training_error"] <= 1e-3 and 0 < info["points"] < info["quadrature_points"]
+    assert "2500" in model.metadata["hyper_reduction"]["label"] and not ckpt.exists()
+    for kwargs, word in (({"tol": 0.0}, "tol"), ({"train_speeds": []}, "train_speeds"),
+                         ({"train_speeds": [-1.0]}, "train_speeds"), ({"train_revolutions": 1}, "train_revolutions"),
+                         ({"train_revolutions": 2.5}, "train_revolutions")):
+        args = {"tol": 1e-3, "train_speeds": [2500.0], "train_revolutions": 2, **kwargs}
+        with pytest.raises(ValueError, match=word):
+            cubature_model(ci_rom, C, ci_blade, case, 4e-7, 1e6, **args)

@@ -26,6 +26,7 @@ import scipy.sparse as sp
 
 from rotor37_rom.dynamics.casing import (Casing, casing_clearance, check_hand, contact_frames, friction_power,
                                          node_angles, ramp_rate)
+from rotor37_rom import forms
 from rotor37_rom.disk.symmetry import repeating_sector_maps
 from rotor37_rom.dynamics.damping import LowRankDamping, ModalLaw
 from rotor37_rom.dynamics.newmark import Newmark, StepContact
@@ -312,7 +313,9 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
                                                        casing.ramp_fraction, casing.ramp_level, casing.width,
                                                        casing.cone_slope, n_c, float(contact.theta0.sum())])
                          + fingerprint + ([] if damping is None else [-4.0, damping.low, damping.high,
-                                                                     damping.n_low, damping.n_modes]))
+                                                                     damping.n_low, damping.n_modes])
+                         + ([] if system.ops.law == "svk"
+                            else [-5.0, 1.0 + sorted(forms.HYPERELASTIC_LAWS).index(system.ops.law)]))
     start, saved = 1, time.perf_counter()
     if checkpoint is not None and Path(checkpoint).is_file():
         with np.load(checkpoint) as data:

@@ -25,15 +25,20 @@ from rotor37_rom.dynamics.casing import DIRECTIONS, Casing
 from rotor37_rom.dynamics.damping import ModalLaw, damping_law
 from rotor37_rom.post.steady import Steadiness, steadiness
 
-__all__ = ["SteadyCase", "SteadyRun", "full_order_run", "reduced_run", "reduced_damping", "pod_model",
-           "revolution_peaks", "compare_runs"]
+#: the full order's hyperelastic laws (``forms.HYPERELASTIC_LAWS``, named here without importing UFL)
+HYPERELASTIC_LAWS = ("svk", "neo-hookean")
+
+__all__ = ["SteadyCase", "SteadyRun", "full_order_run", "reduced_run", "reduced_damping", "cubature_model",
+           "pod_model", "revolution_peaks", "compare_runs"]
 
 
 @dataclasses.dataclass(frozen=True)
 class SteadyCase:
     """One steady-state question: the blade at ``speed`` (rad/s) under the paper's casing (clearance 0.5 mm, bumps
     ``bump_mm``), Coulomb ``mu``, contact normal ``direction``, damping law ``law`` (``dynamics.damping.DAMPING_LAWS``),
-    run for ``revolutions`` at most, steady when the map quantity changes by less than ``tolerance`` a revolution."""
+    run for ``revolutions`` at most, steady when the map quantity changes by less than ``tolerance`` a revolution.
+    ``hyperelastic``: the full order's law (``forms.HYPERELASTIC_LAWS``: 'svk', the paper's and the reduced models',
+    or 'neo-hookean', the second law against which SVK's softening in compression is judged)."""
 
     speed: float
     mu: float = 0.0
@@ -43,6 +48,7 @@ class SteadyCase:
     ramp_revolutions: float = 1.0
     tolerance: float = 0.02
     bump_mm: float = 0.625
+    hyperelastic: str = "svk"
 
     def __post_init__(self):
         real_number("speed", self.speed, 1.0, 5000.0, unit=" rad/s")
@@ -55,6 +61,8 @@ class SteadyCase:
         real_number("ramp_revolutions", self.ramp_revolutions, 0.0, self.revolutions - 2, open_low=True)
         real_number("tolerance", self.tolerance, 0.0, 0.5, open_low=True)
         real_number("bump_mm", self.bump_mm, 0.0, 4.9)
+        if self.hyperelastic not in HYPERELASTIC_LAWS:
+            raise ValueError(f"hyperelastic must be one of {', '.join(HYPERELASTIC_LAWS)}, got {self.hyperelastic!r}")
 
     @property
     def duration(self) -> float:
@@ -69,7 +77,8 @@ class SteadyCase:
                       ramp_fraction=self.ramp_revolutions / self.revolutions)
 
     def label(self) -> str:
-        return f"{self.speed:g} rad/s mu {self.mu:g} {self.direction} {self.law} {self.revolutions} rev"
+        law = "" if self.hyperelastic == "svk" else f" {self.hyperelastic}"
+        return f"{self.speed:g} rad/s mu {self.mu:g} {self.direction} {self.law} {self.revolutions} rev{law}"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -93,11 +102,15 @@ def full_order_run(sector, ops, case: SteadyCase, h: float, rho_inf: float = 0.8
                    snapshots_per_revolution: int = 0) -> tuple[SteadyRun, np.ndarray | None]:
     """The full order at ``case`` with step h (s), generalised alpha ``rho_inf``: the run and, with
     ``snapshots_per_revolution``, its field snapshots (n_snap, n_dofs) for a POD basis (else None). ``checkpoint``:
-    an .npz path the run saves to and resumes from."""
+    an .npz path the run saves to and resumes from. ``ops`` must be the case's law (``fem.create_svk_operators(
+    sector, law=case.hyperelastic)``)."""
     from rotor37_rom.dynamics.casing import contact_frames
     from rotor37_rom.fem.periodic import solve_repeating_newmark
 
     real_number("h", h, 1e-8, 1e-4, unit=" s")
+    if getattr(ops, "law", None) != case.hyperelastic:
+        raise ValueError(f"ops: the case's full order is {case.hyperelastic!r}, the operators' law is "
+                         f"{getattr(ops, 'law', None)!r}")
     casing = case.casing()
     n_steps = int(round(case.duration / h))
     every = n_steps if not snapshots_per_revolution else max(1, n_steps // (case.revolutions
@@ -111,7 +124,7 @@ def full_order_run(sector, ops, case: SteadyCase, h: float, rho_inf: float = 0.8
                             sector.blade_frame_angle())[0][0]
     u = res.tip[:, 0, 0, :] @ normal
     on = res.lam > 0
-    details = {"model": "full order", "h": h, "rho_inf": rho_inf, "steps": n_steps, "dofs": int(sector.n_dofs),
+    details = {"model": "full order", "hyperelastic": case.hyperelastic, "h": h, "rho_inf": rho_inf, "steps": n_steps, "dofs": int(sector.n_dofs),
                "factorisations": int(res.refreshes), "newton_iterations": int(res.iterations.sum()),
                "contact_steps": int(on.any(axis=1).sum()), "max_penetration": res.max_penetration,
                "max_multiplier": float(res.lam.max()), "wall_run_s": res.wall}
@@ -152,6 +165,44 @@ def reduced_run(model, C: np.ndarray, case: SteadyCase, h: float, cap: float, re
     details = {"model": f"reduced r = {model.r}", "h": scheme.h, "cap_hz": cap / (2 * np.pi), "steps": n_steps,
                "diverged": bool(res.diverged_step[0] >= 0), "max_penetration": float(res.max_penetration[0])}
     return SteadyRun(t, u, steadiness(t, u, case.speed, case.tolerance), time.perf_counter() - t0, details)
+
+
+def cubature_model(model, C: np.ndarray, sector, case: SteadyCase, h: float, cap: float, tol: float,
+                   train_speeds, train_revolutions: int = 3, checkpoint=None):
+    """The reduced model with its exact GNL forces replaced by a point cubature (``reduction.builder.hyper_reduce``)
+    trained on its own exact runs (damping ``C``, the explicit scheme at step h and cap ``cap`` rad/s) at
+    ``train_speeds`` for ``train_revolutions`` each under ``case``'s casing (its ramp over its first revolutions):
+    no full-order run enters it. ``checkpoint``: the training runs' checkpoint (.npz), removed once trained.
+    Returns (model, report: cubature points, quadrature points, training error, states, seconds)."""
+    from pathlib import Path
+
+    from rotor37_rom.dynamics.explicit import CentralDifference, contact_training_states
+    from rotor37_rom.reduction.builder import hyper_reduce
+
+    real_number("tol", tol, 1e-10, 0.1, open_low=True)
+    speeds = np.atleast_1d(np.asarray(train_speeds, float))
+    if speeds.size == 0:
+        raise ValueError("train_speeds: give at least one training speed")
+    for w in speeds:
+        real_number("train_speeds", w, 1.0, 5000.0, unit=" rad/s")
+    if not (isinstance(train_revolutions, (int, np.integer)) and case.ramp_revolutions < train_revolutions <= 50):
+        raise ValueError(f"train_revolutions must be an integer in ({case.ramp_revolutions:g}, 50] (past the "
+                         f"casing's ramp), got {train_revolutions!r}")
+    t0 = time.perf_counter()
+    train_case = dataclasses.replace(case, revolutions=max(3, int(train_revolutions)))
+    casing = dataclasses.replace(train_case.casing(), ramp_fraction=case.ramp_revolutions / train_revolutions)
+    scheme = CentralDifference(dataclasses.replace(model, C=np.asarray(C, float)), nonlinear=True, damping=True,
+                               frequency_cap=cap, h=h, force=True)
+    Q_train, _ = contact_training_states(scheme, speeds, casing, float(train_revolutions), checkpoint=checkpoint,
+                                         checkpoint_seconds=300.0)
+    reduced, rep = hyper_reduce(sector, model, Q_train, tol=tol, level="point",
+                                label=f"steady GNL runs {speeds.tolist()} x {train_revolutions} rev, {case.law} "
+                                      f"damping, mu = {case.mu:g}, {case.direction}")
+    if checkpoint is not None:
+        Path(checkpoint).unlink(missing_ok=True)
+    return reduced, {"points": int(rep["points"]), "quadrature_points": int(rep["exact"].w.size),
+                     "training_error": float(rep["result"].training_error), "states": int(Q_train.shape[1]),
+                     "seconds": time.perf_counter() - t0}
 
 
 def pod_model(sector, ops, snapshots: np.ndarray, r: int, cache_dir=None):
