@@ -11,10 +11,11 @@ results/bench_gnl_steady.ckpt/ every 10 min, and the same command resumes them (
     python benchmarks/bench_gnl_steady.py --speeds 1280 --no-full-order --r-c 25       # the maps' r = 55: minutes
     python benchmarks/bench_gnl_steady.py --speeds 1280 1450 --r-c 25 --global-md 3 10 --pod 55   # against it
     python benchmarks/bench_gnl_steady.py --speeds 1280 1450 --no-full-order --global-md 10 --cubature 1e-4
-    python benchmarks/bench_gnl_steady.py --speeds 1280 --hyperelastic neo-hookean --r-c     # the second law's full order
+    python benchmarks/bench_gnl_steady.py --speeds 1280 --hyperelastic neo-hookean --r-c   # the second law's full order
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 from pathlib import Path
@@ -83,6 +84,7 @@ def main(argv=None) -> int:
     args, cases = parse(argv)
     before_work({"results": RESULTS.parent})
     from rotor37_rom import fem
+    from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model
     from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
     from rotor37_rom.studies import gnl_reference as gr
 
@@ -143,11 +145,20 @@ def main(argv=None) -> int:
                     config = ReductionConfig(r_c=r_c, r_md=0, criterion="MI2b", global_md_modes=g, forces="intrusive")
                     model, _ = build_reduced_model(sector, config, ops=ops, cache_dir="results/cache")
                     C, info = gr.reduced_damping(model, sector, ops, case.damping), None
-                    if args.cubature is not None:
-                        train = full_order_stem(ckpts, case, f"{key} training")
-                        model, info = gr.cubature_model(model, C, sector, case, args.rom_step, cap, args.cubature,
-                                                        args.train_speeds,
-                                                        checkpoint=train.with_name(train.name + ".npz"))
+                    if args.cubature is not None:          # trained once for every speed, kept for the next run
+                        name = (f"cubature r_c {r_c} md {g}{hr} mu {case.mu:g} {case.direction} {case.law} "
+                                f"cap {args.rom_cap:g} h {args.rom_step:.3g}")
+                        stem = ckpts / name.replace(" ", "_").replace("/", "-")
+                        kept = stem.with_name(stem.name + ".npz")
+                        if kept.exists():
+                            model = load_reduced_model(kept)
+                        else:
+                            model, info = gr.cubature_model(model, C, sector, case, args.rom_step, cap, args.cubature,
+                                                            args.train_speeds,
+                                                            checkpoint=stem.with_name(stem.name + ".training.npz"))
+                            model = dataclasses.replace(model, metadata={**model.metadata, "steady_cubature": info})
+                            save_reduced_model(model, kept)
+                        info = model.metadata["steady_cubature"]
                     models[r_c, g] = model, C, info
                 model, C, info = models[r_c, g]
                 runs[key] = gr.reduced_run(model, C, case, args.rom_step, cap).to_json()
