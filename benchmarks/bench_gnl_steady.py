@@ -48,6 +48,8 @@ def parse(argv):
     p.add_argument("--rom-cap", type=float, default=120.0, help="reduced models' frequency cap (kHz), in [1, 1e4]")
     p.add_argument("--pod", type=int, nargs="*", default=[], help="POD-Galerkin models of these ranks from the full "
                    "order's snapshots at the largest --h-full (run with --snapshots first), each in [24, 400]")
+    p.add_argument("--energy", type=float, default=None, help="carry each finished full-order run on for this many "
+                   "revolutions, in (0, 20], and close its energy balance (studies.gnl_reference.full_order_energy)")
     p.add_argument("--hyperelastic", default="svk", help="the full order's law: svk or neo-hookean (the full order "
                    "alone: the reduced models are SVK's)")
     p.add_argument("--cubature", type=float, default=None, help="run the --r-c models on a point cubature of this "
@@ -62,6 +64,8 @@ def parse(argv):
                                  ("--train-speeds", args.train_speeds, 1.0, 5000.0)):
         for v in values:
             real_number(name, v, lo, hi)
+    if args.energy is not None:
+        real_number("--energy", args.energy, 0.0, 20.0, open_low=True)
     if args.cubature is not None:
         real_number("--cubature", args.cubature, 0.0, 0.1, open_low=True)
     from rotor37_rom.studies.gnl_reference import SteadyCase
@@ -118,6 +122,11 @@ def main(argv=None) -> int:
                 if snaps is not None:
                     np.save(stem.with_name(stem.name + ".snapshots.npy"), snaps)
                 runs[key] = run.to_json()
+                save()
+            if args.energy is not None and runs[key].get("energy", {}).get("revolutions") != args.energy:
+                stem = full_order_stem(ckpts, case, key)
+                runs[key]["energy"] = gr.full_order_energy(sector, ops, case, h, args.rho_inf,
+                                                           stem.with_name(stem.name + ".npz"), args.energy)
                 save()
             report(case, key, runs[key])
         for r in args.pod:

@@ -39,10 +39,12 @@ from .fields import (cell_midpoints, cell_vertices, cells_touching_points, displ
 from .operators import (JIT_PARAMS, MASS_DIAGONAL, SvkOperators, assemble_coriolis, assemble_free_operators,
                         assemble_mass, assemble_scalar, assemble_spin_softening, assemble_stiffness, assemble_tangent,
                         assemble_tangent_scipy, assemble_vector,
-                        create_svk_operators, evaluate_forces, evaluate_second_derivative, facet_centroid,
+                        create_svk_operators, evaluate_forces, evaluate_second_derivative, evaluate_strain_energy,
+                        facet_centroid, strain_energy_form,
                         free_dofs, gather_dof_values, patch_load, petsc_to_scipy, quadrature_gradients,
                         scipy_to_petsc, tip_patch_interface)
-from .periodic import RepeatingSectors, sector_harmonic_load, solve_repeating_newmark
+from .periodic import (CasingContact, NewmarkScheme, RepeatingNewmark, RepeatingSectors, SectorLoad,
+                       sector_harmonic_load, solve_repeating_newmark)
 from .sector import (MissingMaterial, Sector, build_on_rank0, clamp_cell_group, create_blade_sector,
                      create_sector_from_file,
                      create_sector_from_gmsh, create_sector_from_mesh, locate_cyclic_pairs, tip_node_names,
@@ -57,7 +59,8 @@ __all__ = [
     "create_sector_from_mesh",
     "tip_node_names", "create_svk_operators", "assemble_stiffness", "assemble_mass", "assemble_vector",
     "assemble_scalar", "gather_dof_values", "free_dofs", "petsc_to_scipy", "scipy_to_petsc",
-    "assemble_free_operators", "evaluate_forces", "evaluate_second_derivative", "assemble_tangent_scipy",
+    "assemble_free_operators", "evaluate_forces", "evaluate_second_derivative", "strain_energy_form",
+    "evaluate_strain_energy", "assemble_tangent_scipy",
     "assemble_tangent", "assemble_spin_softening", "assemble_coriolis",
     "quadrature_gradients", "solve_eigenproblem", "compute_clamped_modes", "solve_static", "rotating_modes",
     "reduced_coriolis",
@@ -66,7 +69,8 @@ __all__ = [
     "root_junction", "MASS_DIAGONAL", "JIT_PARAMS",
     "create_disk_sector", "create_annular_sector", "locate_cyclic_pairs", "assemble_cyclic_operators", "CyclicModes",
     "solve_cyclic_modes", "sector_fields", "clamp_cell_group", "build_on_rank0", "CyclicOperators",
-    "RepeatingSectors", "solve_repeating_newmark", "sector_harmonic_load", "write_sector_mesh", "facet_centroid",
+    "RepeatingSectors", "RepeatingNewmark", "NewmarkScheme", "SectorLoad", "CasingContact", "solve_repeating_newmark",
+    "sector_harmonic_load", "write_sector_mesh", "facet_centroid",
     "patch_load", "static_compliance", "tip_patch_interface", "create_ring_sector", "cyclic_projector",
     "centrifugal_state", "rotating_cyclic_operators", "reduced_rotation_terms",
 ]

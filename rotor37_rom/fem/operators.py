@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 __all__ = ["SvkOperators", "create_svk_operators", "assemble_stiffness", "assemble_mass", "assemble_vector",
            "assemble_scalar", "facet_centroid", "patch_load", "tip_patch_interface", "gather_dof_values", "free_dofs",
            "petsc_to_scipy", "scipy_to_petsc", "assemble_free_operators", "evaluate_forces",
-           "evaluate_second_derivative", "assemble_tangent_scipy", "assemble_tangent", "assemble_spin_softening",
+           "evaluate_second_derivative", "strain_energy_form", "evaluate_strain_energy", "assemble_tangent_scipy", "assemble_tangent", "assemble_spin_softening",
            "assemble_coriolis", "quadrature_gradients", "MASS_DIAGONAL", "JIT_PARAMS"]
 
 MASS_DIAGONAL = 1.0e-14
@@ -59,6 +59,7 @@ class SvkOperators:
     d3: object
     constants: dict
     law: str = "svk"
+    quadrature_degree: int | None = None
 
 
 def create_svk_operators(sector: Sector, quadrature_degree: int | None = None, law: str = "svk") -> SvkOperators:
@@ -91,7 +92,7 @@ def create_svk_operators(sector: Sector, quadrature_degree: int | None = None, l
         stiffness=compile_(forms.linear_stiffness(v, du, lmbda, mu, dx)),
         mass=compile_(forms.mass(v, du, rho, dx)),
         d2=d2, d3=d3,
-        constants={"lambda": lmbda, "mu": mu, "rho": rho}, law=law,
+        constants={"lambda": lmbda, "mu": mu, "rho": rho}, law=law, quadrature_degree=quadrature_degree,
     )
 
 
@@ -318,6 +319,24 @@ def evaluate_forces(sector: Sector, ops: SvkOperators, fields: np.ndarray, which
         out[k] = assemble_vector(form).getArray(readonly=True)
     ops.u.x.array[:] = 0.0
     return out
+
+
+def strain_energy_form(sector: Sector, ops: SvkOperators):
+    """The compiled strain energy (J) of ``ops``' law at ``ops.u``, at the quadrature of its forces: the potential of
+    its internal force, f_int = dE/du."""
+    metadata = {} if ops.quadrature_degree is None else {"quadrature_degree": ops.quadrature_degree}
+    dx = ufl.dx(domain=sector.mesh, metadata=metadata)
+    energy = forms.hyperelastic_law(ops.law).strain_energy(ops.u, ops.constants["lambda"], ops.constants["mu"], dx)
+    return fem.form(energy, jit_params=JIT_PARAMS)
+
+
+def evaluate_strain_energy(sector: Sector, ops: SvkOperators, form, u: np.ndarray) -> float:
+    """The strain energy (J) of the sector's displacement field u (n_dofs,), ``form`` from ``strain_energy_form``."""
+    _require_serial(sector, "evaluate_strain_energy")
+    ops.u.x.array[:] = u
+    value = float(fem.assemble_scalar(form))
+    ops.u.x.array[:] = 0.0
+    return value
 
 
 def evaluate_second_derivative(sector: Sector, ops: SvkOperators, w1: np.ndarray, w2: np.ndarray,

@@ -34,12 +34,13 @@ from rotor37_rom.interruption import checkpointing, requested, stop_if_requested
 from rotor37_rom.npz import save_npz
 
 from .operators import (SvkOperators, _require_serial, assemble_mass, assemble_stiffness, assemble_tangent_scipy,
-                        create_svk_operators, evaluate_forces, free_dofs, petsc_to_scipy)
+                        create_svk_operators, evaluate_forces, evaluate_strain_energy, free_dofs, petsc_to_scipy,
+                        strain_energy_form)
 from .sector import Sector
 from .solvers import mumps_solver, slepc_eigenpairs
 
-__all__ = ["RepeatingSectors", "RepeatingSectorResult", "ContactOperators", "solve_repeating_newmark",
-           "sector_harmonic_load"]
+__all__ = ["RepeatingSectors", "RepeatingSectorResult", "ContactOperators", "RepeatingNewmark", "NewmarkScheme",
+           "SectorLoad", "CasingContact", "solve_repeating_newmark", "sector_harmonic_load"]
 
 LOG = logging.getLogger(__name__)
 
@@ -204,6 +205,233 @@ def _envelope(t: float, ramp: float) -> float:
     return 1.0 if t >= ramp else 0.5 * (1.0 - np.cos(np.pi * t / ramp))
 
 
+@dataclasses.dataclass(frozen=True)
+class NewmarkScheme:
+    """The implicit scheme and its Newton: ``rho_inf`` None, Newmark's average acceleration (beta = 1/4, gamma =
+    1/2, no numerical dissipation), or generalised alpha's spectral radius at infinite frequency in [0, 1] (Chung &
+    Hulbert 1993); Newton stops at |r| <= max(rtol x max(|f_int|, |M a|, |f|, |f_contact|), atol) (atol in N: the
+    floor the internal forces' round-off sets while the load is small), after max_iterations at most."""
+
+    rho_inf: float | None = None
+    rtol: float = 1e-8
+    atol: float = 1e-6
+    max_iterations: int = 30
+
+    def __post_init__(self):
+        if self.rho_inf is not None and not 0.0 <= self.rho_inf <= 1.0:
+            raise ValueError(f"rho_inf must be in [0, 1] (or None: Newmark), got {self.rho_inf}")
+
+
+@dataclasses.dataclass(frozen=True)
+class SectorLoad:
+    """A load on every sector carried: ``dof`` the sector DOF loaded (e.g. node LE's e_z, in the sector's frame) or a
+    sector load vector (n_dofs,) per unit amplitude (e.g. ``patch_load``); ``amplitude`` t -> (n_repeat,) the force
+    on each sector (N), e.g. ``sector_harmonic_load``."""
+
+    dof: int | np.ndarray
+    amplitude: Callable[[float], np.ndarray]
+
+
+@dataclasses.dataclass(frozen=True)
+class CasingContact:
+    """The tip nodes touch ``casing``, the rotor turning at ``omega`` (rad/s); the ovalization ramp (eq. 38) is set
+    for a run of ``duration`` s (None: the run's n_steps dt), as ``dynamics.explicit.simulate`` sets it;
+    ``interface`` None, the nodes' own displacements, or a (3 n_tip, n_dofs) matrix C: the casing touches the patch
+    means C u (``fem.tip_patch_interface``) and pushes with C^T lambda."""
+
+    casing: Casing
+    omega: float
+    duration: float | None = None
+    interface: object = None
+
+
+class RepeatingNewmark:
+    """The full order's transient problem: n_repeat sectors closed on themselves (or one blade, n_repeat = 1),
+    ``RepeatingSectors``, from rest under a ``SectorLoad`` and/or a ``CasingContact``, with a
+    ``dynamics.damping.ModalLaw`` (None: undamped), SVK's or ``ops``' law (exact tangent; ``nonlinear`` False: linear
+    K), stepped by ``dynamics.newmark.Newmark`` under a ``NewmarkScheme`` at dt for n_steps.
+
+    ``start()`` is the state at rest, ``step(k, x, v, a, touching)`` the step to t_k = k dt, ``run()`` the whole run
+    (checkpointed), ``stepper`` the ``Newmark`` itself (``dynamics.energy.record_run`` runs it), ``strain_energy(x)``
+    the potential of its internal force. Generalised alpha writes equilibrium at its alpha point, the internal forces
+    as (1 - alpha_f) f(x_n+1) + alpha_f f(x_n), the contact multipliers as one force there (the result's ``lam`` and
+    friction power are alpha-point quantities); the constraint stays on x_n+1."""
+
+    def __init__(self, sector: Sector, n_repeat: int, dt: float, n_steps: int, *, ops: SvkOperators | None = None,
+                 nonlinear: bool = True, load: SectorLoad | None = None, contact: CasingContact | None = None,
+                 damping: ModalLaw | None = None, scheme: NewmarkScheme = NewmarkScheme()):
+        if not (dt > 0 and n_steps >= 1):
+            raise ValueError(f"dt must be > 0 s and n_steps >= 1, got {dt}, {n_steps}")
+        if contact is not None and not (contact.omega is not None and np.isfinite(contact.omega)
+                                        and contact.omega > 0):
+            raise ValueError(f"omega must be an angular speed > 0 rad/s with a casing, got {contact.omega}")
+        if damping is not None and not isinstance(damping, ModalLaw):
+            raise ValueError(f"damping must be a dynamics.damping.ModalLaw or None, got {type(damping).__name__}")
+        self.sector, self.n_repeat, self.dt, self.n_steps = sector, n_repeat, dt, n_steps
+        self.nonlinear, self.load, self.damping, self.scheme = nonlinear, load, damping, scheme
+        self.load_key = -1.0
+        if load is not None:
+            if np.ndim(load.dof) == 0:
+                unit, self.load_key = np.eye(1, sector.n_dofs, int(load.dof)).ravel(), float(load.dof)
+            else:
+                unit = np.asarray(load.dof, dtype=float)
+                if unit.shape != (sector.n_dofs,):
+                    raise ValueError(f"a load vector must have the sector's {sector.n_dofs} DOFs, got {unit.shape}")
+                self.load_key = -2.0 - float(unit @ np.linspace(1.0, 2.0, unit.size))  # a vector's fingerprint
+        self.system = system = RepeatingSectors(sector, n_repeat, ops)
+        keep = system.keep
+        if load is None:
+            def force(t):
+                return np.zeros(keep.size)
+        else:
+            f_unit = [P.T @ unit for P in system.maps]
+
+            def force(t):
+                return sum(a * f for a, f in zip(load.amplitude(t), f_unit))
+
+        self.casing = None if contact is None else contact.casing
+        self.omega = None if contact is None else contact.omega
+        self.interface = _contact_interface(sector, None if contact is None else contact.interface)
+        self.contact = None if contact is None else system.contact_operators(contact.casing, self.interface)
+        step_contact = None
+        if contact is not None:
+            casing, co = contact.casing, self.contact
+            self.duration = n_steps * dt if contact.duration is None else float(contact.duration)
+            if not self.duration > 0:
+                raise ValueError(f"duration must be > 0 s, got {self.duration}")
+            alpha = float(ramp_rate(self.duration, casing.ramp_fraction, casing.ramp_level))
+
+            def clearance(t):
+                theta = node_angles(co.theta0, contact.omega, t, casing.rotation_sense)
+                return casing_clearance(theta, t, casing.c0, casing.p0, alpha, casing.width)
+
+            self.clearance = clearance
+            step_contact = StepContact(co.N, co.S, casing.mu, clearance)
+        self.stepper = Newmark(system.M, system.internal if nonlinear else (lambda x: system.K @ x),
+                               system.tangent if nonlinear else (lambda x: system.K),
+                               lambda A: mumps_solver(A.tocsr()), force, rho_inf=scheme.rho_inf, rtol=scheme.rtol,
+                               atol=scheme.atol, max_iterations=scheme.max_iterations, linear=not nonlinear,
+                               C=None if damping is None else system.damping(damping), contact=step_contact)
+        self._energy = None
+
+    def start(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """x, v, a at rest (the acceleration equilibrium gives there)."""
+        n = self.system.keep.size
+        return np.zeros(n), np.zeros(n), self.stepper.acceleration_at_rest()
+
+    def step(self, k: int, x, v, a, touching: bool):
+        """The step from t_k-1 to t_k: (x, v, a, Newton iterations, multipliers)."""
+        return self.stepper.step(x, v, a, k * self.dt, self.dt, touching)
+
+    def strain_energy(self, x: np.ndarray) -> float:
+        """The strain energy of all sectors at x (J), the potential of the internal force (``ops``' law; the linear
+        problem's 1/2 x.K x)."""
+        if not self.nonlinear:
+            return float(0.5 * x @ (self.system.K @ x))
+        if self._energy is None:
+            self._energy = strain_energy_form(self.sector, self.system.ops)
+        return sum(evaluate_strain_energy(self.sector, self.system.ops, self._energy, u)
+                   for u in self.system.fields(x))
+
+    def tip_values(self, per_sector: np.ndarray) -> np.ndarray:
+        """(n_repeat, n_tip, 3): the tip nodes' displacements (with an interface, the patch means C u)."""
+        tip = np.asarray(self.sector.tip_dofs)
+        if self.interface is None:
+            return per_sector[:, tip]
+        return (self.interface @ per_sector.T).T.reshape((self.n_repeat,) + tip.shape)
+
+    def signature(self, snapshot_every: int) -> np.ndarray:
+        """What a checkpoint of this run must match (every argument that changes its steps)."""
+        casing, contact, damping, sector = self.casing, self.contact, self.damping, self.sector
+        interface = self.interface
+        fingerprint = [] if interface is None else [float(np.linspace(1.0, 2.0, interface.shape[0])
+                                                          @ (interface @ np.linspace(1.0, 2.0, sector.n_dofs)))]
+        law = self.system.ops.law
+        return np.array([self.n_repeat, self.load_key, self.dt, self.n_steps, float(self.nonlinear),
+                         snapshot_every, self.system.keep.size, sector.n_dofs]
+                        + ([] if self.scheme.rho_inf is None else [self.scheme.rho_inf])
+                        + ([] if casing is None else [self.omega, self.duration, casing.c0, casing.h_b, casing.mu,
+                                                      "xrc".index(casing.direction[0]), casing.rotation_sense,
+                                                      casing.ramp_fraction, casing.ramp_level, casing.width,
+                                                      casing.cone_slope, contact.N.shape[0],
+                                                      float(contact.theta0.sum())])
+                        + fingerprint + ([] if damping is None else [-4.0, damping.low, damping.high,
+                                                                    damping.n_low, damping.n_modes])
+                        + ([] if law == "svk" else [-5.0, 1.0 + sorted(forms.HYPERELASTIC_LAWS).index(law)]))
+
+    def same_steps(self, signature: np.ndarray) -> bool:
+        """Whether a checkpoint's ``signature`` is of this run's steps, whatever its snapshot spacing."""
+        ours, theirs = self.signature(0), np.asarray(signature)
+        slot = 5                                                           # snapshot_every's place in the signature
+        return theirs.shape == ours.shape and np.array_equal(np.delete(theirs, slot), np.delete(ours, slot))
+
+    def run(self, snapshot_every: int = 20, checkpoint: str | Path | None = None,
+            checkpoint_seconds: float = 60.0) -> RepeatingSectorResult:
+        """All n_steps from rest: tip displacements every step, sector fields every ``snapshot_every`` steps.
+        ``checkpoint``: an .npz file the run saves its state to every ``checkpoint_seconds`` and resumes from (a
+        file written for another run is refused); SIGTERM or SIGINT: saved at the step, then the run stops."""
+        t_wall = time.perf_counter()
+        system, contact, stepper, n_repeat = self.system, self.contact, self.stepper, self.n_repeat
+        x, v, a = self.start()
+        tip = np.asarray(self.sector.tip_dofs)
+        tips, fields, snaps, its = [np.zeros((n_repeat,) + tip.shape)], [], [], []
+        lams = [] if contact is None else [np.zeros(contact.N.shape[0])]
+        checks = np.array([0.0, -np.inf])                                  # max penetration, friction power
+        signature = self.signature(snapshot_every)
+        start, saved, refreshes = 1, time.perf_counter(), 0
+        if checkpoint is not None and Path(checkpoint).is_file():
+            with np.load(checkpoint) as data:
+                if not np.array_equal(data["signature"], signature):
+                    raise ValueError(f"checkpoint {checkpoint} belongs to another run: remove it or give another path")
+                x, v, a = data["x"], data["v"], data["a"]
+                tips, fields = list(data["tips"]), list(data["fields"])
+                snaps, its, refreshes = list(data["snaps"]), list(data["its"]), int(data["refreshes"])
+                lams = list(data["lams"]) if contact is not None else lams
+                checks = data["checks"] if "checks" in data.files else checks
+                start = int(data["step"]) + 1
+                t_wall -= float(data["elapsed"]) if "elapsed" in data.files else 0.0   # wall of the earlier parts
+            LOG.info("resuming from %s at step %d", checkpoint, start)
+        stepper.refreshes = refreshes
+        dt, casing = self.dt, self.casing
+        with checkpointing() if checkpoint is not None else contextlib.nullcontext():
+            for k in range(start, self.n_steps + 1):
+                x_old = x
+                x, v, a, it, lam = self.step(k, x, v, a, contact is not None and lams[-1].any())
+                its.append(it)
+                per_sector = system.fields(x)
+                tips.append(self.tip_values(per_sector))
+                if contact is not None:
+                    lams.append(lam)
+                    checks[0] = max(checks[0], -(self.clearance(k * dt) - contact.N @ x).min())
+                    on = lam > 0
+                    if on.any():                                         # sliding: rotation + the node's own motion
+                        power = friction_power(casing.mu * lam, self.omega, contact.radius,
+                                               contact.S @ (x - x_old) / dt)
+                        checks[1] = max(checks[1], float(power[on].max()))
+                if k % snapshot_every == 0:
+                    fields.append(per_sector)
+                    snaps.append(k)
+                if checkpoint is not None and (time.perf_counter() - saved > checkpoint_seconds or k == self.n_steps
+                                               or requested() is not None):
+                    save_npz(checkpoint, signature=signature, x=x, v=v, a=a, tips=np.array(tips),
+                             fields=np.array(fields).reshape((-1, n_repeat, self.sector.n_dofs)),
+                             snaps=np.array(snaps, np.int64), its=np.array(its, np.int64),
+                             refreshes=stepper.refreshes, step=k, elapsed=time.perf_counter() - t_wall,
+                             lams=np.array(lams), checks=checks)
+                    saved = time.perf_counter()
+                    stop_if_requested(lambda: None)                        # saved just above
+        LOG.info("repeating-sector Newmark: %d steps, %d factorisations, %.1f s", self.n_steps, stepper.refreshes,
+                 time.perf_counter() - t_wall)
+        touched = contact is not None
+        return RepeatingSectorResult(t=np.arange(self.n_steps + 1) * dt, tip=np.array(tips), fields=np.array(fields),
+                                     snapshots=np.array(snaps, dtype=np.int64), iterations=np.array(its),
+                                     refreshes=stepper.refreshes, wall=time.perf_counter() - t_wall,
+                                     lam=np.array(lams) if touched else None,
+                                     max_penetration=float(max(checks[0], 0.0)) if touched else float("nan"),
+                                     friction_power=float(checks[1]) if touched and np.isfinite(checks[1])
+                                     else float("nan"))
+
+
 def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.ndarray | None,
                             load: Callable[[float], np.ndarray] | None, dt: float, n_steps: int,
                             nonlinear: bool = True, rtol: float = 1e-8, snapshot_every: int = 20,
@@ -212,159 +440,17 @@ def solve_repeating_newmark(sector: Sector, n_repeat: int, load_dof: int | np.nd
                             casing: Casing | None = None, omega: float | None = None,
                             duration: float | None = None, rho_inf: float | None = None,
                             contact_interface=None, damping: ModalLaw | None = None) -> RepeatingSectorResult:
-    """Implicit Newmark (beta = 1/4, gamma = 1/2, undamped) of n_repeat sectors closed on themselves (or of one
-    blade), from rest; with ``rho_inf`` the generalised-alpha scheme (Chung & Hulbert 1993) instead.
-
-    Args:
-        sector: a cyclic sector or a blade (serial); n_repeat: sectors carried (dividing N; 1 for a blade).
-        load_dof: the sector DOF loaded in every sector (e.g. node LE's e_z), in the sector's frame, or a sector
-            load vector (n_dofs,) per unit amplitude (e.g. ``patch_load``); None: no load.
-        load: t -> (n_repeat,) force on each sector's load DOF (N), e.g. ``sector_harmonic_load``; None: no load.
-        dt, n_steps: time step (s) and steps; nonlinear: SVK (exact tangent) or linear K.
-        rtol, atol: Newton stops at |r| <= max(rtol x max(|f_int|, |M a|, |f|, |f_contact|), atol) (atol in N: the
-            floor that the round-off of the internal forces sets while the load is still small).
-        checkpoint: an .npz file the run saves its state to every ``checkpoint_seconds`` and resumes from (a file
-            written for other arguments is refused).
-        casing, omega, duration: the tip nodes touch this casing, the rotor turning at omega (rad/s); the
-            ovalization ramp (eq. 38) is set for a run of ``duration`` s (default n_steps dt), as
-            ``integrator.simulate`` sets it.
-        rho_inf: None, Newmark's average acceleration (no numerical dissipation); a value in [0, 1], the
-            generalised-alpha scheme with that spectral radius at infinite frequency: second order, modes with
-            omega dt >> 1 damped by rho_inf per step, those with omega dt << 1 almost not (1 is average
-            acceleration without contact). Equilibrium is written at the alpha point, the internal forces as
-            (1 - alpha_f) f(x_n+1) + alpha_f f(x_n), the contact multipliers as one force there (their sign holds
-            there, and the result's ``lam`` and friction power are alpha-point quantities); the constraint stays
-            on x_n+1.
-            For a contact run whose tip nodes ring at frequencies the step does not resolve.
-        contact_interface: None, the casing touches the tip nodes; or a (3 n_tip, n_dofs) matrix C, the casing
-            touches the patch means C u (``fem.tip_patch_interface``) and pushes with C^T lambda; the result's
-            ``tip`` then records C u.
-        damping: None (undamped), or a ``dynamics.damping.ModalLaw`` on the carried model's lowest modes
-            (``RepeatingSectors.damping``): the reduced models get the same law by projection.
-    """
-    if not (dt > 0 and n_steps >= 1):
-        raise ValueError(f"dt must be > 0 s and n_steps >= 1, got {dt}, {n_steps}")
-    if casing is not None and not (omega is not None and np.isfinite(omega) and omega > 0):
+    """``RepeatingNewmark(...).run(...)`` with its parts as flat arguments (the callers' form before the problem
+    object): load_dof and load make a ``SectorLoad``; casing, omega, duration and contact_interface a
+    ``CasingContact``; rho_inf, rtol, atol and max_iterations a ``NewmarkScheme``."""
+    if casing is not None and omega is None:
         raise ValueError(f"omega must be an angular speed > 0 rad/s with a casing, got {omega}")
     if (load is None) != (load_dof is None):
         raise ValueError("give load_dof and load together (or neither)")
-    if rho_inf is not None and not 0.0 <= rho_inf <= 1.0:
-        raise ValueError(f"rho_inf must be in [0, 1] (or None: Newmark), got {rho_inf}")
-    if damping is not None and not isinstance(damping, ModalLaw):
-        raise ValueError(f"damping must be a dynamics.damping.ModalLaw or None, got {type(damping).__name__}")
-    load_key = -1.0
-    if load_dof is not None:
-        if np.ndim(load_dof) == 0:
-            unit, load_key = np.eye(1, sector.n_dofs, int(load_dof)).ravel(), float(load_dof)
-        else:
-            unit = np.asarray(load_dof, dtype=float)
-            if unit.shape != (sector.n_dofs,):
-                raise ValueError(f"a load vector must have the sector's {sector.n_dofs} DOFs, got {unit.shape}")
-            load_key = -2.0 - float(unit @ np.linspace(1.0, 2.0, unit.size))      # a vector's fingerprint
-    t_wall = time.perf_counter()
-    system = RepeatingSectors(sector, n_repeat, ops)
-    M, maps, keep = system.M, system.maps, system.keep
-    if load is None:
-        def force(t):
-            return np.zeros(keep.size)
-    else:
-        f_unit = [P.T @ unit for P in maps]
-
-        def force(t):
-            return sum(a * f for a, f in zip(load(t), f_unit))
-
-    interface = _contact_interface(sector, contact_interface)
-    contact = None if casing is None else system.contact_operators(casing, interface)
-    if contact is not None:
-        duration = n_steps * dt if duration is None else float(duration)
-        if not duration > 0:
-            raise ValueError(f"duration must be > 0 s, got {duration}")
-        alpha = float(ramp_rate(duration, casing.ramp_fraction, casing.ramp_level))
-        n_c = contact.N.shape[0]
-
-        def clearance(t):
-            theta = node_angles(contact.theta0, omega, t, casing.rotation_sense)
-            return casing_clearance(theta, t, casing.c0, casing.p0, alpha, casing.width)
-
-    stepper = Newmark(M, system.internal if nonlinear else (lambda x: system.K @ x),
-                      system.tangent if nonlinear else (lambda x: system.K), lambda A: mumps_solver(A.tocsr()), force,
-                      rho_inf=rho_inf, rtol=rtol, atol=atol, max_iterations=max_iterations, linear=not nonlinear,
-                      C=None if damping is None else system.damping(damping),
-                      contact=None if contact is None else StepContact(contact.N, contact.S, casing.mu, clearance))
-    x, v = np.zeros(keep.size), np.zeros(keep.size)
-    a = stepper.acceleration_at_rest()
-    refreshes = 0
-    tip = np.asarray(sector.tip_dofs)
-
-    def tip_values(per_sector):                                        # (n_repeat, n_tip, 3)
-        if interface is None:
-            return per_sector[:, tip]
-        return (interface @ per_sector.T).T.reshape((n_repeat,) + tip.shape)
-
-    tips, fields, snaps, its = [np.zeros((n_repeat,) + tip.shape)], [], [], []
-    lams = [] if contact is None else [np.zeros(n_c)]
-    checks = np.array([0.0, -np.inf])                                  # max penetration, friction power
-    fingerprint = [] if interface is None else [float(np.linspace(1.0, 2.0, interface.shape[0])
-                                                      @ (interface @ np.linspace(1.0, 2.0, sector.n_dofs)))]
-    signature = np.array([n_repeat, load_key, dt, n_steps, float(nonlinear),
-                          snapshot_every, x.size, sector.n_dofs] + ([] if rho_inf is None else [rho_inf])
-                         + ([] if casing is None else [omega, duration, casing.c0, casing.h_b, casing.mu,
-                                                       "xrc".index(casing.direction[0]), casing.rotation_sense,
-                                                       casing.ramp_fraction, casing.ramp_level, casing.width,
-                                                       casing.cone_slope, n_c, float(contact.theta0.sum())])
-                         + fingerprint + ([] if damping is None else [-4.0, damping.low, damping.high,
-                                                                     damping.n_low, damping.n_modes])
-                         + ([] if system.ops.law == "svk"
-                            else [-5.0, 1.0 + sorted(forms.HYPERELASTIC_LAWS).index(system.ops.law)]))
-    start, saved = 1, time.perf_counter()
-    if checkpoint is not None and Path(checkpoint).is_file():
-        with np.load(checkpoint) as data:
-            if not np.array_equal(data["signature"], signature):
-                raise ValueError(f"checkpoint {checkpoint} belongs to another run: remove it or give another path")
-            x, v, a = data["x"], data["v"], data["a"]
-            tips, fields = list(data["tips"]), list(data["fields"])
-            snaps, its, refreshes = list(data["snaps"]), list(data["its"]), int(data["refreshes"])
-            lams = list(data["lams"]) if contact is not None else lams
-            checks = data["checks"] if "checks" in data.files else checks
-            start = int(data["step"]) + 1
-            t_wall -= float(data["elapsed"]) if "elapsed" in data.files else 0.0   # wall of the earlier parts
-        LOG.info("resuming from %s at step %d", checkpoint, start)
-    stepper.refreshes = refreshes
-
-    # SIGTERM or SIGINT in a checkpointed run: the checkpoint written at the step, then the run stops
-    with checkpointing() if checkpoint is not None else contextlib.nullcontext():
-        for k in range(start, n_steps + 1):
-            x_old = x
-            x, v, a, it, lam = stepper.step(x, v, a, k * dt, dt, contact is not None and lams[-1].any())
-            its.append(it)
-            per_sector = system.fields(x)
-            tips.append(tip_values(per_sector))
-            if contact is not None:
-                lams.append(lam)
-                checks[0] = max(checks[0], -(clearance(k * dt) - contact.N @ x).min())
-                on = lam > 0
-                if on.any():                                         # sliding: rotation + the node's own motion
-                    power = friction_power(casing.mu * lam, omega, contact.radius, contact.S @ (x - x_old) / dt)
-                    checks[1] = max(checks[1], float(power[on].max()))
-            if k % snapshot_every == 0:
-                fields.append(per_sector)
-                snaps.append(k)
-            if checkpoint is not None and (time.perf_counter() - saved > checkpoint_seconds or k == n_steps
-                                           or requested() is not None):
-                save_npz(checkpoint, signature=signature, x=x, v=v, a=a, tips=np.array(tips),
-                         fields=np.array(fields).reshape((-1, n_repeat, sector.n_dofs)),
-                         snaps=np.array(snaps, np.int64), its=np.array(its, np.int64), refreshes=stepper.refreshes,
-                         step=k, elapsed=time.perf_counter() - t_wall, lams=np.array(lams), checks=checks)
-                saved = time.perf_counter()
-                stop_if_requested(lambda: None)                        # saved just above
-    refreshes = stepper.refreshes
-    LOG.info("repeating-sector Newmark: %d steps, %d factorisations, %.1f s", n_steps, refreshes,
-             time.perf_counter() - t_wall)
-    return RepeatingSectorResult(t=np.arange(n_steps + 1) * dt, tip=np.array(tips), fields=np.array(fields),
-                                 snapshots=np.array(snaps, dtype=np.int64), iterations=np.array(its),
-                                 refreshes=refreshes, wall=time.perf_counter() - t_wall,
-                                 lam=None if contact is None else np.array(lams),
-                                 max_penetration=float(max(checks[0], 0.0)) if contact is not None else float("nan"),
-                                 friction_power=float(checks[1]) if contact is not None and np.isfinite(checks[1])
-                                 else float("nan"))
+    problem = RepeatingNewmark(
+        sector, n_repeat, dt, n_steps, ops=ops, nonlinear=nonlinear,
+        load=None if load is None else SectorLoad(load_dof, load),
+        contact=None if casing is None else CasingContact(casing, omega, duration, contact_interface),
+        damping=damping, scheme=NewmarkScheme(rho_inf, rtol, atol, max_iterations))
+    return problem.run(snapshot_every, checkpoint, checkpoint_seconds)
 

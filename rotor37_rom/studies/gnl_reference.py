@@ -5,7 +5,8 @@ The full order is the blade's finite-element model itself (``fem.solve_repeating
 the exact SVK tangent, each iterate corrected by the multipliers that close its penetrations), the reduced models the
 maps' explicit scheme (``dynamics.explicit``). Both carry one damping operator: a ``dynamics.damping.ModalLaw`` on the
 full order (exact ratios on its lowest modes, stiffness proportional above), and its Galerkin projection V^T C V on
-the reduced model's basis V, so the damping is the same on both sides by construction, not two modal laws on two sets of modes.
+the reduced model's basis V, so the damping is the same on both sides by construction, not two modal laws on two
+sets of modes. ``full_order_energy`` carries a finished full-order run on and closes its energy balance.
 Each run goes on to its revolution limit; its map quantity (max |u_LE| over a revolution) is judged steady or "not
 steady" by ``post.steady.steadiness`` (changing by less than 2 % a revolution over the last two), never reported as a
 steady value otherwise.
@@ -28,8 +29,8 @@ from rotor37_rom.post.steady import Steadiness, steadiness
 #: the full order's hyperelastic laws (``forms.HYPERELASTIC_LAWS``, named here without importing UFL)
 HYPERELASTIC_LAWS = ("svk", "neo-hookean")
 
-__all__ = ["SteadyCase", "SteadyRun", "full_order_run", "reduced_run", "reduced_damping", "cubature_model",
-           "pod_model", "revolution_peaks", "compare_runs"]
+__all__ = ["SteadyCase", "SteadyRun", "full_order_run", "full_order_energy", "reduced_run", "reduced_damping",
+           "cubature_model", "pod_model", "revolution_peaks", "compare_runs"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -105,31 +106,82 @@ def full_order_run(sector, ops, case: SteadyCase, h: float, rho_inf: float = 0.8
     an .npz path the run saves to and resumes from. ``ops`` must be the case's law (``fem.create_svk_operators(
     sector, law=case.hyperelastic)``)."""
     from rotor37_rom.dynamics.casing import contact_frames
-    from rotor37_rom.fem.periodic import solve_repeating_newmark
 
-    real_number("h", h, 1e-8, 1e-4, unit=" s")
-    if getattr(ops, "law", None) != case.hyperelastic:
-        raise ValueError(f"ops: the case's full order is {case.hyperelastic!r}, the operators' law is "
-                         f"{getattr(ops, 'law', None)!r}")
-    casing = case.casing()
-    n_steps = int(round(case.duration / h))
-    every = n_steps if not snapshots_per_revolution else max(1, n_steps // (case.revolutions
-                                                                            * snapshots_per_revolution))
+    problem, every = _full_order_problem(sector, ops, case, h, rho_inf, snapshots_per_revolution)
     t0 = time.perf_counter()
-    res = solve_repeating_newmark(sector, 1, None, None, h, n_steps, nonlinear=True, ops=ops, casing=casing,
-                                  omega=case.speed, duration=case.duration, snapshot_every=every, rtol=1e-6,
-                                  checkpoint=checkpoint, checkpoint_seconds=600.0, rho_inf=rho_inf,
-                                  damping=case.damping)
+    res = problem.run(every, checkpoint, 600.0)
+    casing, n_steps = problem.casing, problem.n_steps
     normal = contact_frames(sector.tip_nodes[:1], casing.direction, casing.rotation_sense, casing.cone_slope,
                             sector.blade_frame_angle())[0][0]
     u = res.tip[:, 0, 0, :] @ normal
     on = res.lam > 0
-    details = {"model": "full order", "hyperelastic": case.hyperelastic, "h": h, "rho_inf": rho_inf, "steps": n_steps, "dofs": int(sector.n_dofs),
+    details = {"model": "full order", "hyperelastic": case.hyperelastic, "h": h, "rho_inf": rho_inf, "steps": n_steps,
+               "dofs": int(sector.n_dofs),
                "factorisations": int(res.refreshes), "newton_iterations": int(res.iterations.sum()),
                "contact_steps": int(on.any(axis=1).sum()), "max_penetration": res.max_penetration,
                "max_multiplier": float(res.lam.max()), "wall_run_s": res.wall}
     run = SteadyRun(res.t, u, steadiness(res.t, u, case.speed, case.tolerance), time.perf_counter() - t0, details)
     return run, (res.fields[:, 0] if snapshots_per_revolution else None)
+
+
+def _full_order_problem(sector, ops, case: SteadyCase, h: float, rho_inf: float | None, snapshots_per_revolution: int):
+    """The full order of ``case`` at step h (``fem.periodic.RepeatingNewmark``), ``ops`` of the case's law, and the
+    steps between its snapshots (all of them: none but the last)."""
+    from rotor37_rom.fem.periodic import CasingContact, NewmarkScheme, RepeatingNewmark
+
+    real_number("h", h, 1e-8, 1e-4, unit=" s")
+    if getattr(ops, "law", None) != case.hyperelastic:
+        raise ValueError(f"ops: the case's full order is {case.hyperelastic!r}, the operators' law is "
+                         f"{getattr(ops, 'law', None)!r}")
+    n_steps = int(round(case.duration / h))
+    every = n_steps if not snapshots_per_revolution else max(1, n_steps // (case.revolutions
+                                                                            * snapshots_per_revolution))
+    problem = RepeatingNewmark(sector, 1, h, n_steps, ops=ops, nonlinear=True,
+                               contact=CasingContact(case.casing(), case.speed, case.duration),
+                               damping=case.damping, scheme=NewmarkScheme(rho_inf, rtol=1e-6))
+    return problem, every
+
+
+def full_order_energy(sector, ops, case: SteadyCase, h: float, rho_inf: float | None, checkpoint,
+                      revolutions: float = 1.0) -> dict:
+    """The energy balance (``dynamics.energy``) of the full order carried on for ``revolutions`` from the end of its
+    finished run (``checkpoint``, the .npz ``full_order_run`` wrote with these arguments, with or without snapshots):
+    per revolution (J), the
+    casing's work (wall), what the impacts take (closing) and give back (opening), friction, the damping law's
+    dissipation, the change of kinetic + strain energy, the residual R (> 0: lost by the scheme) split as R = G - P + A
+    (the trapezoidal quadrature gap of the internal force, Newton's defect, generalised alpha's algorithmic
+    dissipation); and the node LE's map quantity over the window."""
+    from rotor37_rom.dynamics.energy import balance_of_run, record_run
+
+    problem, _ = _full_order_problem(sector, ops, case, h, rho_inf, 0)
+    real_number("revolutions", revolutions, 0.0, 20.0, open_low=True)
+    with np.load(checkpoint) as data:
+        if not problem.same_steps(data["signature"]):
+            raise ValueError(f"checkpoint {checkpoint} belongs to another run")
+        if int(data["step"]) != problem.n_steps:
+            raise ValueError(f"checkpoint {checkpoint}: the run is at step {int(data['step'])} of "
+                             f"{problem.n_steps}; finish it first")
+        x, v, a = data["x"], data["v"], data["a"]
+    k = int(round(revolutions * 2 * np.pi / case.speed / h))
+    t = (problem.n_steps + np.arange(k + 1)) * h
+    t0 = time.perf_counter()
+    run = record_run(problem.stepper, t, x, v, a)
+    balance = balance_of_run(problem.stepper, run, problem.strain_energy)
+    wall_s = time.perf_counter() - t0
+    per = 1.0 / revolutions
+
+    def total(y):
+        return float(per * np.sum(y))
+
+    terms = {"wall": total(balance.wall), "closing": total(balance.closing), "opening": total(balance.opening),
+             "friction": total(balance.contact_friction), "damping": total(balance.damping),
+             "external": total(balance.external), "stored": float(per * (balance.energy[-1] - balance.energy[0])),
+             "residual": total(balance.residual), "quadrature_gap": total(balance.quadrature_gap),
+             "defect": total(balance.defect), "algorithmic": total(balance.algorithmic),
+             "scale": total(balance.scale)}
+    normal = problem.contact.N @ run.x
+    return {"per_revolution_J": terms, "revolutions": revolutions, "steps": k, "wall_s": wall_s,
+            "mean_energy_J": float(np.mean(balance.energy)), "le_normal_max_m": float(np.abs(normal[0]).max())}
 
 
 def reduced_damping(model, sector, ops, law: ModalLaw) -> np.ndarray:
