@@ -127,6 +127,8 @@ def main(argv=None) -> int:
                 stem = full_order_stem(ckpts, case, key)
                 runs[key]["energy"] = gr.full_order_energy(sector, ops, case, h, args.rho_inf,
                                                            stem.with_name(stem.name + ".npz"), args.energy)
+                print(f"{case.label()} | {key}: energy per revolution (J) {json.dumps(runs[key]['energy'])}",
+                      flush=True)
                 save()
             report(case, key, runs[key])
         for r in args.pod:
