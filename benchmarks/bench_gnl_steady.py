@@ -151,27 +151,30 @@ def main(argv=None) -> int:
                                                     + "/".join(f"{w:g}" for w in args.train_speeds))
             key = (f"rom r_c {r_c}" + ("" if g == 3 else f" global md {g}")
                    + f"{hr} cap {args.rom_cap:g} h {args.rom_step:.3g}")
-            if key not in runs:
-                if (r_c, g) not in models:                # the cases differ by their speed alone: built once
-                    config = ReductionConfig(r_c=r_c, r_md=0, criterion="MI2b", global_md_modes=g, forces="intrusive")
-                    model, _ = build_reduced_model(sector, config, ops=ops, cache_dir="results/cache")
-                    C, info = gr.reduced_damping(model, sector, ops, case.damping), None
-                    if args.cubature is not None:          # trained once for every speed, kept for the next run
-                        name = (f"cubature r_c {r_c} md {g}{hr} mu {case.mu:g} {case.direction} {case.law} "
-                                f"cap {args.rom_cap:g} h {args.rom_step:.3g}")
-                        stem = ckpts / name.replace(" ", "_").replace("/", "-")
-                        kept = stem.with_name(stem.name + ".npz")
-                        if kept.exists():
-                            model = load_reduced_model(kept)
-                        else:
-                            model, info = gr.cubature_model(model, C, sector, case, args.rom_step, cap, args.cubature,
-                                                            args.train_speeds,
-                                                            checkpoint=stem.with_name(stem.name + ".training.npz"))
-                            model = dataclasses.replace(model, metadata={**model.metadata, "steady_cubature": info})
-                            save_reduced_model(model, kept)
-                        info = model.metadata["steady_cubature"]
-                    models[r_c, g] = model, C, info
-                model, C, info = models[r_c, g]
+            if (r_c, g) not in models:                    # the cases differ by their speed alone: built once
+                config = ReductionConfig(r_c=r_c, r_md=0, criterion="MI2b", global_md_modes=g, forces="intrusive")
+                model, _ = build_reduced_model(sector, config, ops=ops, cache_dir="results/cache")
+                C, info = gr.reduced_damping(model, sector, ops, case.damping), None
+                if args.cubature is not None:              # trained once for every speed, kept for the next run
+                    name = (f"cubature r_c {r_c} md {g}{hr} mu {case.mu:g} {case.direction} {case.law} "
+                            f"cap {args.rom_cap:g} h {args.rom_step:.3g}")
+                    stem = ckpts / name.replace(" ", "_").replace("/", "-")
+                    kept = stem.with_name(stem.name + ".npz")
+                    if kept.exists():
+                        model = load_reduced_model(kept)
+                    else:
+                        model, info = gr.cubature_model(model, C, sector, case, args.rom_step, cap, args.cubature,
+                                                        args.train_speeds,
+                                                        checkpoint=stem.with_name(stem.name + ".training.npz"))
+                        model = dataclasses.replace(model, metadata={**model.metadata, "steady_cubature": info})
+                        save_reduced_model(model, kept)
+                    info = model.metadata["steady_cubature"]
+                models[r_c, g] = model, C, info
+            model, C, info = models[r_c, g]
+            made = runs.get(key, {}).get("details", {}).get("model")
+            if made is not None and made != f"reduced r = {model.r}":       # kept from a model built otherwise
+                print(f"{case.label()} | {key}: the run kept was of a {made}, this model has r = {model.r}: run again")
+            if made != f"reduced r = {model.r}":
                 runs[key] = gr.reduced_run(model, C, case, args.rom_step, cap).to_json()
                 if info is not None:
                     runs[key]["details"]["cubature"] = info

@@ -3,6 +3,7 @@
     python benchmarks/speed_accuracy.py                       # all scenes (52 min from scratch on the 2-core machine)
     python benchmarks/speed_accuracy.py --scene modes clearance map-linear
     python benchmarks/speed_accuracy.py --scene disk                # the bladed disk's scenes
+    python benchmarks/speed_accuracy.py --scene gnl-steady          # read from bench_gnl_steady's full-order runs
     make speed-accuracy                                       # the same as the first line
 
 Scenes (the report's settings):
@@ -83,7 +84,7 @@ from typing import Sequence
 
 from rotor37_rom.checks import before_work, readable_file
 from rotor37_rom.cli import ArgumentParser, run_main
-from rotor37_rom.studies.speed_accuracy.scenes import DISK_SCENES, GROUPS, SCENES
+from rotor37_rom.studies.speed_accuracy.scenes import DISK_SCENES, GROUPS, REFERENCE_SCENES, SCENES
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGE = "choosing-a-model.md"          # the page whose generated block the study rewrites, in --out
@@ -91,8 +92,9 @@ PAGE = "choosing-a-model.md"          # the page whose generated block the study
 
 def build_parser() -> ArgumentParser:
     p = ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--scene", nargs="+", choices=SCENES + DISK_SCENES + tuple(GROUPS), default=["all"],
-                   help="scenes to run: all (the single blade's, the default), disk (the bladed disk's) or names")
+    p.add_argument("--scene", nargs="+", choices=SCENES + DISK_SCENES + REFERENCE_SCENES + tuple(GROUPS),
+                   default=["all"], help="scenes to run: all (the single blade's, the default), disk (the bladed "
+                   "disk's) or names (gnl-steady: read from bench_gnl_steady's full-order runs)")
     p.add_argument("--json", type=Path, default=ROOT / "rotor37_rom" / "data" / "speed_accuracy.json",
                    help="the study file (.json; read if it exists, the scenes not run keep their entries; default "
                         "rotor37_rom/data/speed_accuracy.json, the one choose_model reads)")

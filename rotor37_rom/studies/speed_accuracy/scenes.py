@@ -20,15 +20,16 @@ from rotor37_rom.studies.speed_accuracy.disk_maps import scene_disk_map
 from rotor37_rom.studies.speed_accuracy.disk_modes import scene_disk_modes
 from rotor37_rom.studies.speed_accuracy.disk_stress import scene_disk_stress
 from rotor37_rom.studies.speed_accuracy.docs import write_docs
+from rotor37_rom.studies.speed_accuracy.gnl_steady import scene_gnl_steady
 from rotor37_rom.studies.speed_accuracy.study_file import SCHEMA, StudyRecord, load_or_new, write_study
 
-__all__ = ["Scene", "REGISTRY", "SCENES", "DISK_SCENES", "GROUPS", "expand_scenes", "record_choices", "run_study"]
+__all__ = ["Scene", "REGISTRY", "SCENES", "DISK_SCENES", "REFERENCE_SCENES", "GROUPS", "expand_scenes", "record_choices", "run_study"]
 
 
 @dataclasses.dataclass(frozen=True)
 class Scene:
-    """A scene of the command line: ``family`` 'blade' (in 'all') or 'disk' (in 'disk', the bladed disk's: not in
-    'all', the single-blade study's hour); ``run(ctx, study, t0)`` stores its records in ``study`` (``t0``: when the
+    """A scene of the command line: ``family`` 'blade' (in 'all'), 'disk' (in 'disk', the bladed disk's: not in
+    'all', the single-blade study's hour) or 'reference' (by name: read from a benchmark's full-order runs); ``run(ctx, study, t0)`` stores its records in ``study`` (``t0``: when the
     scene started, for its note)."""
 
     family: str
@@ -55,6 +56,11 @@ def _map(gnl: bool, ctx: StudyContext, study: StudyRecord, t0: float) -> None:
     held_out_map(ctx, maps, gnl)
     study["scenes"][name], study["scenes"][name.replace("map", "history")] = maps, history
     study["scenes"][name.replace("map", "stress")] = scene_stress(ctx, gnl, maps)
+
+
+def _gnl_steady(ctx: StudyContext, study: StudyRecord, t0: float) -> None:
+    """Read from the steady-state benchmark's results (results/bench_gnl_steady.json): nothing computed here."""
+    study["scenes"]["gnl-steady"] = scene_gnl_steady(ctx.work.parent / "bench_gnl_steady.json")
 
 
 def _stability(ctx: StudyContext, study: StudyRecord, t0: float) -> None:
@@ -113,9 +119,12 @@ REGISTRY: dict[str, Scene] = {
     "disk-map-gnl": Scene("disk", functools.partial(_disk_map, True)),
     "disk-forced-linear": Scene("disk", functools.partial(_disk_forced, False)),
     "disk-forced-gnl": Scene("disk", functools.partial(_disk_forced, True)),
+    "gnl-steady": Scene("reference", _gnl_steady),
 }
 SCENES = tuple(name for name, scene in REGISTRY.items() if scene.family == "blade")
 DISK_SCENES = tuple(name for name, scene in REGISTRY.items() if scene.family == "disk")
+#: scenes read from a benchmark's full-order runs (hours each), run by name only
+REFERENCE_SCENES = tuple(name for name, scene in REGISTRY.items() if scene.family == "reference")
 GROUPS = {"all": SCENES, "disk": DISK_SCENES}
 
 

@@ -105,7 +105,7 @@ SCENE_CONFIG = {
     **{f"{kind}-{gnl}": _MAP_CONFIG for kind in ("map", "history", "stress", "disk-map", "disk-stress")
        for gnl in ("linear", "gnl")},
     "disk-modes": _DISK_CONFIG, "disk-forced-linear": _DISK_CONFIG, "disk-forced-gnl": _DISK_CONFIG,
-    "rotating-modes": ("rotor37_rom.reduction.config", "ReductionConfig"),
+    "rotating-modes": ("rotor37_rom.reduction.config", "ReductionConfig"), "gnl-steady": _MAP_CONFIG,
 }
 # a study option that another configuration names otherwise: {(configuration class name, option): its field}
 RENAMED = {("ReductionConfig", "global_md"): "global_md_modes"}
