@@ -45,12 +45,13 @@ class ContactStep:
 
     u_n = N q at the contact nodes (rows ``rows`` of the node map), S q along the sliding; a unit normal multiplier
     moves q by WN, a unit friction multiplier by WT (W = X0, the reduced operator); the multipliers of one run solve
-    D lambda = g* on the active set (``ContactSolver``). ``run_length`` (P,) sets the ovalisation ramp (eq. 38).
+    D lambda = g* on the active set (``ContactSolver``). ``run_length`` (P,) sets the ovalisation ramp (eq. 38); None:
+    the casing's steady ovalisation from t = 0 (eq. 38 at t -> infinity: the periodic orbits').
     ``reference`` (r, P): the states the clearance is measured from (a turning blade's running state,
     ``dynamics.turning``); None: rest.
     """
 
-    def __init__(self, scheme, casings: list[Casing] | None, run_length: np.ndarray,
+    def __init__(self, scheme, casings: list[Casing] | None, run_length: np.ndarray | None,
                  reference: np.ndarray | None = None):
         nodes = scheme.model.nodes
         N, S, self.theta0, self.rows = contact_matrices(nodes, scheme.r, None if casings is None else casings[0])
@@ -62,7 +63,8 @@ class ContactStep:
         self.c0 = np.array([c.c0 for c in casings])
         self.mu = np.array([c.mu for c in casings])
         self.p0 = np.array([c.p0 for c in casings])
-        self.alpha = ramp_rate(run_length, casings[0].ramp_fraction, casings[0].ramp_level)
+        self.alpha = (np.full(len(casings), np.inf) if run_length is None
+                      else ramp_rate(run_length, casings[0].ramp_fraction, casings[0].ramp_level))
         self.sense, self.width = casings[0].rotation_sense, casings[0].width
         self.radius = np.hypot(nodes.coordinates[self.rows, 0], nodes.coordinates[self.rows, 1])
         # response to unit multipliers: normal force -n_k, friction force -s_k (times mu)
@@ -81,25 +83,13 @@ class ContactStep:
         t_n, Qpa at t_n-1), with the multipliers into ``lam_now`` and the works and extremes into ``st``."""
         N, S, mu, work = self.N, self.S, self.mu, st.work
         om = omega[active]
-        ur = N @ Qn
-        if self.shift is not None:
-            ur = ur - self.shift[:, active]
-        theta = node_angles(self.theta0[:, None], om[None, :], t1, self.sense, phase[active][None, :])
-        g = casing_clearance(theta, t1, self.c0[active], self.p0[active], self.alpha[active], self.width) - ur
-        # a run already past the blow-up limit gets no contact solve (it is stopped at the next check)
-        sane = np.isfinite(g).all(axis=0) & (np.abs(ur).max(axis=0) <= blowup_limit)
-        hits = np.nonzero((g < 0.0).any(axis=0) & sane)[0]
+        hits, lam, gap_after = self.multipliers(Qn, active, omega, phase, t1, blowup_limit)
         if not hits.size:
             return
-        nc = self.n_contact
         ps = active[hits]
         mus = mu[ps]
-        lam, gap_after = np.empty((nc, hits.size)), np.empty((nc, hits.size))
-        for k, j in enumerate(hits):
-            lam[:, k], gap_after[:, k] = self.solver.solve(mus[k], g[:, j])
         mlam = lam * mus                       # friction multipliers mu lambda
-        act = np.nonzero((lam > 0).any(axis=1))[0]  # the nodes pushed (a few of a disk's hundreds)
-        Qn[:, hits] += self.WN[:, act] @ lam[act] + self.WT[:, act] @ mlam[act]
+        Qn[:, hits] += self.push(lam, mus)
         dq = Qn[:, hits] - Qpa[:, hits]        # q_n+1 - q_n-1: the force of step n works over dq / 2
         work[0, ps] -= 0.5 * np.sum(lam * (N @ dq), axis=0)
         work[1, ps] -= 0.5 * np.sum(mlam * (S @ dq), axis=0)
@@ -114,3 +104,27 @@ class ContactStep:
         power = np.where(on, power, -np.inf).max(axis=0)
         st.fric_pow[ps] = np.where(touched, np.maximum(st.fric_pow[ps], power), st.fric_pow[ps])
         lam_now[:, ps] = lam
+
+    def multipliers(self, Qn: np.ndarray, active: np.ndarray, omega: np.ndarray, phase: np.ndarray, t1: float,
+                    blowup_limit: float = np.inf) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The contact law at t1 on the predicted states Qn (r, n_active) of the runs ``active``: (hits, the columns
+        of Qn that penetrate the casing; lam (n_c, n_hits), their normal multipliers; the gaps left after the
+        correction). A run past the blow-up limit gets none (it is stopped at the next check)."""
+        ur = self.N @ Qn
+        if self.shift is not None:
+            ur = ur - self.shift[:, active]
+        theta = node_angles(self.theta0[:, None], omega[active][None, :], t1, self.sense, phase[active][None, :])
+        g = casing_clearance(theta, t1, self.c0[active], self.p0[active], self.alpha[active], self.width) - ur
+        sane = np.isfinite(g).all(axis=0) & (np.abs(ur).max(axis=0) <= blowup_limit)
+        hits = np.nonzero((g < 0.0).any(axis=0) & sane)[0]
+        lam, gap_after = np.empty((self.n_contact, hits.size)), np.empty((self.n_contact, hits.size))
+        mus = self.mu[active[hits]]
+        for k, j in enumerate(hits):
+            lam[:, k], gap_after[:, k] = self.solver.solve(mus[k], g[:, j])
+        return hits, lam, gap_after
+
+    def push(self, lam: np.ndarray, mus: np.ndarray) -> np.ndarray:
+        """The correction of the states (r, n) by normal multipliers lam (n_c, n) with Coulomb coefficients mus
+        (n,): W N^T lam + W S^T mu lam, over the nodes pushed alone (a few of a disk's hundreds)."""
+        act = np.nonzero((lam > 0).any(axis=1))[0]
+        return self.WN[:, act] @ lam[act] + self.WT[:, act] @ (lam[act] * mus)

@@ -377,8 +377,13 @@ class CentralDifference:
         self.W[np.ix_(b, b)] = self.Kbb_inv                             # contact moves the massless boundary only
         self.Xg = self.g = None
 
-    def predict(self, Q: np.ndarray, Qp: np.ndarray, F: np.ndarray | None) -> np.ndarray:
-        if self.harmonic is not None:                     # tuned disk: one batched product over the harmonics
+    def predict(self, Q: np.ndarray, Qp: np.ndarray, F: np.ndarray | None, parts: bool = False):
+        """The states at t_n+1 before the contact correction, of P runs at t_n (Q) and t_n-1 (Qp), (r, P), under
+        the external forces F ((r,) or (r, P), None: none): X1 Q + X2 Qp + X0 (F - g(Q)) (eqs. 28-33). With
+        ``parts`` (a blade's scheme): (those states, the GNL force's part -X0 g(Q) or None), for the tangent."""
+        if self.harmonic is not None:
+            if parts:
+                raise ValueError("predict(parts=True): a blade's scheme only, not a tuned disk's")                     # tuned disk: one batched product over the harmonics
             G = None if F is None else (F if F.ndim == 2 else np.repeat(F[:, None], Q.shape[1], axis=1))
             if self.g is not None:
                 g = self.g.evaluate(Q)
@@ -388,11 +393,14 @@ class CentralDifference:
         out += self.X2 @ Qp
         if F is not None:
             out += self.X0 @ F if F.ndim == 2 else (self.X0 @ F)[:, None]
+        force = None
         if self.Xg is not None:
-            out += self.Xg.evaluate(Q)
+            force = self.Xg.evaluate(Q)
         elif self.g is not None:
-            out -= self.X0 @ self.g.evaluate(Q)
-        return out
+            force = -(self.X0 @ self.g.evaluate(Q))
+        if force is not None:
+            out += force
+        return (out, force) if parts else out
 
 
 @dataclasses.dataclass

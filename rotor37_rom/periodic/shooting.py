@@ -21,7 +21,8 @@ from __future__ import annotations
 import numpy as np
 
 from rotor37_rom.checks import real_number
-from rotor37_rom.dynamics.casing import Casing, ContactSetError, ContactSolver, casing_profile, contact_matrices
+from rotor37_rom.dynamics.casing import Casing, ContactSetError, contact_matrices
+from rotor37_rom.dynamics.contact_step import ContactStep
 
 __all__ = ["Shooting"]
 
@@ -59,7 +60,7 @@ class Shooting:
         self.scheme, self.casing, self.forcing, self.m, self.steps = scheme, casing, forcing, int(m), int(steps)
         self.jacobian_every = int(jacobian_every)
         self.r = scheme.r
-        self._h = None
+        self._h, self.contact = None, None
         if casing is not None:
             self.N, self.S, self.theta0, self.rows = contact_matrices(scheme.model.nodes, self.r, casing)
 
@@ -82,9 +83,8 @@ class Shooting:
         if self._h != h:
             self._scheme, self._h = self.scheme.with_step(h), h
             if self.casing is not None:
-                W = self._scheme.W
-                self.WN, self.WT = -(self.N @ W.T).T, -(self.S @ W.T).T
-                self.solver = ContactSolver(self.N @ self.WN, self.N @ self.WT)
+                self.contact = ContactStep(self._scheme, [self.casing], None)     # the casing's steady ovalisation
+                self.WN, self.WT, self.solver = self.contact.WN, self.contact.WT, self.contact.solver
         return self._scheme
 
     def speed(self, omega: float) -> float:
@@ -107,37 +107,31 @@ class Shooting:
         h, r, n = sc.h, self.r, self.steps
         Q, Qp = np.array(z[:r], float), np.array(z[r:], float)
         Qp0 = Qp.copy()
-        Xg = sc.Xg
         force = sc.model.forces if sc.nonlinear else None
-        casing = self.casing
-        if casing is not None:
-            sense, Om, mu = casing.rotation_sense, self.speed(omega), casing.mu
+        contact = self.contact
+        if contact is not None:                   # the map's contact step (dynamics.contact_step), one run
+            mu = self.casing.mu
             B = self.WN + mu * self.WT
+            one, Om, phase = np.zeros(1, int), np.array([self.speed(omega)]), np.zeros(1)
         states = np.empty((n + 1, r))
         states[0] = Q
         touched = {}
         sensitivity = domega and tangent and self.forcing is None
         forces = np.zeros((n, r)) if sensitivity and force is not None else None
-        for k in range(n):
-            Qn = sc.X1 @ Q + sc.X2 @ Qp
-            if self.forcing is not None:
-                Qn += sc.X0 @ np.asarray(self.forcing(k * h, omega), float)
-            if force is not None:
-                fk = Xg.evaluate(Q[:, None])[:, 0] if Xg is not None else -sc.X0 @ force.evaluate(Q[:, None])[:, 0]
-                Qn += fk
-                if forces is not None:
-                    forces[k] = fk
-            if casing is not None:
-                theta = self.theta0 + sense * Om * (k + 1) * h
-                g = casing.c0 - casing_profile(theta, casing.c0, casing.p0, casing.width) - self.N @ Qn
-                if (g < 0).any():
-                    lam, _ = self.solver.solve(mu, g)
-                    if (lam > 0).any():
-                        act, inv = self.solver.inverse(mu, lam > 0)        # D_AA^-1, kept by the solver
-                        correction = B[:, act] @ lam[act]
-                        Qn = Qn + correction
-                        touched[k] = act, inv, correction
-            Qp, Q = Q, Qn
+        for k in range(n):                        # the map's prediction (CentralDifference.predict), one run
+            F = None if self.forcing is None else np.asarray(self.forcing(k * h, omega), float)
+            Qn, fk = sc.predict(Q[:, None], Qp[:, None], F, parts=True)
+            if forces is not None:
+                forces[k] = fk[:, 0]
+            if contact is not None:
+                hits, lam, _ = contact.multipliers(Qn, one, Om, phase, (k + 1) * h)
+                if hits.size and (lam[:, 0] > 0).any():
+                    lam = lam[:, 0]
+                    act, inv = self.solver.inverse(mu, lam > 0)            # D_AA^-1, kept by the solver
+                    correction = contact.push(lam[:, None], np.array([mu]))[:, 0]
+                    Qn[:, 0] += correction
+                    touched[k] = act, inv, correction
+            Qp, Q = Q, Qn[:, 0]
             states[k + 1] = Q
         zT = np.r_[Q, Qp]
         if not tangent:
