@@ -22,7 +22,7 @@ ENTRY_POINTS = ["demos/contact_map.py", "demos/report.py", "demos/reduced_blade.
                 "benchmarks/bench_disk_gnl_coupling.py", "benchmarks/bench_disk_map.py",
                 "benchmarks/bench_disk_mistuning.py", "benchmarks/bench_gnl_vs_linear.py",
                 "benchmarks/disk_backbone.py", "benchmarks/plot_disk_indicator.py", "benchmarks/speed_accuracy.py",
-                "benchmarks/bench_gnl_steady.py"]
+                "benchmarks/bench_gnl_steady.py", "benchmarks/bench_impact_numbers.py"]
 NUMBERS = ["nan", "inf", "-inf", "1e300", "abc", ""]          # never a valid value of a numeric option
 MAYBE = ["0", "-1", "-0.5"]                                  # valid for some options, refused by the others
 PATHS = ("--out", "--cache", "--model", "--mesh", "--table")
