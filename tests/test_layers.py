@@ -195,7 +195,7 @@ def test_every_subpackage_is_installed():
 # The layers, lowest first (a module imports only from layers below its own, or from its own subpackage): utilities
 # and the FE-free geometry and forms; the dolfinx adapter; the pure algorithms in their own order; the studies; the
 # plotting and the command line. Two pure modules sit below the adapter that uses them.
-RANKS = {"checks": 0, "npz": 0, "interruption": 0, "blas_check": 0, "pareto": 0, "geometry": 0, "forms": 0,
+RANKS = {"checks": 0, "npz": 0, "interruption": 0, "reporting": 0, "blas_check": 0, "pareto": 0, "geometry": 0, "forms": 0,
          "machine": 0.5, "disk.symmetry": 0.9, "model.modes": 0.9, "fem": 1, "forces": 2.0, "model": 2.1,
          "disk": 2.2, "dynamics": 2.3, "periodic": 2.4, "post": 2.5, "reduction": 2.6, "studies": 3, "viz": 4,
          "cli": 4}
@@ -231,3 +231,33 @@ def test_imports_go_down_the_layers():
                 climbs.setdefault(name, set()).add(target)
     assert set(RANKS) >= {_unit(n) for n, _ in _modules() if _unit(n) and "." not in _unit(n)} - {"__init__", "data"}
     assert climbs == CLIMBS
+
+
+# the command line's own modules: they talk to the user; the library says (``rotor37_rom.reporting``)
+PRINTING = {"rotor37_rom/cli.py", "rotor37_rom/blas_check.py"}
+
+
+def test_the_library_says_and_never_prints():
+    """No ``print`` call in the package below the command line (#87): the library's messages go through
+    ``reporting.say``, and a caller can keep or silence them."""
+    printing = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "rotor37_rom").rglob("*.py")
+                      if str(p.relative_to(ROOT)) not in PRINTING
+                      and any(isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == "print"
+                              for n in ast.walk(ast.parse(p.read_text()))))
+    assert printing == []
+
+
+def test_a_reporter_keeps_or_silences_what_the_library_says(capsys):
+    from rotor37_rom.reporting import reporting, say
+
+    kept = []
+    with reporting(kept.append):
+        say("model built:", 55, sep=" ")
+        with reporting(lambda message: None):
+            say("silenced")
+        say("after")
+    say("to stdout")
+    assert kept == ["model built: 55", "after"] and capsys.readouterr().out == "to stdout\n"
+    with pytest.raises(ValueError, match="reporter must be a callable"):
+        with reporting("stdout"):
+            pass

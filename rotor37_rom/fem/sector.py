@@ -25,6 +25,7 @@ from rotor37_rom.geometry.nastran import bulk_material
 from rotor37_rom.geometry.mesh_import import UNITS, check_blade_mass
 from rotor37_rom.geometry.tables import read_blade_table
 from rotor37_rom.interruption import Interrupted
+from rotor37_rom.reporting import say
 
 from .operators import assemble_scalar
 
@@ -259,7 +260,7 @@ def create_sector_from_file(path: str | Path, clamp, tip=None, comm: MPI.Comm = 
         sector = dataclasses.replace(sector, volume=assemble_scalar(1.0 * ufl.dx(domain=sector.mesh), sector.comm))
     mass = sector.volume * sector.material.rho
     if comm.rank == 0 and verbose:
-        print(f"{sector.summary}; mass {mass:.4g} kg (rho = {sector.material.rho:g} kg/m^3); "
+        say(f"{sector.summary}; mass {mass:.4g} kg (rho = {sector.material.rho:g} kg/m^3); "
               f"{len(sector.tip_nodes)} contact nodes", flush=True)
     if mass_check:
         check_blade_mass(mass, UNITS[units] if units is not None else scale, str(path))
@@ -301,7 +302,7 @@ def file_material(path, material: Material | None, units: str | None, scale: flo
         where = "given" if material is not None else "the deck's"
         other = f"; the deck states {stated(deck)}" if material is not None and deck is not None and deck != material \
             else ""
-        print(f"material: {stated(chosen)} ({where}){other}", flush=True)
+        say(f"material: {stated(chosen)} ({where}){other}", flush=True)
     return chosen
 
 

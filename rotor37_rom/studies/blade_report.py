@@ -35,6 +35,7 @@ from rotor37_rom.studies.clearance_consumption import (PAPER_LINEAR_RANGE, Reduc
 from rotor37_rom.studies.contact_map import (PAPER, ContactMapConfig, ContactMapResult, MapResult, carry_on, map_model,
     run_contact_map, time_scheme)
 from rotor37_rom.viz.html import Section, Table, write_report
+from rotor37_rom.reporting import say
 
 __all__ = ["ReportConfig", "ReportResult", "PeakStress", "run_report", "summary_table", "flags", "onset_text",
            "resonance", "amplitude_at", "peak_stress", "write_html", "NORMALS"]
@@ -261,7 +262,7 @@ def run_report(config: ReportConfig) -> ReportResult:
 
     def lap(name: str, t0: float) -> None:
         seconds[name] = time.perf_counter() - t0
-        print(f"{name}: {seconds[name]:.0f} s", flush=True)
+        say(f"{name}: {seconds[name]:.0f} s", flush=True)
 
     t0 = time.perf_counter()
     modes = run_blade_modes(config.modes_config, comm=MPI.COMM_SELF)

@@ -38,6 +38,7 @@ from rotor37_rom.studies.sweep import (ContinuationPoint, InteractionMap, SavedR
     continuation, interaction_map, idle_barrier, load_speed, load_sweep, record_row, rerun_diverged, run_sweep,
     sector_maxima, sweep_folder)
 from rotor37_rom.viz.charts import plot_interaction_map, plot_nfrc, plot_periodic_nfrc, plot_time_history
+from rotor37_rom.reporting import say
 
 if TYPE_CHECKING:
     from mpi4py import MPI
@@ -197,7 +198,7 @@ def build_model(config: ContactMapConfig) -> ReducedModel:
                                     spin_modes=min(4, r_c) if spin else 0)
         model, _ = build_reduced_model(sector, reduction, cache_dir=config.cache_dir)
     what = f"{config.rom.mesh.path.name}" if config.rom.mesh is not None else f"{config.rom.preset} preset"
-    print(f"reduced model: {what} ({sector.n_dofs} DOF) -> r = {model.r} {model.sizes} "
+    say(f"reduced model: {what} ({sector.n_dofs} DOF) -> r = {model.r} {model.sizes} "
           f"in {time.perf_counter() - t0:.1f} s")
     return model
 
@@ -469,7 +470,7 @@ def disk_peak_stress(config: ContactMapConfig, scheme: CentralDifference, result
     picture = render_stress(sector, fields[config.sector], vm_sectors, config.out / f"stress_disk_{tag}.png",
                             title, n_sectors=model.nodes.n_sectors, factor=factor, clim=numbers["clim"],
                             sector_displacements=fields)
-    print(f"         stress at t_max ({speed:.0f} rad/s): sector {config.sector} {numbers['vm_max'] / 1e6:.0f} MPa "
+    say(f"         stress at t_max ({speed:.0f} rad/s): sector {config.sector} {numbers['vm_max'] / 1e6:.0f} MPa "
           f"({numbers['ratio_yield']:.2f} sigma_Y) outside the tip band ({describe_location(numbers['location'])}), "
           f"largest over the sectors {numbers['vm_max_all_sectors'] / 1e6:.0f} MPa (sector {numbers['sector_of_max']}: "
           f"{describe_location(numbers['location_all_sectors'])}); off the root corner (> "
@@ -482,7 +483,7 @@ def disk_peak_stress(config: ContactMapConfig, scheme: CentralDifference, result
 
 def print_map(result: MapResult, linear_resonance: float) -> None:
     """One line per map (step, largest response, divergences) and one per continuation branch."""
-    print(f"{result.label:>7}: h = {result.h:.3g} s (2/omega_max = {result.h_crit:.3g}), largest response at "
+    say(f"{result.label:>7}: h = {result.h:.3g} s (2/omega_max = {result.h_crit:.3g}), largest response at "
           f"{result.peak_speed:.0f} rad/s ({np.nanmax(result.nfrc) * 1e3:.3f} mm), linear 1B/EO4 "
           f"{linear_resonance:.0f} rad/s; {int(result.diverged.sum())} diverged ({len(result.retried)} run again "
           f"with a smaller step); {result.wall_s:.0f} s")
@@ -491,12 +492,12 @@ def print_map(result: MapResult, linear_resonance: float) -> None:
         unsteady = [f"{p.omega:.0f}" for p in branch.points if not p.steady]
         largest = (f"largest response at {best.omega:.0f} rad/s ({best.amplitude * 1e3:.3f} mm)"
                    if np.isfinite(best.amplitude) else f"every run blew up (from {best.omega:.0f} rad/s)")
-        print(f"         continuation {name} (h = {branch.h:.3g} s, {branch.wall_s:.0f} s): {largest}; "
+        say(f"         continuation {name} (h = {branch.h:.3g} s, {branch.wall_s:.0f} s): {largest}; "
               f"{len(branch.points)} speeds, not steady at {', '.join(unsteady) or 'none'}")
     if result.periodic is not None:
-        print(f"         {result.periodic.describe()}")
+        say(f"         {result.periodic.describe()}")
         for name, comparison in result.periodic.continuation.items():
-            print(f"         {describe_against(name, comparison)}")
+            say(f"         {describe_against(name, comparison)}")
 
 
 def check_summary(summary) -> None:
@@ -613,20 +614,20 @@ def _run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None,
                         "blade_frame": "the plane through the axis and the blade's centre of mass",
                         "blade_frame_theta_deg": float(np.degrees(model.nodes.frame_angle))}
     if rank == 0 and not config.quiet:
-        print(f"frame: rotation about +z, sense {casing.rotation_sense:+d} (towards "
+        say(f"frame: rotation about +z, sense {casing.rotation_sense:+d} (towards "
               f"{'-' if casing.rotation_sense < 0 else '+'}theta), contact normal {casing.direction}"
               + (f" (the blade frame's e_x: radial through its centre of mass, "
                  f"{np.degrees(model.nodes.frame_angle):+.3f} deg)" if casing.direction == "x" else "") + "; the tip's "
               f"trailing edge {abs(np.degrees(stagger)):.1f} deg behind its leading edge")
     if rank == 0 and not config.quiet:
         where = f" turning at {config.top_speed:g} rad/s" if turning else ""
-        print(f"sustained sliding{where} diverges (sprag-slip) from mu = {onset['weakest_node']:.3f} on one contact "
+        say(f"sustained sliding{where} diverges (sprag-slip) from mu = {onset['weakest_node']:.3f} on one contact "
               f"node, {onset['all_nodes']:.3f} on all of them; this run: mu = {config.sweep.casing.mu:g} (growth can "
               f"start below: docs/results.md, 'Friction')")
         if turning:
             crossing = rotation["resonance_1B_EO4"]
             what = "disk: its k = 4 1B family" if model.sectors is not None else "blade: 1B"
-            print(f"turning {what} ({config.scheme.rotation} clearance) meets EO4 at "
+            say(f"turning {what} ({config.scheme.rotation} clearance) meets EO4 at "
                   + (f"{crossing:.1f} rad/s" if crossing is not None else f"no speed up to {config.top_speed:g} "
                      f"rad/s") + f" (at rest: {summary['linear_resonance']:.1f} rad/s)")
     runs, mesh = {}, None
@@ -634,7 +635,7 @@ def _run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None,
         setting = config.setting(gnl)
         if config.tolerance is not None and rank == 0:
             larger = config.model_beyond_choice(gnl)
-            print(f"--tolerance {config.tolerance:g}: {config.choice(gnl).describe()}" + (
+            say(f"--tolerance {config.tolerance:g}: {config.choice(gnl).describe()}" + (
                 f"; run on the larger model the settings share ({', '.join(f'{k} {v}' for k, v in larger.items())}): "
                 f"the expected error and cost are the choice's, measured on its own model" if larger else ""))
         scheme = (schemes or {}).get(gnl) or time_scheme(setting, model, gnl, comm)
@@ -661,7 +662,7 @@ def _run_contact_map(config: ContactMapConfig, comm: MPI.Comm | None,
                                                     run_on_larger_model=config.model_beyond_choice(gnl))
         print_map(result, resonance)
         if gnl and setting.scheme.step_outliers == "drop" and result.imap.diverged.any():
-            print(f"         {int(result.imap.diverged.sum())} speeds still blew up with --step-outliers drop (their "
+            say(f"         {int(result.imap.diverged.sum())} speeds still blew up with --step-outliers drop (their "
                   f"retries halve a step above the one from every state): run them with --step-outliers keep before "
                   f"reading them as grown")
         if config.stress:

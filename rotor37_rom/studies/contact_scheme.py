@@ -25,6 +25,7 @@ from rotor37_rom.model.reduced import (ReducedModel, load_reduced_model, perturb
 from rotor37_rom.npz import load_npz, save_npz
 from rotor37_rom.studies.contact_config import ContactMapConfig
 from rotor37_rom.studies.sweep import idle_barrier
+from rotor37_rom.reporting import say
 
 if TYPE_CHECKING:
     from mpi4py import MPI
@@ -66,7 +67,7 @@ def cubature_model(config: ContactMapConfig, model: ReducedModel, comm: MPI.Comm
     rank = 0 if comm is None else comm.rank
     if cache.is_file():
         if rank == 0:
-            print(f"cubature: reusing {cache}")
+            say(f"cubature: reusing {cache}")
     else:
         error = None
         if rank == 0:
@@ -106,7 +107,7 @@ def _train_cubature(config: ContactMapConfig, model: ReducedModel, scheme: Centr
     sector = config.rom.create_sector(MPI.COMM_SELF)
     reduced, rep = hyper_reduce(sector, model, Q_train, tol=config.scheme.cubature, level="point",
                                 label=f"contact runs {train.tolist()} x {revolutions:g} rev, mu = {casing.mu:g}")
-    print(f"cubature: {rep['points']} of {rep['exact'].w.size} quadrature points (training error "
+    say(f"cubature: {rep['points']} of {rep['exact'].w.size} quadrature points (training error "
           f"{rep['result'].training_error:.1e}) from {Q_train.shape[1]} states of exact GNL runs at "
           f"{len(train)} speeds x {revolutions:g} rev; {time.perf_counter() - t0:.0f} s")
     save_npz(cache.with_suffix(".states.npz"), states=step_states)
@@ -136,14 +137,14 @@ def capped_gnl_step(config: ContactMapConfig, model: ReducedModel, run_model: Re
                                   rotation=turning(config))
             kind = "unscaled"
         if verbose:
-            print(f"GNL step from the tangent limit on a {revolutions:g}-revolution {kind} probe at {len(probe)} "
+            say(f"GNL step from the tangent limit on a {revolutions:g}-revolution {kind} probe at {len(probe)} "
                   f"speeds")
     step = gnl_step_report(run_model, states, config.scheme.frequency_cap_rad_s, safety=config.scheme.tangent_safety,
                            cap_safety=config.scheme.safety)
     drop = config.scheme.step_outliers == "drop" and step["h_without_outliers"] > step["h"]
     h = step["h_without_outliers"] if drop else step["h"]
     if verbose:
-        print(f"GNL with a {config.scheme.frequency_cap:g} kHz cap: h = {h:.3g} s")
+        say(f"GNL with a {config.scheme.frequency_cap:g} kHz cap: h = {h:.3g} s")
         print_step_outliers(step, dropped=drop)
     return h
 
@@ -167,7 +168,7 @@ def print_step_outliers(step: dict, dropped: bool = False) -> None:
                     f"step take {ratio:.1f} times as many steps (--step-outliers drop). Such states may be where the "
                     f"St. Venant-Kirchhoff model collapses under a point contact (docs/results.md, 'GNL against "
                     f"linear with the paper's friction').")
-        print(head + tail)
+        say(head + tail)
 
 
 def capped_probe_states(config: ContactMapConfig, model: ReducedModel, probe: np.ndarray, revolutions: float

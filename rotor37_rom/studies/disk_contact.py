@@ -12,6 +12,7 @@ import numpy as np
 from rotor37_rom import fem
 from rotor37_rom.reduction.disk_builder import DiskReductionConfig, build_disk_model
 from rotor37_rom.dynamics.explicit import simulate
+from rotor37_rom.reporting import say
 
 MAP_SPEEDS, MAP_REVOLUTIONS = np.linspace(1200.0, 1650.0, 90), 200.0     # the full-disk map
 
@@ -24,7 +25,7 @@ def contact_disk_model(preset: str):
     model, _ = build_disk_model(sector, DiskReductionConfig(tip_nodes="all", r_c=10, r_md=10, criterion="MI2b",
                                                             r_cyclic=144), cache_dir=Path("results/cache"))
     offline = time.perf_counter() - t0
-    print(f"disk model r = {model.r} {model.sizes}, {len(model.nodes)} tip nodes; {offline:.0f} s", flush=True)
+    say(f"disk model r = {model.r} {model.sizes}, {len(model.nodes)} tip nodes; {offline:.0f} s", flush=True)
     return sector, model, offline
 
 

@@ -19,6 +19,7 @@ import numpy as np
 from rotor37_rom.checks import before_work, flagged
 from rotor37_rom.dynamics.casing import Casing, check_hand
 from rotor37_rom.studies.sector_file import SectorFile
+from rotor37_rom.reporting import say
 
 __all__ = ["OwnBladeConfig", "load_blade", "run_own_blade", "show_groups"]
 
@@ -83,7 +84,7 @@ def load_blade(config: OwnBladeConfig):
         Path(config.out).mkdir(parents=True, exist_ok=True)
         path = fem.write_sector_mesh(fem.create_blade_sector(preset="ci"), Path(config.out) / "example_blade_mm.inp",
                                      units="mm")
-        print(f"no --mesh: the ci blade written as {path} (C3D4, mm, node sets CLAMP and TIP)")
+        say(f"no --mesh: the ci blade written as {path} (C3D4, mm, node sets CLAMP and TIP)")
         mesh = SectorFile(path)
     return mesh.create()
 
@@ -93,7 +94,7 @@ def show_groups(sector, out) -> Path:
     from rotor37_rom.viz.plotting import render_groups
 
     path = render_groups(sector, Path(out) / "groups.png", Path(sector.source.removeprefix("file:")).name)
-    print(f"the groups drawn on the mesh (contact nodes in red): {path}; run again without --show-groups")
+    say(f"the groups drawn on the mesh (contact nodes in red): {path}; run again without --show-groups")
     return path
 
 
@@ -112,23 +113,23 @@ def run_own_blade(config: OwnBladeConfig) -> dict:
         return {"groups_png": str(show_groups(blade, config.out))}
     stagger = check_hand(blade.tip_nodes, config.rotation_sense)          # ValueError naming --rotation-sense
     towards = "-theta" if config.rotation_sense < 0 else "+theta"
-    print(f"frame: rotation about +z, sense {config.rotation_sense:+d} (towards {towards}), contact normal "
+    say(f"frame: rotation about +z, sense {config.rotation_sense:+d} (towards {towards}), contact normal "
           f"{config.direction}; the tip's trailing edge {abs(np.degrees(stagger)):.1f} deg behind its leading edge")
     modes = fem.compute_clamped_modes(blade, config.modes)
-    print("clamped modes (Hz):", np.round(modes.omega / (2 * np.pi), 1).tolist())
-    print("contact nodes (LE -> TE), mm:", np.round(1e3 * blade.tip_nodes, 2).tolist())
+    say("clamped modes (Hz):", np.round(modes.omega / (2 * np.pi), 1).tolist())
+    say("contact nodes (LE -> TE), mm:", np.round(1e3 * blade.tip_nodes, 2).tolist())
     model, _ = build_reduced_model(blade, ReductionConfig(r_c=config.r_c, r_md=0, global_md_modes=3,
                                                           forces="intrusive", keep_basis=True))
-    print(f"reduced model: r = {model.r} {model.sizes}")
+    say(f"reduced model: r = {model.r} {model.sizes}")
     frame_deg = float(np.degrees(model.nodes.frame_angle))
     if config.direction == "x":
-        print(f"contact normal x: the blade frame's e_x, radial through the blade's centre of mass at "
+        say(f"contact normal x: the blade frame's e_x, radial through the blade's centre of mass at "
               f"theta = {frame_deg:+.3f} deg in the file")
     casing = config.casing
     N, S, _, _ = contact_matrices(model.nodes, model.r, casing)
     per_node = [sprag_slip_friction(model.K, N, S, [k]) for k in range(N.shape[0])]
     le_half = sprag_slip_friction(model.K, N, S, list(range(max(1, N.shape[0] // 2))))
-    print("sprag-slip onset mu* per node (LE -> TE):", [round(m, 3) if np.isfinite(m) else None for m in per_node],
+    say("sprag-slip onset mu* per node (LE -> TE):", [round(m, 3) if np.isfinite(m) else None for m in per_node],
           f"LE half {le_half:.3f}")
     scheme = CentralDifference(model, nonlinear=True, safety=0.5)
     run = simulate(scheme, [config.speed], casing, revolutions=config.revolutions, on_blowup="flag")
@@ -150,13 +151,13 @@ def run_own_blade(config: OwnBladeConfig) -> dict:
         "wall_s": time.perf_counter() - t0,
     }
     if diverged:
-        print(f"contact run at {config.speed} rad/s grew past the limit: no result shown")
+        say(f"contact run at {config.speed} rad/s grew past the limit: no result shown")
     else:
-        print(f"contact run at {config.speed} rad/s, mu = {config.mu}: max radial displacement of node LE "
+        say(f"contact run at {config.speed} rad/s, mu = {config.mu}: max radial displacement of node LE "
               f"{summary['le_max_radial_mm']:.3f} mm")
     out = Path(config.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "summary.json").write_text(json.dumps(summary, indent=1))
-    print(f"wrote {out / 'summary.json'} ({summary['wall_s']:.0f} s)")
+    say(f"wrote {out / 'summary.json'} ({summary['wall_s']:.0f} s)")
     return summary
 

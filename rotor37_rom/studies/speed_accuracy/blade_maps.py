@@ -9,6 +9,7 @@ import numpy as np
 
 from rotor37_rom.studies.speed_accuracy.context import HELD_OUT_SPEEDS, PERTURBATION, ROBUST, TOLERANCES, StudyContext
 from rotor37_rom.studies.speed_accuracy.maps import MapRun, held_out_choices, held_out_options, model_file, run_map
+from rotor37_rom.reporting import say
 
 __all__ = ["scene_map", "held_out_map", "map_errors", "LINEAR_CANDIDATES", "GNL_CANDIDATES"]
 
@@ -79,7 +80,7 @@ def scene_map(ctx: StudyContext, gnl: bool) -> tuple[dict, dict]:
     pert = run_map(ctx, "reference_perturbed", gnl, ref_options, model_path=pert_path)
     peak = np.nanmax(ref.nfrc)
     robust = np.abs(pert.nfrc - ref.nfrc) <= ROBUST * peak
-    print(f"robust speeds: {ref.speeds[robust].tolist()}")
+    say(f"robust speeds: {ref.speeds[robust].tolist()}")
     cands, hist = [], []
     for name, options in (GNL_CANDIDATES if gnl else LINEAR_CANDIDATES):
         run = run_map(ctx, name, gnl, options)

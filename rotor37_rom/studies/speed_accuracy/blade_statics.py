@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rotor37_rom.reporting import say
+
 __all__ = ["scene_modes", "scene_clearance", "scene_rotating_modes", "CLEARANCE_BASES", "ROTATING_BASES"]
 
 
@@ -29,7 +31,7 @@ def scene_modes() -> dict:
         wall = time.perf_counter() - t0
         labels = classify_blade_modes(modal.tip_displacements, sector.tip_nodes)
         rows[preset] = dict(omega=np.asarray(modal.omega[:6], float), wall=wall, labels=labels, dofs=sector.n_dofs)
-        print(f"modes {preset}: {sector.n_dofs} DOF, {wall:.1f} s, {np.round(modal.omega[:6])} {labels}")
+        say(f"modes {preset}: {sector.n_dofs} DOF, {wall:.1f} s, {np.round(modal.omega[:6])} {labels}")
     # the presets are not nested refinements (gmsh remeshes): the frequencies need not converge monotonically, so
     # no Richardson limit; the reference is the finest preset, whose own error is estimated by its last change
     ref = rows["paper"]["omega"]
@@ -71,7 +73,7 @@ def scene_clearance() -> dict:
         roms[name], _ = build_reduced_model(sector, ReductionConfig(r_c=r_c, r_md=r_md, global_md_modes=n_global,
                                                                     criterion=criterion, forces="intrusive"), ops=ops)
         offline[name] = time.perf_counter() - t0
-        print(f"clearance: {name}: r = {roms[name].r}, built in {offline[name]:.1f} s")
+        say(f"clearance: {name}: r = {roms[name].r}, built in {offline[name]:.1f} s")
     cases = {"study": (("1B", 1e-3), ("1T", 0.5e-3)), "held_out": (("1B", 1.5e-3), ("1T", 0.75e-3))}
     studies = {key: [clearance_consumption_study(sector, mode, zeta, n_levels=10, ops=ops, roms=roms)
                      for mode, zeta in pairs] for key, pairs in cases.items()}
@@ -132,7 +134,7 @@ def scene_rotating_modes() -> dict:
                           error=float(err[study].max()), held_out_error=float(err[~study].max()), r=row["r"],
                           offline_s=row["build_s"], online_s=row["per_speed_s"] * int(study.sum()),
                           errors={"speeds_rad_s": result.speeds.tolist(), "largest": err.tolist()}))
-        print(f"rotating-modes: {row['label']}: r = {row['r']}, error {cands[-1]['error']:.1e}, held out "
+        say(f"rotating-modes: {row['label']}: r = {row['r']}, error {cands[-1]['error']:.1e}, held out "
               f"{cands[-1]['held_out_error']:.1e}, cost {cands[-1]['cost']:.1f} s")
     return dict(description="the turning ci blade's frequencies of modes 1-3 and its tip's centrifugal displacement "
                             "at 1,200-1,600 rad/s by 100 (the maps' range): largest relative error against the full "

@@ -11,6 +11,7 @@ import numpy as np
 
 from rotor37_rom.studies.speed_accuracy.context import MAP, StudyContext, percent
 from rotor37_rom.studies.speed_accuracy.maps import MapRun, model_file, run_map
+from rotor37_rom.reporting import say
 
 __all__ = ["scene_stress", "stress_at_tmax", "scene_stability"]
 
@@ -69,7 +70,7 @@ def scene_stress(ctx: StudyContext, gnl: bool, maps: dict) -> dict:
             out = stress_at_tmax(ctx, run_map(ctx, c["name"], gnl, c["options"]), c["options"], gnl, speed)
             vm, seconds = out["vm_max"], out["seconds"]
         err = abs(vm - ref["vm_max"]) / ref["vm_max"] if np.isfinite(vm) else math.inf
-        print(f"stress {'gnl' if gnl else 'linear'} {c['name']}: {vm / 1e6:.4g} MPa ({percent(err)})")
+        say(f"stress {'gnl' if gnl else 'linear'} {c['name']}: {vm / 1e6:.4g} MPa ({percent(err)})")
         cands.append(dict(name=c["name"], options=c["options"], us_per_step=c["us_per_step"], h=c["h"],
                           cost=c["cost"] + seconds, error=err, vm_max=vm, held_out_error=None))
     kind = "GNL" if gnl else "GNL off"
@@ -106,7 +107,7 @@ def scene_stability(ctx: StudyContext) -> dict:
         gnl = [2 / tangent_highest_frequency(model, q, mass=scheme.M) for q in states]
         reached = [float(abs(q[le])) for q in states]
         rows.append(dict(cap_khz=cap, h_linear=float(lin), h_gnl=[float(h) for h in gnl], le_amplitude=reached))
-        print(f"stability, cap {cap}: linear {lin:.3g} s, GNL {gnl[0]:.3g} .. {gnl[-1]:.3g} s")
+        say(f"stability, cap {cap}: linear {lin:.3g} s, GNL {gnl[0]:.3g} .. {gnl[-1]:.3g} s")
     return dict(description="the stable step 2 / omega_max of the tangent (K + dg/dq, mass M or the capped mass) on "
                             "static states of a load at node LE along e_x, against the LE displacement; r = 45 ci",
                 rows=rows)

@@ -12,6 +12,7 @@ import numpy as np
 
 from rotor37_rom.studies.speed_accuracy.context import MAP, PAPER_H, PAPER_R, StudyContext
 from rotor37_rom.studies.speed_accuracy.maps import model_file, study_training_speeds
+from rotor37_rom.reporting import say
 
 if TYPE_CHECKING:
     from rotor37_rom.forces.tensors import QuadratureForces
@@ -83,7 +84,7 @@ def scene_paper_speedup(ctx: StudyContext, study: dict, tolerance: float = 0.05)
         Q = rng.standard_normal((sch.model.r, P)) * 1e-6
         t = time_per_step(lambda: sch.predict(Q, Q.copy(), None), min_time=2.0) / P
         rows[name] = dict(r=sch.model.r, h=sch.h, us_per_sim_step=1e6 * t, us_per_simulated_ms=1e6 * t / sch.h * 1e-3)
-        print(f"{name}: r = {sch.model.r}, {1e6 * t:.1f} us per simulation-step, h = {sch.h:.3g} s")
+        say(f"{name}: r = {sch.model.r}, {1e6 * t:.1f} us per simulation-step, h = {sch.h:.3g} s")
     per_step = rows["paper"]["us_per_sim_step"] / rows["chosen"]["us_per_sim_step"]
     step = rows["chosen"]["h"] / PAPER_H
     return dict(tolerance=tolerance, model=choice.name, expected_error=choice.error, rows=rows,
@@ -130,7 +131,7 @@ def scene_cost_r(ctx: StudyContext, r_values=COST_R, P: int = 11, min_time: floa
                                    (f"cubature, {POINTS_PER_MODE} r points", POINTS_PER_MODE * r, "double"),
                                    (f"cubature, {POINTS_PER_MODE} r points, float32", POINTS_PER_MODE * r, "single")):
             methods[name].append(cost(dataclasses.replace(model, forces=_synthetic_cubature(r, n, precision, rng))))
-            print(f"r = {r}: {name}: {methods[name][-1]:.3g} us per simulation-step")
+            say(f"r = {r}: {name}: {methods[name][-1]:.3g} us per simulation-step")
         del model
     study_training = f"contact runs {list(study_training_speeds())}"
     trained = []

@@ -17,6 +17,7 @@ from rotor37_rom.npz import save_json
 from rotor37_rom.studies.speed_accuracy.context import StudyContext
 from rotor37_rom.studies.speed_accuracy.disk_maps import disk_sector
 from rotor37_rom.studies.speed_accuracy.study_file import finite_or_none
+from rotor37_rom.reporting import say
 
 __all__ = ["scene_disk_forced", "forced_reference", "forced_model", "forced_error", "DISK_FORCED",
            "DISK_FORCED_CASES", "DISK_FORCED_HELD_OUT", "DISK_FORCED_GNL_CASES", "DISK_FORCED_GNL_HELD_OUT",
@@ -134,7 +135,7 @@ def scene_disk_forced(ctx: StudyContext, gnl: bool = False) -> dict:
     refs = {case: forced_reference(ctx, case, gnl) for case in cases}
     ref_wall = sum(float(r["wall"]) for r in refs.values())
     steps = sum(r["tip"].shape[0] - 1 for r in refs.values())
-    print(f"{name}: full-order references {ref_wall:.0f} s")
+    say(f"{name}: full-order references {ref_wall:.0f} s")
     cands, models = [], {}
     for cname, options in (DISK_FORCED_GNL_CANDIDATES if gnl else DISK_FORCED_CANDIDATES):
         model, build = models[cname] = forced_model(ctx, options, gnl)
@@ -146,7 +147,7 @@ def scene_disk_forced(ctx: StudyContext, gnl: bool = False) -> dict:
                           held_out_error=None, I=min(r["I"] for r in runs.values()),
                           worst_case={"N_d": worst[0], "omega": worst[1]}, errors=runs[worst]["errors"],
                           by_case=[{"N_d": c[0], "omega": c[1], **runs[c]} for c in cases]))
-        print(f"{name}: {cname}: r = {model.r}, {wall:.1f} s, error {runs[worst]['error']:.3g} (I >= "
+        say(f"{name}: {cname}: r = {model.r}, {wall:.1f} s, error {runs[worst]['error']:.3g} (I >= "
               f"{cands[-1]['I']:.3f}; worst N_d {worst[0]} at {worst[1]:g} rad/s)")
     load = (f"400 N along e_z over a {DISK_FORCED_PATCH_MM:g} mm patch around node LE of every sector" if gnl
             else "400 N along e_z at node LE of every sector")
@@ -182,5 +183,5 @@ def scene_disk_forced(ctx: StudyContext, gnl: bool = False) -> dict:
         failed = [run["failed"] for run in runs if "failed" in run]
         if failed:
             cand["held_out_failed"] = failed[0]
-        print(f"{name}: held out: {cand['name']}: {cand['held_out_error']:.3g}")
+        say(f"{name}: held out: {cand['name']}: {cand['held_out_error']:.3g}")
     return scene

@@ -12,6 +12,7 @@ import numpy as np
 from rotor37_rom.machine import machine_description
 from rotor37_rom.studies.speed_accuracy.context import PERTURBATION, ROBUST, TOLERANCES, StudyContext, percent
 from rotor37_rom.studies.speed_accuracy.maps import MapRun, held_out_choices, held_out_options, run_map
+from rotor37_rom.reporting import say
 
 __all__ = ["scene_disk_map", "run_disk_map", "disk_model_file", "disk_sector", "disk_map_errors", "disk_robust",
            "largest_over_blades", "cap_floor", "floor_record", "DISK_MAP", "DISK_GNL_MAP", "DISK_HELD_OUT_SPEEDS",
@@ -191,7 +192,7 @@ def scene_disk_map(ctx: StudyContext, gnl: bool = False) -> tuple[dict, dict]:
     ref, pert = reference_maps()
     runs = {"reference": ref, "reference_perturbed": pert}     # for the stress scene: the maps' final states
     robust = disk_robust(ref, pert)
-    print(f"{scene_name}: robust speeds {ref.speeds[robust].round(1).tolist()}")
+    say(f"{scene_name}: robust speeds {ref.speeds[robust].round(1).tolist()}")
     cands = []
     for name, options in (DISK_GNL_CANDIDATES if gnl else DISK_MAP_CANDIDATES):
         run = runs[name] = run_disk_map(ctx, name, options, gnl=gnl)
@@ -200,7 +201,7 @@ def scene_disk_map(ctx: StudyContext, gnl: bool = False) -> tuple[dict, dict]:
                           wall_s=run.wall, sweep_s=run.sweep_wall, diverged=int(run.diverged.sum()),
                           cost=run.sweep_wall, error=err["map"], held_out_error=None,
                           errors={k: err[k] for k in ("nfrc", "largest", "speed", "peak")}))
-        print(f"{scene_name}: {name}: {run.sweep_wall:.0f} s, error {err['map']:.3g} "
+        say(f"{scene_name}: {name}: {run.sweep_wall:.0f} s, error {err['map']:.3g} "
               f"({', '.join(f'{k} {err[k]:.3g}' for k in ('nfrc', 'largest', 'speed', 'peak'))})")
     big, top = largest_over_blades(ref), int(np.nanargmax(ref.nfrc))
     i_rob = int(np.flatnonzero(robust)[np.nanargmax(ref.nfrc[robust])])

@@ -9,6 +9,7 @@ import numpy as np
 
 from rotor37_rom.machine import machine_description
 from rotor37_rom.studies.speed_accuracy.context import StudyContext
+from rotor37_rom.reporting import say
 
 __all__ = ["scene_disk_modes", "DISK_MODELS", "DISK_CAP_KHZ", "DISK_TIMED_STEPS"]
 
@@ -45,7 +46,7 @@ def scene_disk_modes(ctx: StudyContext) -> dict:
         ctx.fresh.append(f"disk-modes reference {time.perf_counter() - t0:.0f} s")
         cached = load_npz(ref_file, ("omega", "wall"))
     ref, ref_wall = cached["omega"], float(cached["wall"])
-    print(f"disk-modes: cyclic reference, 6 families x {ref.shape[0]} harmonics ({ref_wall:.0f} s)")
+    say(f"disk-modes: cyclic reference, 6 families x {ref.shape[0]} harmonics ({ref_wall:.0f} s)")
     cap = 2 * np.pi * DISK_CAP_KHZ * 1e3
     speeds = np.linspace(1200.0, 1650.0, 8)
     casing = Casing(mu=0.15, direction="cone")                 # the disk maps' casing (paper's c0, h_b)
@@ -75,7 +76,7 @@ def scene_disk_modes(ctx: StudyContext) -> dict:
                           errors={"families 1-3 by k": err[:, :3].max(axis=1).tolist(),
                                   "families 4-6 by k": err[:, 3:6].max(axis=1).tolist()}))
         made = "read from the cache" if build is None else f"built in {build:.0f} s"
-        print(f"disk-modes: {name}: r = {model.r}, {made}, 1B/1T/2B within {100 * study:.3f} %, "
+        say(f"disk-modes: {name}: r = {model.r}, {made}, 1B/1T/2B within {100 * study:.3f} %, "
               f"modes 4-6 within {100 * held:.3f} %, {1e6 * per_step:.1f} us/sim-step at h = {scheme.h:.3g} s")
     return dict(description="the bladed disk's (36 ci sectors, 8 tip nodes each) 1B, 1T and 2B families at every "
                             "nodal diameter k = 0 ... 18: largest relative frequency error against the sector's "

@@ -13,6 +13,7 @@ from rotor37_rom.machine import machine_description
 from rotor37_rom.studies.speed_accuracy.context import PERTURBATION, StudyContext, percent
 from rotor37_rom.studies.speed_accuracy.disk_maps import disk_model_file, disk_sector, floor_record
 from rotor37_rom.studies.speed_accuracy.maps import MapRun
+from rotor37_rom.reporting import say
 
 __all__ = ["scene_disk_stress", "disk_stress_at_tmax"]
 
@@ -58,7 +59,7 @@ def scene_disk_stress(ctx: StudyContext, maps: dict, runs: dict, gnl: bool = Fal
     pert_file = disk_model_file(ctx, ref_opts, 0.0 if gnl else PERTURBATION, gnl=gnl)
     pert = disk_stress_at_tmax(runs["reference_perturbed"], pert_file, speed, gnl)
     moved = max(abs(pert["vm"] - ref["vm"]) / ref["vm"], abs(pert["vm_all"] - ref["vm_all"]) / ref["vm_all"])
-    print(f"{scene}: the reference {ref['vm'] / 1e6:.4g} / {ref['vm_all'] / 1e6:.4g} MPa, perturbed by "
+    say(f"{scene}: the reference {ref['vm'] / 1e6:.4g} / {ref['vm_all'] / 1e6:.4g} MPa, perturbed by "
           f"{PERTURBATION:g}: {pert['vm'] / 1e6:.4g} / {pert['vm_all'] / 1e6:.4g} MPa ({percent(moved)})")
     cands = []
     for c in maps["candidates"]:
@@ -68,7 +69,7 @@ def scene_disk_stress(ctx: StudyContext, maps: dict, runs: dict, gnl: bool = Fal
             out = disk_stress_at_tmax(runs[c["name"]], disk_model_file(ctx, c["options"], gnl=gnl), speed, gnl)
         err = max(abs(out["vm"] - ref["vm"]) / ref["vm"], abs(out["vm_all"] - ref["vm_all"]) / ref["vm_all"])
         err = err if np.isfinite(err) else math.inf
-        print(f"{scene}: {c['name']}: sector 0 {out['vm'] / 1e6:.4g} MPa, over the sectors "
+        say(f"{scene}: {c['name']}: sector 0 {out['vm'] / 1e6:.4g} MPa, over the sectors "
               f"{out['vm_all'] / 1e6:.4g} MPa ({percent(err)}), {out['seconds']:.1f} s")
         cands.append(dict(name=c["name"], options=c["options"], us_per_step=c["us_per_step"], h=c["h"],
                           cost=c["cost"] + out["seconds"], error=err, vm_max=out["vm"], vm_max_all=out["vm_all"],

@@ -13,6 +13,7 @@ import numpy as np
 
 from rotor37_rom.npz import load_json, save_json
 from rotor37_rom.studies.speed_accuracy.context import MAP, StudyContext
+from rotor37_rom.reporting import say
 
 __all__ = ["MapRun", "model_file", "run_map", "study_training_speeds", "held_out_options", "held_out_choices",
            "RETRIES", "MODEL_OPTIONS"]
@@ -131,7 +132,7 @@ def run_map(ctx: StudyContext, name: str, gnl: bool, options: dict, speeds=MAP["
 
     imap = interaction_map(records, config.node)
     steps = sum(config.sweep.revolutions * 2 * np.pi / float(r["omega"]) / h for r, h in zip(records, record_h))
-    print(f"map {tag}: h = {info['h']:.3g} s, sweep {info['sweep_wall']:.1f} s "
+    say(f"map {tag}: h = {info['h']:.3g} s, sweep {info['sweep_wall']:.1f} s "
           f"({1e6 * info['sweep_wall'] / steps:.1f} us/sim-step), diverged {int(imap.diverged.sum())}")
     return MapRun(imap.nfrc, imap.speeds, imap.diverged, records, info["wall"], info["sweep_wall"], steps, info["h"],
                   config, record_h)
@@ -189,6 +190,6 @@ def held_out_choices(scene: dict, tolerances, error_of) -> None:
             if cand["held_out_error"] is not None:
                 break
             cand["held_out_error"] = error_of(choice.name, cand["options"])
-            print(f"held out at {tol:g}: {choice.name}: {cand['held_out_error']:.3g}")
+            say(f"held out at {tol:g}: {choice.name}: {cand['held_out_error']:.3g}")
             if cand["held_out_error"] <= tol:
                 break

@@ -22,6 +22,7 @@ from rotor37_rom.studies.speed_accuracy.disk_stress import scene_disk_stress
 from rotor37_rom.studies.speed_accuracy.docs import write_docs
 from rotor37_rom.studies.speed_accuracy.gnl_steady import scene_gnl_steady
 from rotor37_rom.studies.speed_accuracy.study_file import SCHEMA, StudyRecord, load_or_new, write_study
+from rotor37_rom.reporting import say
 
 __all__ = ["Scene", "REGISTRY", "SCENES", "DISK_SCENES", "REFERENCE_SCENES", "GROUPS", "expand_scenes", "record_choices", "run_study"]
 
@@ -159,7 +160,7 @@ def run_study(ctx: StudyContext, todo: Iterable[str]) -> StudyRecord:
     for name in todo:
         t0 = time.perf_counter()
         REGISTRY[name].run(ctx, study, t0)
-        print(f"scene {name}: {time.perf_counter() - t0:.0f} s")
+        say(f"scene {name}: {time.perf_counter() - t0:.0f} s")
         record_choices(study)
         # the study's machine is the from-scratch run's; a scene measured elsewhere since says its own
         study.update(schema=SCHEMA, machine=study.get("machine") if not fresh and "machine" in study
