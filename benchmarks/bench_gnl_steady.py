@@ -50,6 +50,8 @@ def parse(argv):
                    "order's snapshots at the largest --h-full (run with --snapshots first), each in [24, 400]")
     p.add_argument("--energy", type=float, default=None, help="carry each finished full-order run on for this many "
                    "revolutions, in (0, 20], and close its energy balance (studies.gnl_reference.full_order_energy)")
+    p.add_argument("--batch-cost", type=int, default=0, help="also time each --r-c model in a map's batch of this "
+                   "many speeds (0: not), in [0, 1000]")
     p.add_argument("--hyperelastic", default="svk", help="the full order's law: svk or neo-hookean (the full order "
                    "alone: the reduced models are SVK's)")
     p.add_argument("--cubature", type=float, default=None, help="run the --r-c models on a point cubature of this "
@@ -64,6 +66,7 @@ def parse(argv):
                                  ("--train-speeds", args.train_speeds, 1.0, 5000.0)):
         for v in values:
             real_number(name, v, lo, hi)
+    real_number("--batch-cost", args.batch_cost, 0, 1000)
     if args.energy is not None:
         real_number("--energy", args.energy, 0.0, 20.0, open_low=True)
     if args.cubature is not None:
@@ -178,6 +181,11 @@ def main(argv=None) -> int:
                 runs[key] = gr.reduced_run(model, C, case, args.rom_step, cap).to_json()
                 if info is not None:
                     runs[key]["details"]["cubature"] = info
+                save()
+            if args.batch_cost and runs[key]["details"].get("batch", {}).get("speeds") != args.batch_cost:
+                runs[key]["details"]["batch"] = gr.batch_cost(model, C, case, args.rom_step, cap, args.batch_cost)
+                print(f"{case.label()} | {key}: in a batch of {args.batch_cost} speeds "
+                      f"{runs[key]['details']['batch']['us_per_speed_step']:.1f} us per speed-step", flush=True)
                 save()
             report(case, key, runs[key])
         save()                                    # merged with the other runs of this case on disk

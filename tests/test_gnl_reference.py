@@ -131,3 +131,15 @@ def test_the_cubature_model_is_trained_on_its_own_runs(ci_blade, ci_rom, tmp_pat
         args = {"tol": 1e-3, "train_speeds": [2500.0], "train_revolutions": 2, **kwargs}
         with pytest.raises(ValueError, match=word):
             cubature_model(ci_rom, C, ci_blade, case, 4e-7, 1e6, **args)
+
+
+def test_batch_cost_times_a_maps_batch_and_refuses_bad_sizes(ci_rom):
+    from rotor37_rom.studies.gnl_reference import batch_cost
+
+    case = SteadyCase(1280.0)
+    C = np.zeros_like(ci_rom.K)
+    out = batch_cost(ci_rom, C, case, 4e-7, 2e3 * np.pi * 120, speeds=3, steps=50)
+    assert out["speeds"] == 3 and out["steps"] == 50 and 0 < out["us_per_speed_step"] < 1e6
+    for kwargs, word in (({"speeds": 0}, "speeds"), ({"speeds": 2.5}, "speeds"), ({"steps": 5}, "steps")):
+        with pytest.raises(ValueError, match=word):
+            batch_cost(ci_rom, C, case, 4e-7, 1e6, **{"speeds": 3, "steps": 50, **kwargs})

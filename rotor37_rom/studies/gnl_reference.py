@@ -30,7 +30,7 @@ from rotor37_rom.post.steady import Steadiness, steadiness
 HYPERELASTIC_LAWS = ("svk", "neo-hookean")
 
 __all__ = ["SteadyCase", "SteadyRun", "full_order_run", "full_order_energy", "reduced_run", "reduced_damping",
-           "cubature_model", "pod_model", "revolution_peaks", "compare_runs"]
+           "cubature_model", "batch_cost", "pod_model", "revolution_peaks", "compare_runs"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -255,6 +255,27 @@ def cubature_model(model, C: np.ndarray, sector, case: SteadyCase, h: float, cap
     return reduced, {"points": int(rep["points"]), "quadrature_points": int(rep["exact"].w.size),
                      "training_error": float(rep["result"].training_error), "states": int(Q_train.shape[1]),
                      "seconds": time.perf_counter() - t0}
+
+
+def batch_cost(model, C: np.ndarray, case: SteadyCase, h: float, cap: float, speeds: int = 20,
+               steps: int = 4000) -> dict:
+    """What the reduced model costs in a map: ``speeds`` runs around ``case``'s speed (+-10 %) marched together in
+    the maps' explicit scheme (``dynamics.explicit.simulate``, one batch) for ``steps`` steps from rest under the
+    casing. Returns the wall time per speed-step (us), the steps and speeds, and the step h (s)."""
+    from rotor37_rom.dynamics.explicit import CentralDifference, simulate
+
+    if not (isinstance(speeds, (int, np.integer)) and 1 <= speeds <= 1000):
+        raise ValueError(f"speeds must be an integer in [1, 1000], got {speeds!r}")
+    if not (isinstance(steps, (int, np.integer)) and 10 <= steps <= 10 ** 6):
+        raise ValueError(f"steps must be an integer in [10, 1e6], got {steps!r}")
+    damped = dataclasses.replace(model, C=np.asarray(C, float))
+    scheme = CentralDifference(damped, nonlinear=True, damping=True, frequency_cap=cap, h=h, force=True)
+    omega = case.speed * np.linspace(0.9, 1.1, speeds)
+    t0 = time.perf_counter()
+    simulate(scheme, omega, case.casing(), n_steps=steps, duration=case.duration, record_every=steps,
+             on_blowup="flag")
+    wall = time.perf_counter() - t0
+    return {"us_per_speed_step": 1e6 * wall / (speeds * steps), "speeds": speeds, "steps": steps, "h": scheme.h}
 
 
 def pod_model(sector, ops, snapshots: np.ndarray, r: int, cache_dir=None):
