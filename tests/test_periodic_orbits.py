@@ -366,3 +366,26 @@ def test_shooting_bad_input(ci_rom):
         Shooting(scheme, Casing(), steps=4000).from_rest(2 * 1220.0, 0)
     with pytest.raises(ValueError, match="exceeds the scheme's stability limit"):
         Shooting(scheme, Casing(), steps=10).scheme_at(100.0)
+
+
+def test_monodromy_products_and_arnoldi_multipliers_are_the_dense_ones(linear_contact):
+    """#88 item 1: the monodromy applied to a block by ``monodromy_products`` is the dense monodromy's product to
+    round-off (the same recurrence on k columns instead of 2 r), and Arnoldi on those products
+    (``leading_multipliers``) finds the multipliers of largest modulus of the dense monodromy (the ci blade's rubbing
+    orbit), each within 1e-8 of one of them (ARPACK's 1e-10 relative residual)."""
+    shooting, sol = linear_contact
+    z = sol.unknowns
+    zT, mono, _ = shooting.march(z, sol.omega)
+    zT2, apply = shooting.monodromy_products(z, sol.omega)
+    V = np.random.default_rng(88).standard_normal((z.size, 3))
+    assert np.array_equal(zT, zT2)
+    assert np.abs(apply(V) - mono @ V).max() <= 1e-12 * np.abs(mono).max() * np.abs(V).max() * z.size
+    dense = np.linalg.eigvals(mono)
+    dense = dense[np.argsort(-np.abs(dense))]
+    found = shooting.leading_multipliers(z, sol.omega, k=6)
+    assert np.allclose(np.abs(found), np.abs(dense[:6]), rtol=0, atol=1e-8)
+    assert all(np.abs(dense - mu).min() <= 1e-8 for mu in found)
+    with pytest.raises(ValueError, match="k \\(the multipliers wanted\\)"):
+        shooting.leading_multipliers(z, sol.omega, k=0)
+    with pytest.raises(ValueError, match="tol"):
+        shooting.leading_multipliers(z, sol.omega, tol=0.0)

@@ -104,6 +104,28 @@ class Shooting:
         and moves the multipliers by as much; a contact correction rings the highest modes, whose periods are a
         few steps, so an orbit that touches always gets the exact one)."""
         sc = self.scheme_at(omega)
+        sensitivity = domega and tangent and self.forcing is None
+        path = self._orbit(z, omega, keep_forces=sensitivity)
+        zT, states = path["zT"], path["states"]
+        if not tangent:
+            return zT, None, (states if record else None)
+        h, r = sc.h, self.r
+        # the tangent: d q_n / d z and d q_n-1 / d z along the orbit (and d q_n / d h as a last column)
+        T, Tp = np.eye(2 * r)[:r].copy(), np.eye(2 * r)[r:].copy()
+        if sensitivity:
+            T, Tp = np.hstack([T, np.zeros((r, 1))]), np.hstack([Tp, np.zeros((r, 1))])
+        T, Tp = self._propagate(path, T, Tp, sensitivity)
+        mono = np.vstack([T[:, :2 * r], Tp[:, :2 * r]])
+        if domega and tangent:
+            # h = 2 pi / (omega n); the casing's angle per step, Omega h = m pi / n, does not depend on omega
+            dz = None if not sensitivity else np.r_[T[:, -1], Tp[:, -1]] * (-h / omega)
+            return zT, mono, (states if record else None), dz
+        return zT, mono, (states if record else None)
+
+    def _orbit(self, z: np.ndarray, omega: float, keep_forces: bool = False) -> dict:
+        """One period of the scheme from z: its states (n + 1, r), z(T), each touching step's active set, D_AA^-1
+        and correction, and (``keep_forces``) each step's GNL part of the prediction."""
+        sc = self.scheme_at(omega)
         h, r, n = sc.h, self.r, self.steps
         Q, Qp = np.array(z[:r], float), np.array(z[r:], float)
         Qp0 = Qp.copy()
@@ -111,13 +133,11 @@ class Shooting:
         contact = self.contact
         if contact is not None:                   # the map's contact step (dynamics.contact_step), one run
             mu = self.casing.mu
-            B = self.WN + mu * self.WT
             one, Om, phase = np.zeros(1, int), np.array([self.speed(omega)]), np.zeros(1)
         states = np.empty((n + 1, r))
         states[0] = Q
         touched = {}
-        sensitivity = domega and tangent and self.forcing is None
-        forces = np.zeros((n, r)) if sensitivity and force is not None else None
+        forces = np.zeros((n, r)) if keep_forces and force is not None else None
         for k in range(n):                        # the map's prediction (CentralDifference.predict), one run
             F = None if self.forcing is None else np.asarray(self.forcing(k * h, omega), float)
             Qn, fk = sc.predict(Q[:, None], Qp[:, None], F, parts=True)
@@ -133,13 +153,19 @@ class Shooting:
                     touched[k] = act, inv, correction
             Qp, Q = Q, Qn[:, 0]
             states[k + 1] = Q
-        zT = np.r_[Q, Qp]
-        if not tangent:
-            return zT, None, (states if record else None)
-        # the tangent: d q_n / d z and d q_n-1 / d z along the orbit (and d q_n / d h as a last column)
-        T, Tp = np.eye(2 * r)[:r].copy(), np.eye(2 * r)[r:].copy()
+        return {"scheme": sc, "omega": omega, "zT": np.r_[Q, Qp], "states": states, "touched": touched,
+                "forces": forces, "Qp0": Qp0}
+
+    def _propagate(self, path: dict, T: np.ndarray, Tp: np.ndarray, sensitivity: bool = False):
+        """The tangent of the period ``path`` (``_orbit``) applied to the columns (T; Tp) of d(q_0; q_-1): (d q_n,
+        d q_n-1) at the period's end. With ``sensitivity`` the last column is d/dh, marched with the operators' own
+        change with the step."""
+        sc, states, touched, forces, Qp0 = (path[k] for k in ("scheme", "states", "touched", "forces", "Qp0"))
+        n = self.steps
+        force = sc.model.forces if sc.nonlinear else None
+        if self.contact is not None:
+            B = self.WN + self.casing.mu * self.WT
         if sensitivity:
-            T, Tp = np.hstack([T, np.zeros((r, 1))]), np.hstack([Tp, np.zeros((r, 1))])
             dX1, dX2, G0 = self._step_derivatives(sc)
         # an orbit that touches rings the highest modes (periods of a few steps): J at every step there
         every = 1 if touched else self.jacobian_every
@@ -168,12 +194,36 @@ class Shooting:
                 # lambda_A = D_AA^-1 (c - N_A q_pred): d q = (I - B_A D_AA^-1 N_A) d q_pred
                 Tn = Tn - B[:, act] @ (inv @ (self.N[act] @ Tn))
             Tp, T = T, Tn
-        mono = np.vstack([T[:, :2 * r], Tp[:, :2 * r]])
-        if domega and tangent:
-            # h = 2 pi / (omega n); the casing's angle per step, Omega h = m pi / n, does not depend on omega
-            dz = None if not sensitivity else np.r_[T[:, -1], Tp[:, -1]] * (-h / omega)
-            return zT, mono, (states if record else None), dz
-        return zT, mono, (states if record else None)
+        return T, Tp
+
+    def monodromy_products(self, z: np.ndarray, omega: float):
+        """The monodromy of the period from z as products (#88): returns (z(T), apply), apply(V) = M V for a block V
+        (2 r, k) of perturbations of z, marched together along the one orbit (k columns, not 2 r: Newton-Krylov and
+        Arnoldi need a few tens of products, not the whole monodromy)."""
+        path = self._orbit(z, omega)
+        r = self.r
+
+        def apply(V: np.ndarray) -> np.ndarray:
+            V = np.asarray(V, float)
+            block = V.reshape(2 * r, -1)
+            T, Tp = self._propagate(path, block[:r].copy(), block[r:].copy())
+            return np.vstack([T, Tp]).reshape(V.shape)
+        return path["zT"], apply
+
+    def leading_multipliers(self, z: np.ndarray, omega: float, k: int = 6, tol: float = 1e-10) -> np.ndarray:
+        """The k Floquet multipliers of largest modulus (those that decide stability and bifurcations), by Arnoldi
+        on the monodromy's products (``monodromy_products``; scipy's ARPACK), by decreasing modulus."""
+        import scipy.sparse.linalg as spla
+
+        n = 2 * self.r
+        if not (isinstance(k, (int, np.integer)) and 1 <= k <= n - 2):
+            raise ValueError(f"k (the multipliers wanted) must be an integer in [1, {n - 2}], got {k!r}")
+        if not (isinstance(tol, float) and 0.0 < tol < 1.0):
+            raise ValueError(f"tol (Arnoldi's) must be in (0, 1), got {tol!r}")
+        _, apply = self.monodromy_products(z, omega)
+        op = spla.LinearOperator((n, n), matvec=apply, matmat=apply, dtype=float)
+        values = spla.eigs(op, k=int(k), which="LM", tol=tol, return_eigenvectors=False)
+        return values[np.argsort(-np.abs(values), kind="stable")]
 
     @staticmethod
     def _step_derivatives(sc):
