@@ -389,3 +389,23 @@ def test_monodromy_products_and_arnoldi_multipliers_are_the_dense_ones(linear_co
         shooting.leading_multipliers(z, sol.omega, k=0)
     with pytest.raises(ValueError, match="tol"):
         shooting.leading_multipliers(z, sol.omega, tol=0.0)
+
+
+def test_newton_krylov_finds_the_dense_newtons_orbit(linear_contact):
+    """#88 item 1: Newton-Krylov (GMRES on the monodromy's products, ``solve_periodic_krylov``) from rest converges to
+    the orbit dense Newton found (both to 1e-10 on the update; the orbits agree to 1e-8 of their size, the Newton
+    tolerance times the conditioning of M - I of a damped orbit), with the same stability and the same leading
+    multipliers (1e-8); bad input is refused in one line."""
+    from rotor37_rom.periodic import solve_periodic_krylov
+
+    shooting, sol = linear_contact
+    nk = solve_periodic_krylov(shooting, np.zeros(shooting.size), sol.omega, tol=1e-10, krylov_tol=1e-8)
+    assert np.abs(nk.unknowns - sol.unknowns).max() <= 1e-8 * np.abs(sol.unknowns).max()
+    assert nk.stable == sol.stable and nk.residual <= 1e-8 * np.abs(sol.unknowns).max()
+    dense = np.sort(np.abs(sol.multipliers))[::-1][:6]
+    assert np.allclose(np.sort(np.abs(nk.multipliers))[::-1], dense, rtol=0, atol=1e-8)
+    for kwargs, word in (({"krylov_tol": 0.0}, "krylov_tol"), ({"multipliers": shooting.size}, "multipliers"),
+                         ({"x0": np.zeros(3)}, "x0"), ({"omega": -1.0}, "omega")):
+        args = {"x0": np.zeros(shooting.size), "omega": sol.omega, **kwargs}
+        with pytest.raises(ValueError, match=word):
+            solve_periodic_krylov(shooting, **args)

@@ -8,10 +8,10 @@ states with its Jacobian, as the reduced models' forces do."""
 from .harmonic_balance import (Branch, Harmonics, HarmonicBalance, PeriodicProblem, PeriodicSolution, continue_branch,
     model_force, solve_periodic, time_state, backbone, bifurcation_kind)
 from .contact import CoulombFriction, ContactBalance
-from .shooting import Shooting
+from .shooting import Shooting, solve_periodic_krylov
 from .travelling_wave import TravellingWaveBalance, travelling_excitation
 from .departure import wave_departure
 
 __all__ = ["Branch", "Harmonics", "HarmonicBalance", "PeriodicProblem", "PeriodicSolution", "continue_branch",
            "solve_periodic", "model_force", "time_state", "backbone", "bifurcation_kind", "CoulombFriction",
-           "ContactBalance", "Shooting", "TravellingWaveBalance", "travelling_excitation", "wave_departure"]
+           "ContactBalance", "Shooting", "solve_periodic_krylov", "TravellingWaveBalance", "travelling_excitation", "wave_departure"]

@@ -24,7 +24,7 @@ from rotor37_rom.checks import real_number
 from rotor37_rom.dynamics.casing import Casing, ContactSetError, contact_matrices
 from rotor37_rom.dynamics.contact_step import ContactStep
 
-__all__ = ["Shooting"]
+__all__ = ["Shooting", "solve_periodic_krylov"]
 
 
 class Shooting:
@@ -291,3 +291,51 @@ class Shooting:
         with np.errstate(divide="ignore"):          # real and imaginary parts apart: -inf + i 0, not nan
             lam = np.log(np.abs(mult)) * (omega / (2 * np.pi)) + 1j * (np.angle(mult) * omega / (2 * np.pi))
         return lam[np.argsort(lam.real, kind="stable")]
+
+
+def solve_periodic_krylov(shooting: Shooting, x0: np.ndarray, omega: float, tol: float = 1e-10, max_iter: int = 30,
+                          krylov_tol: float = 1e-3, multipliers: int = 6):
+    """Newton-Krylov on the shooting residual R = z(T) - z (#88): each Newton step solves (M - I) dz = -R by GMRES on
+    the monodromy's products (``Shooting.monodromy_products``: one orbit, then a few vectors marched along it,
+    instead of the 2 r columns of the dense monodromy), to the relative residual ``krylov_tol``; stops when the
+    update is below ``tol`` relative to z. Stability from the ``multipliers`` leading Floquet multipliers by
+    Arnoldi (``Shooting.leading_multipliers``; 0: none). Returns a ``PeriodicSolution`` as ``solve_periodic`` does
+    (its exponents those of the leading multipliers alone); ValueError where Newton does not converge."""
+    import scipy.sparse.linalg as spla
+
+    from rotor37_rom.checks import whole_number
+    from rotor37_rom.periodic.harmonic_balance import PeriodicSolution, _stable
+
+    real_number("omega", omega, 0.0, open_low=True, unit=" rad/s")
+    real_number("tol", tol, 0.0)
+    whole_number("max_iter", max_iter, 1)
+    real_number("krylov_tol", krylov_tol, 0.0, 1.0, open_low=True, open_high=True)
+    whole_number("multipliers", multipliers, 0)
+    n = shooting.size
+    if multipliers > n - 2:
+        raise ValueError(f"multipliers must be in [0, {n - 2}], got {multipliers}")
+    x = np.asarray(x0, float).copy()
+    if x.shape != (n,) or not np.isfinite(x).all():
+        raise ValueError(f"x0 must be {n} finite unknowns, got shape {x.shape}")
+    for it in range(1, max_iter + 1):
+        zT, apply = shooting.monodromy_products(x, omega)
+        R = zT - x
+        if not np.isfinite(R).all():
+            raise ValueError(f"periodic orbit: the period from Newton-Krylov's iterate {it} is not finite at omega "
+                             f"= {omega:g} (past the scheme's stability limit)")
+        op = spla.LinearOperator((n, n), matvec=lambda v: apply(v) - v, dtype=float)
+        dx, info = spla.gmres(op, -R, tol=krylov_tol, atol=0.0, restart=min(n, 60), maxiter=20)
+        if info < 0 or not np.isfinite(dx).all():
+            raise ValueError(f"periodic orbit: GMRES failed (info {info}) at omega = {omega:g}")
+        x += dx
+        if np.linalg.norm(dx) <= tol * max(np.linalg.norm(x), 1e-300):
+            exps = None
+            if multipliers:
+                mult = shooting.leading_multipliers(x, omega, k=int(multipliers))
+                with np.errstate(divide="ignore"):
+                    exps = np.log(np.abs(mult)) * (omega / (2 * np.pi)) + 1j * (np.angle(mult) * omega / (2 * np.pi))
+                exps = exps[np.argsort(exps.real, kind="stable")]
+            X, L = shooting.split(x)
+            residual = float(np.linalg.norm(shooting.march(x, omega, tangent=False)[0] - x))
+            return PeriodicSolution(omega, X, exps, _stable(exps, omega), residual, it, L)
+    raise ValueError(f"periodic orbit: Newton-Krylov did not converge in {max_iter} iterations at omega = {omega:g}")
