@@ -132,6 +132,12 @@ def main(argv=None) -> int:
                                                            stem.with_name(stem.name + ".npz"), args.energy)
                 print(f"{case.label()} | {key}: energy per revolution (J) {json.dumps(runs[key]['energy'])}",
                       flush=True)
+                maxima = runs[key]["maxima"] + runs[key]["energy"]["maxima"]       # the run's, then carried on
+                changes = np.abs(np.diff(maxima[-3:])) / np.asarray(maxima[-3:-1])
+                print(f"{case.label()} | {key}: carried on {args.energy:g} revolutions, max |u_LE| per revolution "
+                      f"(mm) " + " ".join(f"{1e3 * m:.3f}" for m in maxima) + "; last changes "
+                      + ", ".join(f"{100 * c:.1f} %" for c in changes)
+                      + (" (steady)" if (changes < case.tolerance).all() else " (not steady)"), flush=True)
                 save()
             report(case, key, runs[key])
         for r in args.pod:

@@ -24,7 +24,7 @@ import numpy as np
 from rotor37_rom.checks import real_number
 from rotor37_rom.dynamics.casing import DIRECTIONS, Casing
 from rotor37_rom.dynamics.damping import ModalLaw, damping_law
-from rotor37_rom.post.steady import Steadiness, steadiness
+from rotor37_rom.post.steady import Steadiness, revolution_maxima, steadiness
 
 #: the full order's hyperelastic laws (``forms.HYPERELASTIC_LAWS``, named here without importing UFL)
 HYPERELASTIC_LAWS = ("svk", "neo-hookean")
@@ -150,7 +150,8 @@ def full_order_energy(sector, ops, case: SteadyCase, h: float, rho_inf: float | 
     casing's work (wall), what the impacts take (closing) and give back (opening), friction, the damping law's
     dissipation, the change of kinetic + strain energy, the residual R (> 0: lost by the scheme) split as R = G - P + A
     (the trapezoidal quadrature gap of the internal force, Newton's defect, generalised alpha's algorithmic
-    dissipation); and the node LE's map quantity over the window."""
+    dissipation); and node LE's map quantity over the window: per whole revolution carried on, max |u_LE|
+    ('maxima', the run's own revolutions' continued) and its peaks towards the axis and the casing."""
     from rotor37_rom.dynamics.energy import balance_of_run, record_run
 
     problem, _ = _full_order_problem(sector, ops, case, h, rho_inf, 0)
@@ -179,9 +180,13 @@ def full_order_energy(sector, ops, case: SteadyCase, h: float, rho_inf: float | 
              "residual": total(balance.residual), "quadrature_gap": total(balance.quadrature_gap),
              "defect": total(balance.defect), "algorithmic": total(balance.algorithmic),
              "scale": total(balance.scale)}
-    normal = problem.contact.N @ run.x
+    labels = list(problem.contact.labels)
+    u = np.asarray(problem.contact.N[labels.index("0:LE") if "0:LE" in labels else 0] @ run.x).ravel()
+    inward, outward = revolution_peaks(run.t, u, case.speed)
     return {"per_revolution_J": terms, "revolutions": revolutions, "steps": k, "wall_s": wall_s,
-            "mean_energy_J": float(np.mean(balance.energy)), "le_normal_max_m": float(np.abs(normal[0]).max())}
+            "mean_energy_J": float(np.mean(balance.energy)), "le_normal_max_m": float(np.abs(u).max()),
+            "maxima": revolution_maxima(run.t, u, case.speed).tolist(), "towards_axis": inward.tolist(),
+            "towards_casing": outward.tolist()}
 
 
 def reduced_damping(model, sector, ops, law: ModalLaw) -> np.ndarray:
