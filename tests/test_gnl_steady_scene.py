@@ -32,6 +32,7 @@ def _results(tmp_path, cubature_growth=0.0):
             ROM: _run(w, amp * (1.05 if w == 1280 else 0.97), 800.0),
             CUB: _run(w, amp * 1.02, 40.0, growth=cubature_growth if w == 1450 else 0.0),
             "pod r 55 cap 120 h 4e-07": _run(w, amp, 40.0, r=55)}
+    store["1400 rad/s mu 0 x heavy 8 rev"] = {"full h 2e-06 rho 0.8": _run(1400.0, 5e-4, 4000.0, growth=0.5)}
     store["1280 rad/s mu 0.15 cone heavy 8 rev"] = {"full h 2e-06 rho 0.8": _run(1280.0, 3e-4, 4000.0),
                                                     ROM: _run(1280.0, 1e-4, 1.0)}
     path = tmp_path / "bench_gnl_steady.json"
@@ -49,6 +50,8 @@ def test_the_scene_compares_predictive_models_with_the_full_order(tmp_path):
     assert rows[ROM]["cost"] == pytest.approx(100.0) and rows[CUB]["cost_ratio"] == pytest.approx(200.0)
     assert "(full h 1e-06 rho 0.8 s)" in scene["reference"]["options"]["model"]     # against the finest step
     assert "r = 104" in rows[ROM]["name"]
+    assert "left out (a full order without reduced runs): 1400 rad/s" in scene["description"]
+    assert set(rows[ROM]["errors"]) == {"1280", "1450"}
 
 
 def test_a_model_not_steady_at_one_speed_has_no_error(tmp_path):
