@@ -61,8 +61,8 @@ class Shooting:
         self.jacobian_every = int(jacobian_every)
         self.r = scheme.r
         self._h, self.contact = None, None
-        if casing is not None:
-            self.N, self.S, self.theta0, self.rows = contact_matrices(scheme.model.nodes, self.r, casing)
+        if casing is not None:                    # the casing checked (its hand) before any work; its rows are the
+            contact_matrices(scheme.model.nodes, self.r, casing)     # contact step's (``scheme_at``)
 
     @property
     def size(self) -> int:
@@ -192,7 +192,7 @@ class Shooting:
                     # B = W E changes as dW W^-1 B = G0 B: d q = P (d q_pred + G0 B_A lambda_A)
                     Tn[:, -1] += G0 @ correction
                 # lambda_A = D_AA^-1 (c - N_A q_pred): d q = (I - B_A D_AA^-1 N_A) d q_pred
-                Tn = Tn - B[:, act] @ (inv @ (self.N[act] @ Tn))
+                Tn = Tn - B[:, act] @ (inv @ (self.contact.N[act] @ Tn))
             Tp, T = T, Tn
         return T, Tp
 
