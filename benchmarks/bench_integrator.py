@@ -7,11 +7,14 @@ The machine's GEMM rate (dgemm 2000 x 2000) gives the fraction of peak. Then, on
 full step with casing contact, and the interaction-map throughput in simulated revolutions per wall second, GNL on,
 with the projection to the headline map (100 speeds x 200 revolutions).
 
+The exact polynomial force of a batch on its C kernel against the NumPy path (GEMMs over monomials), same arrays,
+same run, at the kernel's thread count (``forces.kernel.kernel_threads``: OPENBLAS_NUM_THREADS's).
+
     python benchmarks/bench_integrator.py [--r 30 45 60 90] [--P 1 8 80]
+    python benchmarks/bench_integrator.py --polynomial-only --r 55 104 --P 2 6 11 16 32   # the kernel alone
 """
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
@@ -19,6 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rotor37_rom.checks import before_work, real_number
+from rotor37_rom.cli import ArgumentParser, run_main
 from rotor37_rom.machine import write_results
 from rotor37_rom.studies.speed_accuracy.cost import synthetic_model, time_per_step
 
@@ -109,19 +114,68 @@ def stress_kernel(headline: str, point_counts, P: int = 50, r: int = 45) -> dict
     return out
 
 
+def polynomial_kernel_rows(rs, Ps) -> list[dict]:
+    """Microseconds of one evaluation of the exact polynomial force of r modes at P states: the C kernel (packed
+    tensors) against the NumPy path, random tensors of the right sizes (timing only)."""
+    from rotor37_rom.forces.kernel import kernel_threads, polynomial_kernel
+    from rotor37_rom.forces.tensors import PolynomialForces
+
+    if polynomial_kernel() is None:
+        print("polynomial kernel: none on this machine (no compiler or ROTOR37_C_KERNEL=0)")
+        return []
+    rows, rng = [], np.random.default_rng(0)
+    for r in rs:
+        forces = PolynomialForces(rng.standard_normal((r, r * (r + 1) // 2)),
+                                  rng.standard_normal((r, r * (r + 1) * (r + 2) // 6)))
+        for P in Ps:
+            if P < 2:
+                continue                               # one state: the NumPy GEMV (memory-bound) is used
+            Q = rng.standard_normal((r, P)) * 1e-3
+            t_np = time_per_step(lambda: forces._evaluate_numpy(Q), 0.3)
+            t_c = time_per_step(lambda: forces.evaluate(Q), 0.3)
+            rows.append({"r": r, "P": P, "numpy_us": t_np * 1e6, "kernel_us": t_c * 1e6, "speedup": t_np / t_c,
+                         "threads": kernel_threads()})
+            print(f"polynomial force r = {r}, P = {P}: numpy {t_np * 1e6:.0f} us, C kernel {t_c * 1e6:.0f} us "
+                  f"({t_np / t_c:.2f}x, {kernel_threads()} thread(s), {t_c / P * 1e6:.0f} us a state)")
+    return rows
+
+
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--r", type=int, nargs="+", default=[30, 45, 60, 90])
-    parser.add_argument("--P", type=int, nargs="+", default=[1, 8, 80])
-    parser.add_argument("--preset", default="ci")
-    parser.add_argument("--throughput-speeds", type=int, default=16)
-    parser.add_argument("--throughput-revolutions", type=float, default=1.0)
-    parser.add_argument("--headline-speeds", type=int, default=100)
-    parser.add_argument("--headline", default="results/headline",
-                        help="a GNL headline map (the demo's --out with --cubature): its trained cubature and step "
-                             "for the step with and without the C stress kernel; skipped when missing")
+    parser = ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--r", type=int, nargs="+", default=[30, 45, 60, 90], help="reduced sizes, each in [1, 150]")
+    parser.add_argument("--P", type=int, nargs="+", default=[1, 8, 80], help="batch sizes, each in [1, 1000]")
+    parser.add_argument("--preset", default="ci", help="mesh preset of the real model: ci, coarse or paper")
+    parser.add_argument("--throughput-speeds", type=int, default=16, help="speeds of a throughput batch, [1, 1000]")
+    parser.add_argument("--throughput-revolutions", type=float, default=1.0,
+                        help="revolutions of a throughput run, in (0, 100]")
+    parser.add_argument("--headline-speeds", type=int, default=100, help="speeds of the headline batch, [1, 1000]")
+    parser.add_argument("--headline", default=None,
+                        help="a GNL headline map's folder (the demo's --out with --cubature): its trained cubature "
+                             "and step for the step with and without the C stress kernel (default results/headline, "
+                             "skipped when missing)")
     parser.add_argument("--kernel-points", type=int, nargs="+", default=[376, 3000])
+    parser.add_argument("--polynomial-only", action="store_true",
+                        help="time the exact polynomial force's C kernel against NumPy at --r x --P, nothing else")
     args = parser.parse_args(argv)
+    from rotor37_rom.geometry.blade import MESH_PRESETS
+
+    for name, values, high in (("--r", args.r, 150), ("--P", args.P, 1000)):
+        for v in values:
+            real_number(name, v, 1, high)
+    for name, v in (("--throughput-speeds", args.throughput_speeds), ("--headline-speeds", args.headline_speeds)):
+        real_number(name, v, 1, 1000)
+    real_number("--throughput-revolutions", args.throughput_revolutions, 0, 100, open_low=True)
+    real_number("--kernel-points", min(args.kernel_points), 1, None)
+    if args.preset not in MESH_PRESETS:
+        raise ValueError(f"--preset must be one of {', '.join(MESH_PRESETS)}, got {args.preset!r}")
+    if args.headline is not None and (not args.headline or not Path(args.headline).is_dir()):
+        raise ValueError(f"--headline must be a map's output folder, got {args.headline!r} (no such folder)")
+    args.headline = args.headline or "results/headline"
+    before_work({"results": Path("results")})
+    if args.polynomial_only:
+        rows = polynomial_kernel_rows(args.r, args.P)
+        print(f"machine: {write_results('bench_polynomial_kernel', rows)}")
+        return 0
     from rotor37_rom.dynamics.explicit import CentralDifference
 
     gflops = gemm_rate()
@@ -200,11 +254,13 @@ def main(argv=None) -> int:
         measure(f"{tag}, " + ("no cap" if cap_khz is None else f"cap {cap_khz:g} kHz"), scheme, args.headline_speeds,
                 cap_khz=cap_khz, p90_nfrc_error=best.get("p90_error"))
     kernel = stress_kernel(args.headline, args.kernel_points)
+    polynomial = polynomial_kernel_rows(args.r, args.P)
     machine = write_results("bench_integrator", rows, dgemm_gflops=gflops, throughput=throughput,
-                            model={"preset": args.preset, "r": model.r}, stress_kernel=kernel)
+                            model={"preset": args.preset, "r": model.r}, stress_kernel=kernel,
+                            polynomial_kernel=polynomial)
     print(f"machine: {machine}")
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_main(main))

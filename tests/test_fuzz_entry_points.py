@@ -22,7 +22,8 @@ ENTRY_POINTS = ["demos/contact_map.py", "demos/report.py", "demos/reduced_blade.
                 "benchmarks/bench_disk_gnl_coupling.py", "benchmarks/bench_disk_map.py",
                 "benchmarks/bench_disk_mistuning.py", "benchmarks/bench_gnl_vs_linear.py",
                 "benchmarks/disk_backbone.py", "benchmarks/plot_disk_indicator.py", "benchmarks/speed_accuracy.py",
-                "benchmarks/bench_gnl_steady.py", "benchmarks/bench_impact_numbers.py"]
+                "benchmarks/bench_gnl_steady.py", "benchmarks/bench_impact_numbers.py",
+                "benchmarks/bench_integrator.py"]
 NUMBERS = ["nan", "inf", "-inf", "1e300", "abc", ""]          # never a valid value of a numeric option
 MAYBE = ["0", "-1", "-0.5"]                                  # valid for some options, refused by the others
 PATHS = ("--out", "--cache", "--model", "--mesh", "--table")
@@ -155,6 +156,13 @@ REFUSED = {
         (["--speeds", "1200", "1600", "1e9"], "--speeds"),               # grew to 6.6 GB in 32 s
         (["--speeds", "1200", "1600", "1e300"], "--speeds"),
         (["--speeds", "100", "1600", "10000", "--revolutions", "200"], "--speeds"),   # ~900 GiB read back for the map
+        (["--r-c", "5000"], "--r-c"),                                    # was accepted at --check
+        (["--r-c", "400"], "--r-c"),                                     # r = 430: 128 GiB of cubic tensors
+        (["--r-md", "3000"], "--r-md"),
+    ],
+    "demos/report.py": [
+        (["--r-c", "5000"], "--r-c"),
+        (["--r-c", "400"], "--r-c"),
     ],
     "demos/turning_map.py": [
         (["--speeds", "1400", "1900", "1e9"], "--speeds"),

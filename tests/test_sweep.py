@@ -6,6 +6,7 @@ import os
 import re
 import subprocess
 import sys
+import types
 from pathlib import Path
 
 import numpy as np
@@ -800,3 +801,24 @@ def test_idle_barrier_waits_asleep(tmp_path):
     assert cpu_idle < 0.5, measured
     if os.getloadavg()[0] < 1.0:          # the control needs the core to itself: on a busy machine a spin gets less
         assert cpu_blocking > 1.0, measured
+
+
+def test_sweep_seconds_adds_each_batch_as_its_runs_end(monkeypatch):
+    """``sweep_seconds``'s arithmetic against the closed form: with a step of k runs costing a + b k (what the probes
+    measure, here given), a batch whose runs take s_1 >= ... >= s_P steps costs sum_k (s_k - s_(k+1)) (a + b k) =
+    sum_p s_p b + s_1 a; two batches add. The probes are the only thing replaced (their wall is the given cost)."""
+    a, b = 2e-4, 5e-5
+
+    class Probe:
+        def __init__(self, omega, n_steps):
+            self.wall = n_steps * (a + b * len(omega))
+
+    monkeypatch.setattr(sweep_mod, "simulate", lambda scheme, omega, casing, n_steps, **kw: Probe(omega, n_steps))
+    scheme = types.SimpleNamespace(h=1e-6)
+    speeds = np.array([1600.0, 1200.0, 1300.0, 1500.0, 1400.0])
+    spec = SweepSpec(revolutions=2.0, batch_size=3)
+    steps = np.ceil(2.0 * 2 * np.pi / np.sort(speeds) / 1e-6)
+    expected = sum(s.sum() * b + s.max() * a for s in (steps[:3], steps[3:]))
+    assert sweep_mod.sweep_seconds(scheme, speeds, spec) == pytest.approx(expected, rel=1e-12)
+    with pytest.raises(ValueError, match="probe_steps"):
+        sweep_mod.sweep_seconds(scheme, speeds, spec, probe_steps=5)

@@ -19,7 +19,7 @@ import itertools
 
 import numpy as np
 
-from rotor37_rom.forces.kernel import pk_nonlinear_kernel
+from rotor37_rom.forces.kernel import pack_panels, pk_nonlinear_kernel, polynomial_kernel
 
 __all__ = [
     "quadratic_monomial_indices",
@@ -363,9 +363,22 @@ class PolynomialForces:
             raise ValueError(f"PolynomialForces: A {self.A.shape} and B {self.B.shape} do not match r = {r}")
 
     def evaluate(self, Q: np.ndarray) -> np.ndarray:
-        """g~ for a batch Q (r, P) -> (r, P) as GEMMs over monomials; the cubic one without forming m3: for each
-        j, Q_j * (B[:, triples starting at j] @ m2[pairs starting at >= j])."""
+        """g~ for a batch Q (r, P) -> (r, P): from two states on, the C kernel on A~ and B~ packed once
+        (``forces.kernel.polynomial_kernel``); without it (or for one state) GEMMs over monomials, the cubic one
+        without forming m3: for each j, Q_j * (B[:, triples starting at j] @ m2[pairs starting at >= j])."""
         Q = np.asarray(Q, float).reshape(self.r, -1)
+        if Q.shape[1] >= 2 and self._panels is not None:
+            return polynomial_kernel()(self._panels, Q)
+        return self._evaluate_numpy(Q)
+
+    @functools.cached_property
+    def _panels(self) -> "tuple | None":
+        """A~ and B~ packed for the C kernel (a copy of both), or None without a kernel or past 1 GB."""
+        if polynomial_kernel() is None or self.A.nbytes + self.B.nbytes > 2 ** 30:
+            return None
+        return ((2, pack_panels(self.A)), (3, pack_panels(self.B)))
+
+    def _evaluate_numpy(self, Q: np.ndarray) -> np.ndarray:
         r = self.r
         a, b = quadratic_monomial_indices(r)
         m2 = Q[a] * Q[b]

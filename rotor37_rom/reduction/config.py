@@ -8,8 +8,21 @@ import numbers
 
 import numpy as np
 
-from rotor37_rom.checks import real_number, whole_number
+from rotor37_rom.checks import fits_in_memory, real_number, whole_number
 from rotor37_rom.reduction.craig_bampton import CRITERIA, GLOBAL_MD_MAX
+
+#: fixed-interface modes or modal derivatives (per sector) at most: far above any contact study's (15-200), below
+#: what SLEPc and the cubic tensors (r^4 / 6 entries) could hold on one machine
+MODES_MAX = 2000
+
+
+def check_cubic_memory(option: str, r: int, copies: int = 3) -> None:
+    """ValueError naming ``option`` where a blade's reduced model of size ``r`` could not hold its exact cubic forces
+    (r (r + 1) (r + 2) / 6 x r doubles) ``copies`` times: the tensor, its packed copy for the C kernel and the
+    explicit scheme's premultiplied one."""
+    fits_in_memory(option, copies * 8.0 * r * r * (r + 1) * (r + 2) / 6,
+                   f"a reduced model of r = {r}: its exact cubic forces {copies} times",
+                   hint="fewer modes (--r-c, --r-md, --global-md)")
 
 __all__ = ["ReductionConfig", "DiskReductionConfig", "FORCE_METHODS"]
 
@@ -66,8 +79,8 @@ class ReductionConfig:
     spin_modes: int = 0
 
     def __post_init__(self):
-        whole_number("r_c", self.r_c, 1)
-        whole_number("r_md", self.r_md, 0)
+        whole_number("r_c", self.r_c, 1, MODES_MAX)
+        whole_number("r_md", self.r_md, 0, MODES_MAX)
         whole_number("global_md_modes", self.global_md_modes, 0, GLOBAL_MD_MAX)
         whole_number("ecsw_states", self.ecsw_states, 1)
         real_number("contact_patch", self.contact_patch, 0, 0.01, unit=" m")
@@ -155,8 +168,8 @@ class DiskReductionConfig:
                              "snapshot speed)")
         if self.tip_nodes not in ("all", "LE"):
             raise ValueError(f"tip_nodes must be 'all' or 'LE', got {self.tip_nodes!r}")
-        whole_number("r_c", self.r_c, 1)
-        whole_number("r_md", self.r_md, 0)
+        whole_number("r_c", self.r_c, 1, MODES_MAX)
+        whole_number("r_md", self.r_md, 0, MODES_MAX)
         whole_number("r_cyclic", self.r_cyclic, 1)
         whole_number("face_shapes", self.face_shapes, 0)
         whole_number("seed", self.seed, 0)

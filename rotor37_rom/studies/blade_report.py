@@ -247,6 +247,32 @@ def draw_stress(sector, model, peak: dict, run: MapResult, speed: float, nonline
     return files
 
 
+def map_seconds(config: ContactMapConfig, model) -> tuple[float, float] | None:
+    """(the map, its stress at t_max) in seconds on this machine (``sweep.sweep_seconds``: probes of the map's own
+    scheme; the stress carries one revolution on at one speed), or None for a cubature map (its training's length
+    is known only once it has run)."""
+    from rotor37_rom.studies.contact_scheme import time_scheme
+    from rotor37_rom.studies.sweep import sweep_seconds
+
+    if config.scheme.cubature is not None:
+        return None
+    scheme = time_scheme(config, model, config.gnl == "on", None)
+    one = dataclasses.replace(config.sweep, revolutions=1.0, batch_size=1)
+    speeds = config.speed_grid
+    return sweep_seconds(scheme, speeds, config.sweep), sweep_seconds(scheme, [float(speeds.min())], one)
+
+
+def _left(estimates: list, done: int) -> str:
+    """What the report still has to do, from the estimates of its maps (and their stress) not yet run."""
+    rest = estimates[done:]
+    known = [e for e in rest if e is not None]
+    stress = sum(e[1] for e in estimates if e is not None)
+    text = (f"about {sum(e[0] for e in known) + stress:.0f} s of integration left (the maps' and the stress's, "
+            f"from probes of each map's scheme on this machine)")
+    return text + (f", plus {len(rest) - len(known)} cubature map(s) whose training is not timed"
+                   if len(known) < len(rest) else "")
+
+
 def run_report(config: ReportConfig) -> ReportResult:
     """Run every study of ``config`` and write ``<out>/report.html`` (serial)."""
     from mpi4py import MPI
@@ -272,11 +298,14 @@ def run_report(config: ReportConfig) -> ReportResult:
     model = next(iter(clearance.models.values()))
     save_reduced_model(model, config.model_file)
     lap("reduced model and clearance consumption", t0)
+    estimates = [map_seconds(c, model) for c in config.map_configs]
+    say(f"report: {_left(estimates, 0)}", flush=True)
     maps = []
-    for map_config in config.map_configs:
+    for k, map_config in enumerate(config.map_configs):
         t0 = time.perf_counter()
         maps.append(run_contact_map(map_config))
         lap(f"interaction map, GNL {map_config.gnl}", t0)
+        say(f"report: {_left(estimates, k + 1)}", flush=True)
     t0 = time.perf_counter()
     sector = clearance.sector
     H, _, cells = fem.quadrature_gradients(sector, model.Phi.T)

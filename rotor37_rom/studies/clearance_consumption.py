@@ -18,11 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
-from rotor37_rom.checks import before_work
+from rotor37_rom.checks import before_work, whole_number
 from rotor37_rom.cli import resolve_table
 from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.model.reduced import ReducedModel
 from rotor37_rom.post.clearance import ClearanceCurves, delta_range_within, relative_error
+from rotor37_rom.reduction.config import MODES_MAX, check_cubic_memory
 from rotor37_rom.reduction.craig_bampton import CRITERIA, GLOBAL_MD_MAX
 from rotor37_rom.studies.model_choice import ModelChoice
 
@@ -73,11 +74,10 @@ class ReducedBladeConfig:
             self._take_the_chosen_model()
         if self.preset not in MESH_PRESETS:
             raise ValueError(f"--preset must be one of {', '.join(MESH_PRESETS)}, got {self.preset!r}")
-        if not self.r_c >= 1:
-            raise ValueError(f"--r-c must be >= 1, got {self.r_c}")
+        whole_number("--r-c", self.r_c, 1, MODES_MAX)
+        for r_md in self.r_md:
+            whole_number("--r-md (each value)", r_md, 0, MODES_MAX)
         object.__setattr__(self, "r_md", tuple(int(r) for r in self.r_md))
-        if any(r < 0 for r in self.r_md):
-            raise ValueError(f"--r-md: each value must be >= 0, got {list(self.r_md)}")
         if self.criterion not in CRITERIA:
             raise ValueError(f"--criterion must be one of {', '.join(CRITERIA)}, got {self.criterion!r}")
         if self.forces not in FORCES:
@@ -88,6 +88,9 @@ class ReducedBladeConfig:
             raise ValueError(f"--global-md must be in [0, {GLOBAL_MD_MAX}], got {self.global_md}")
         if not self.r_md and not self.global_md:
             raise ValueError("--r-md and --global-md: no model to build (give an --r-md value or --global-md >= 1)")
+        if self.forces == "intrusive":
+            check_cubic_memory("--r-c" if self.r_c > max(self.r_md, default=0) else "--r-md",
+                               24 + self.r_c + max(self.r_md, default=0) + self.global_md * (self.global_md + 1) // 2)
         object.__setattr__(self, "table", str(self.table))
         object.__setattr__(self, "out", Path(self.out))
         resolve_table(self.table)

@@ -25,7 +25,7 @@ from rotor37_rom.cli import ArgumentParser
 from rotor37_rom.dynamics.turning import CLEARANCES
 from rotor37_rom.geometry.blade import MESH_PRESETS
 from rotor37_rom.model.reduced import ReducedModel
-from rotor37_rom.reduction.config import DiskReductionConfig, ReductionConfig
+from rotor37_rom.reduction.config import DiskReductionConfig, ReductionConfig, check_cubic_memory
 from rotor37_rom.studies.campbell import MAX_TURNING_SPEED
 from rotor37_rom.studies.sector_file import SECTOR_OPTIONS, SectorFile, add_sector_options
 from rotor37_rom.studies.sweep import SweepSpec
@@ -156,6 +156,14 @@ class MapModel:
     seed: int = 0
     mesh: SectorFile | None = None
 
+    def _check_tensor_memory(self) -> None:
+        """The blade's model built here, r = 3 x contact nodes + r_c + r_md + the global modal derivatives'
+        g (g + 1) / 2, must hold its exact cubic forces (``reduction.config.check_cubic_memory``)."""
+        g = self.global_md
+        r = (3 * (self.mesh.contact if self.mesh is not None else 8) + (self.r_c or 15) + (self.r_md or 0)
+             + g * (g + 1) // 2)
+        check_cubic_memory("--r-c" if self.r_c else "--r-md", r)
+
     def __post_init__(self):
         if self.mesh is not None:
             if not isinstance(self.mesh, SectorFile):
@@ -176,6 +184,8 @@ class MapModel:
                                              ("seed", "seed", self.seed, DiskReductionConfig)):
             if value is not None:
                 flagged(_flag(option), lambda: config(**{field: value}))
+        if not self.disk and self.path is None:
+            self._check_tensor_memory()
         if self.contact_patch and (self.disk or self.path is not None):
             raise ValueError("--contact-patch shapes the blade's model built here: not with --disk or --model")
         real_number("--mistuning (standard deviation of the blades' stiffness factors)", self.mistuning, 0, 1,

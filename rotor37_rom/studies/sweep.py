@@ -30,7 +30,7 @@ __all__ = ["SweepSpec", "run_sweep", "rerun_diverged", "load_sweep", "compute_se
            "read_spec", "check_spec",
            "interaction_map", "InteractionMap", "engine_order_resonance", "record_row", "last_revolution_max",
            "sector_maxima", "sector_rows", "continuation", "ContinuationPoint", "is_steady", "response_period",
-           "engine_order_content"]
+           "engine_order_content", "sweep_seconds"]
 
 LOG = logging.getLogger(__name__)
 LE = "0:LE"     # the node whose response makes the maps and NFRC: node LE of sector 0 (a NodeMap label)
@@ -353,6 +353,33 @@ def rerun_diverged(scheme: CentralDifference, results: Sequence[dict], spec: Swe
             results = [again.get(float(r["omega"]), r) if int(r["diverged_step"]) >= 0 else r for r in results]
         retried.update({w: h for w in bad.tolist()})
     return results, retried
+
+
+def sweep_seconds(scheme: CentralDifference, speeds, spec: SweepSpec, probe_steps: int = 300) -> float:
+    """The wall time a serial ``run_sweep`` of ``speeds`` should take on this machine: each batch runs until its
+    slowest speed ends, so with its runs' step counts s_1 >= ... >= s_P it costs sum_k (s_k - s_(k+1)) c(k), c(k) the
+    wall of one step with k runs, measured by probes of ``probe_steps`` steps from rest (1 and P runs, no contact
+    yet, the fastest of three) and interpolated linearly between them (a step's forces and contact cost grow with
+    k). The integration only: a map's charts and files, and the contact steps' own cost, come on top."""
+    speeds = np.sort(np.asarray(speeds, float))
+    whole_number("probe_steps", probe_steps, 10)
+    steps = np.ceil(spec.revolutions * 2 * np.pi / speeds / scheme.h)
+    batches = [steps[i:i + spec.batch_size] for i in range(0, speeds.size, spec.batch_size)]
+    widest = max(b.size for b in batches)
+    cost = {}
+    for k in sorted({1, widest}):                       # the fastest of three: the first pays for warming up,
+        cost[k] = min(simulate(scheme, speeds[:k], spec.casing, n_steps=probe_steps, record_every=probe_steps,
+                               on_blowup="flag", duration=float(spec.revolutions * 2 * np.pi / speeds[0])).wall
+                      for _ in range(3)) / probe_steps   # another job's bursts on a shared core inflate the others
+
+    def c(k: int) -> float:
+        return cost[1] if widest == 1 else cost[1] + (cost[widest] - cost[1]) * (k - 1) / (widest - 1)
+
+    total = 0.0
+    for b in batches:
+        s = np.sort(b)[::-1]
+        total += sum((s[k - 1] - (s[k] if k < s.size else 0.0)) * c(k) for k in range(1, s.size + 1))
+    return float(total)
 
 
 def _batch_layout(folder: Path, todo: list[float], batch_size: int, size: int, write: bool
