@@ -177,6 +177,10 @@ def test_period_doubling_divergence_and_short_runs_are_not_steady():
     short = t <= 2.5 * 2 * np.pi / 1000.0
     assert "3 needed" in steadiness(t[short], u[short], 1000.0).reason
     assert revolution_maxima(t[short], u[short], 1000.0).size == 2
+    T, dt = 2 * np.pi / 1000.0, t[1] - t[0]
+    for end, whole in ((3 * T - 0.5 * dt, 3), (3 * T - 1.5 * dt, 2)):    # within one sample of the end, or not
+        keep = t <= end
+        assert revolution_maxima(t[keep], u[keep], 1000.0).size == whole
 
 
 @pytest.mark.parametrize("args, word", [((np.arange(3.0), np.ones(4), 1.0), "t and u"),

@@ -29,10 +29,15 @@ def _check_history(t, u, omega):
 
 def revolution_maxima(t, u, omega: float) -> np.ndarray:
     """max |u| over each whole revolution of the run (revolution k: k T <= t <= (k + 1) T, T = 2 pi / omega; a
-    partial last revolution is left out). A non-finite sample makes its revolution's maximum NaN."""
+    partial last revolution is left out). A run that ends at most one sample spacing before a revolution's end (its
+    step count rounded down) lacks only that revolution's last sample, which is the next one's first: it counts. A non-finite sample
+    makes its revolution's maximum NaN."""
     t, u = _check_history(t, u, omega)
     T = 2.0 * np.pi / omega
-    n = int(np.floor((t[-1] - t[0]) / T + 1e-9))
+    span = t[-1] - t[0]
+    n = int(np.floor(span / T + 1e-9))
+    if t.size > 1 and (n + 1) * T - span <= (t[-1] - t[-2]) * (1 + 1e-9):
+        n += 1
     out = np.full(n, np.nan)
     for k in range(n):
         sel = (t >= t[0] + k * T - 1e-12 * T) & (t <= t[0] + (k + 1) * T + 1e-12 * T)
