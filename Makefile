@@ -59,7 +59,7 @@ TEST_HALF := tests/test_clearance.py tests/test_sweep.py tests/test_report.py te
              tests/test_blade_frame.py tests/test_neo_hookean.py tests/test_readme.py tests/test_output_folder.py \
              tests/test_damping.py tests/test_energy_balance.py tests/test_full_order_energy.py \
              tests/test_gnl_steady_scene.py tests/test_impact_numbers.py tests/test_explicit_step.py \
-             tests/test_polynomial_kernel.py
+             tests/test_polynomial_kernel.py tests/test_steady_reference.py
 TEST_OTHER = $(filter-out $(TEST_HALF),$(wildcard tests/test_*.py))
 test: $(STAMP) $(CHROMIUM)
 	@mkdir -p results && echo "tests in two halves side by side: results/test_half_1.log, results/test_half_2.log"

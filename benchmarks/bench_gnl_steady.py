@@ -15,16 +15,10 @@ results/bench_gnl_steady.ckpt/ every 10 min, and the same command resumes them (
 """
 from __future__ import annotations
 
-import dataclasses
-import json
-import os
 from pathlib import Path
-
-import numpy as np
 
 from rotor37_rom.checks import before_work, real_number
 from rotor37_rom.cli import ArgumentParser, run_main
-from rotor37_rom.machine import machine_description
 
 RESULTS = Path("results/bench_gnl_steady.json")
 
@@ -87,125 +81,28 @@ def parse(argv):
     return args, cases
 
 
+def config_of(args, cases):
+    """The study's config from the checked options."""
+    from rotor37_rom.studies.steady_reference import FullOrderSettings, ReducedSettings, SteadyStudyConfig
+
+    full = FullOrderSettings(steps=tuple(args.h_full) or (2e-6,), rho_inf=args.rho_inf, snapshots=args.snapshots,
+                             energy=args.energy, run=not args.no_full_order and bool(args.h_full))
+    reduced = ReducedSettings(r_c=tuple(args.r_c), global_md=tuple(args.global_md), step=args.rom_step,
+                              cap_khz=args.rom_cap, pod=tuple(args.pod), cubature=args.cubature,
+                              train_speeds=tuple(args.train_speeds), batch_cost=args.batch_cost)
+    return SteadyStudyConfig(tuple(cases), full, reduced, RESULTS)
+
+
 def main(argv=None) -> int:
     args, cases = parse(argv)
+    config = config_of(args, cases)
     before_work({"results": RESULTS.parent})
-    from rotor37_rom import fem
-    from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model
-    from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
-    from rotor37_rom.studies import gnl_reference as gr
+    from rotor37_rom.studies.steady_reference import run_steady_study
 
-    store = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
-    store["machine"] = machine_description()
-    ckpts = RESULTS.with_suffix(".ckpt")           # full-order runs under way
-    ckpts.mkdir(parents=True, exist_ok=True)
-
-    def save():                  # merged with what other runs of this command saved meanwhile (one per core)
-        on_disk = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
-        for label, runs in store.items():
-            if isinstance(runs, dict) and label != "machine":
-                runs.update({**on_disk.get(label, {}), **runs})     # in place: the loop's `runs` is this dict
-                on_disk[label] = runs
-        on_disk["machine"] = store["machine"]
-        tmp = RESULTS.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(json.dumps(on_disk))
-        tmp.replace(RESULTS)
-
-    sector = fem.create_blade_sector(preset="ci")
-    ops = fem.create_svk_operators(sector, law=args.hyperelastic)
-    models, cap = {}, 2e3 * np.pi * args.rom_cap      # the reduced models, their damping and cubature, by (r_c, g)
-    for case in cases:
-        runs = store.setdefault(case.label(), {})
-        for h in [] if args.no_full_order else sorted(args.h_full, reverse=True):
-            key = f"full h {h:.3g} rho {args.rho_inf:g}"
-            if key not in runs:
-                stem = full_order_stem(ckpts, case, key)
-                run, snaps = gr.full_order_run(sector, ops, case, h, args.rho_inf, stem.with_name(stem.name + ".npz"),
-                                               100 if args.snapshots else 0)
-                if snaps is not None:
-                    np.save(stem.with_name(stem.name + ".snapshots.npy"), snaps)
-                runs[key] = run.to_json()
-                save()
-            if args.energy is not None and runs[key].get("energy", {}).get("revolutions") != args.energy:
-                stem = full_order_stem(ckpts, case, key)
-                runs[key]["energy"] = gr.full_order_energy(sector, ops, case, h, args.rho_inf,
-                                                           stem.with_name(stem.name + ".npz"), args.energy)
-                print(f"{case.label()} | {key}: energy per revolution (J) {json.dumps(runs[key]['energy'])}",
-                      flush=True)
-                maxima = runs[key]["maxima"] + runs[key]["energy"]["maxima"]       # the run's, then carried on
-                changes = np.abs(np.diff(maxima[-3:])) / np.asarray(maxima[-3:-1])
-                print(f"{case.label()} | {key}: carried on {args.energy:g} revolutions, max |u_LE| per revolution "
-                      f"(mm) " + " ".join(f"{1e3 * m:.3f}" for m in maxima) + "; last changes "
-                      + ", ".join(f"{100 * c:.1f} %" for c in changes)
-                      + (" (steady)" if (changes < case.tolerance).all() else " (not steady)"), flush=True)
-                save()
-            report(case, key, runs[key])
-        for r in args.pod:
-            key = f"pod r {r} cap {args.rom_cap:g} h {args.rom_step:.3g}"
-            if key not in runs:
-                h = max(args.h_full) if args.h_full else 2e-6
-                stem = full_order_stem(ckpts, case, f"full h {h:.3g} rho {args.rho_inf:g}")
-                snaps = stem.with_name(stem.name + ".snapshots.npy")
-                if not snaps.exists():
-                    raise ValueError(f"--pod: no full-order snapshots for {case.label()} at h {h:.3g} s ({snaps}): "
-                                     f"run the full order with --snapshots first")
-                model, bound = gr.pod_model(sector, ops, np.load(snaps), r, cache_dir="results/cache")
-                C = gr.reduced_damping(model, sector, ops, case.damping)
-                runs[key] = gr.reduced_run(model, C, case, args.rom_step, cap).to_json()
-                runs[key]["details"]["pod_bound"] = bound
-                save()
-            report(case, key, runs[key])
-        for r_c, g in ((r_c, g) for r_c in args.r_c for g in args.global_md):
-            hr = "" if args.cubature is None else (f" cubature {args.cubature:g} train "
-                                                    + "/".join(f"{w:g}" for w in args.train_speeds))
-            key = (f"rom r_c {r_c}" + ("" if g == 3 else f" global md {g}")
-                   + f"{hr} cap {args.rom_cap:g} h {args.rom_step:.3g}")
-            if (r_c, g) not in models:                    # the cases differ by their speed alone: built once
-                config = ReductionConfig(r_c=r_c, r_md=0, criterion="MI2b", global_md_modes=g, forces="intrusive")
-                model, _ = build_reduced_model(sector, config, ops=ops, cache_dir="results/cache")
-                C, info = gr.reduced_damping(model, sector, ops, case.damping), None
-                if args.cubature is not None:              # trained once for every speed, kept for the next run
-                    name = (f"cubature r_c {r_c} md {g}{hr} mu {case.mu:g} {case.direction} {case.law} "
-                            f"cap {args.rom_cap:g} h {args.rom_step:.3g}")
-                    stem = ckpts / name.replace(" ", "_").replace("/", "-")
-                    kept = stem.with_name(stem.name + ".npz")
-                    if kept.exists():
-                        model = load_reduced_model(kept)
-                    else:
-                        model, info = gr.cubature_model(model, C, sector, case, args.rom_step, cap, args.cubature,
-                                                        args.train_speeds,
-                                                        checkpoint=stem.with_name(stem.name + ".training.npz"))
-                        model = dataclasses.replace(model, metadata={**model.metadata, "steady_cubature": info})
-                        save_reduced_model(model, kept)
-                    info = model.metadata["steady_cubature"]
-                models[r_c, g] = model, C, info
-            model, C, info = models[r_c, g]
-            made = runs.get(key, {}).get("details", {}).get("model")
-            if made is not None and made != f"reduced r = {model.r}":       # kept from a model built otherwise
-                print(f"{case.label()} | {key}: the run kept was of a {made}, this model has r = {model.r}: run again")
-            if made != f"reduced r = {model.r}":
-                runs[key] = gr.reduced_run(model, C, case, args.rom_step, cap).to_json()
-                if info is not None:
-                    runs[key]["details"]["cubature"] = info
-                save()
-            if args.batch_cost and runs[key]["details"].get("batch", {}).get("speeds") != args.batch_cost:
-                runs[key]["details"]["batch"] = gr.batch_cost(model, C, case, args.rom_step, cap, args.batch_cost)
-                print(f"{case.label()} | {key}: in a batch of {args.batch_cost} speeds "
-                      f"{runs[key]['details']['batch']['us_per_speed_step']:.1f} us per speed-step", flush=True)
-                save()
-            report(case, key, runs[key])
-        save()                                    # merged with the other runs of this case on disk
-        runs = store[case.label()]
-        full = sorted((k for k in runs if k.startswith("full")), key=lambda k: float(k.split()[2]))
-        if full:
-            table(gr.compare_runs(case, runs, full[0]), case, full[0])
+    for result in run_steady_study(config):
+        if result.reference is not None:
+            table(result.rows, result.case, result.reference)
     return 0
-
-
-def full_order_stem(folder: Path, case, key: str) -> Path:
-    """The files' stem of a full-order run (its checkpoint <stem>.npz, its snapshots <stem>.snapshots.npy): the case
-    and the run's key, the dots of its numbers kept (rho 0.8 and 0.9 are two runs)."""
-    return folder / f"{case.label()} {key}".replace(" ", "_").replace("/", "")
 
 
 def table(rows, case, reference):
@@ -218,16 +115,6 @@ def table(rows, case, reference):
         flag = "" if r["steady"] else " (not steady)"
         print(f"| {r['run']} | {1e3 * r['value']:.3f}{flag} | {1e3 * r['towards_casing']:.3f} | {pct(r['error'])} | "
               f"{pct(r['error_towards_casing'])} | {r['wall_per_revolution_s']:.1f} | {r['cost_ratio']:.0f} |")
-
-
-def report(case, key, run):
-    from rotor37_rom.studies.gnl_reference import revolution_peaks
-
-    inward, outward = revolution_peaks(run["t"], run["u_le"], case.speed)
-    value = f"{1e3 * run['value']:.3f} mm" + ("" if run["steady"] else " (NOT STEADY)")
-    print(f"{case.label()} | {key}: max |u_LE| {value}; per revolution, towards the axis / the casing (mm): "
-          + "  ".join(f"{1e3 * a:.3f}/{1e3 * b:.3f}" for a, b in zip(inward, outward))
-          + f"; {run['reason']}; {run['wall_s']:.0f} s", flush=True)
 
 
 if __name__ == "__main__":
