@@ -340,29 +340,41 @@ class RepeatingNewmark:
             return per_sector[:, tip]
         return (self.interface @ per_sector.T).T.reshape((self.n_repeat,) + tip.shape)
 
-    def signature(self, snapshot_every: int) -> np.ndarray:
-        """What a checkpoint of this run must match (every argument that changes its steps)."""
+    def signature_fields(self, snapshot_every: int) -> list[tuple[str, float]]:
+        """What a checkpoint of this run must match, named: every argument that changes its steps (the optional
+        groups only where they apply, behind a negative tag where they could be mistaken for another group)."""
         casing, contact, damping, sector = self.casing, self.contact, self.damping, self.sector
         interface = self.interface
-        fingerprint = [] if interface is None else [float(np.linspace(1.0, 2.0, interface.shape[0])
-                                                          @ (interface @ np.linspace(1.0, 2.0, sector.n_dofs)))]
+        fields = [("n_repeat", self.n_repeat), ("load", self.load_key), ("dt", self.dt), ("n_steps", self.n_steps),
+                  ("nonlinear", float(self.nonlinear)), ("snapshot_every", snapshot_every),
+                  ("kept_dofs", self.system.keep.size), ("sector_dofs", sector.n_dofs)]
+        if self.scheme.rho_inf is not None:
+            fields.append(("rho_inf", self.scheme.rho_inf))
+        if casing is not None:
+            fields += [("omega", self.omega), ("duration", self.duration), ("c0", casing.c0), ("h_b", casing.h_b),
+                       ("mu", casing.mu), ("direction", "xrc".index(casing.direction[0])),
+                       ("rotation_sense", casing.rotation_sense), ("ramp_fraction", casing.ramp_fraction),
+                       ("ramp_level", casing.ramp_level), ("width", casing.width), ("cone_slope", casing.cone_slope),
+                       ("contact_rows", contact.N.shape[0]), ("theta0_sum", float(contact.theta0.sum()))]
+        if interface is not None:
+            fields.append(("interface", float(np.linspace(1.0, 2.0, interface.shape[0])
+                                              @ (interface @ np.linspace(1.0, 2.0, sector.n_dofs)))))
+        if damping is not None:
+            fields += [("damping_tag", -4.0), ("damping_low", damping.low), ("damping_high", damping.high),
+                       ("damping_n_low", damping.n_low), ("damping_n_modes", damping.n_modes)]
         law = self.system.ops.law
-        return np.array([self.n_repeat, self.load_key, self.dt, self.n_steps, float(self.nonlinear),
-                         snapshot_every, self.system.keep.size, sector.n_dofs]
-                        + ([] if self.scheme.rho_inf is None else [self.scheme.rho_inf])
-                        + ([] if casing is None else [self.omega, self.duration, casing.c0, casing.h_b, casing.mu,
-                                                      "xrc".index(casing.direction[0]), casing.rotation_sense,
-                                                      casing.ramp_fraction, casing.ramp_level, casing.width,
-                                                      casing.cone_slope, contact.N.shape[0],
-                                                      float(contact.theta0.sum())])
-                        + fingerprint + ([] if damping is None else [-4.0, damping.low, damping.high,
-                                                                    damping.n_low, damping.n_modes])
-                        + ([] if law == "svk" else [-5.0, 1.0 + sorted(forms.HYPERELASTIC_LAWS).index(law)]))
+        if law != "svk":
+            fields += [("law_tag", -5.0), ("law", 1.0 + sorted(forms.HYPERELASTIC_LAWS).index(law))]
+        return fields
+
+    def signature(self, snapshot_every: int) -> np.ndarray:
+        """``signature_fields``' values, as a checkpoint stores them."""
+        return np.array([value for _, value in self.signature_fields(snapshot_every)])
 
     def same_steps(self, signature: np.ndarray) -> bool:
         """Whether a checkpoint's ``signature`` is of this run's steps, whatever its snapshot spacing."""
-        ours, theirs = self.signature(0), np.asarray(signature)
-        slot = 5                                                           # snapshot_every's place in the signature
+        names = [name for name, _ in self.signature_fields(0)]
+        ours, theirs, slot = self.signature(0), np.asarray(signature), names.index("snapshot_every")
         return theirs.shape == ours.shape and np.array_equal(np.delete(theirs, slot), np.delete(ours, slot))
 
     def run(self, snapshot_every: int = 20, checkpoint: str | Path | None = None,
