@@ -181,7 +181,8 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
                  prescribed: Sequence[tuple[np.ndarray, np.ndarray]] = (), n_steps: int = 10,
                  rtol: float = 1e-10, max_iterations: int = 25, ops: SvkOperators | None = None,
                  linear: bool = False, spin: float = 0.0) -> StaticResult:
-    """Nonlinear static equilibrium f_int(u) = lambda f_ext by Newton with the exact tangent and load stepping.
+    """Nonlinear static equilibrium f_int(u) = lambda f_ext by Newton with the exact tangent and load stepping, each
+    step started from a predictor: u_k plus the last increment extrapolated (u_k+1 ~ 3 u_k - 3 u_k-1 + u_k-2).
 
     Args:
         sector: the structure (clamp applied).
@@ -237,8 +238,13 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
         K_lin.zeroRowsColumns(global_rows, diag=1.0)
         ksp = _lu_solver(sector.comm, K_lin, "static_")
     lift, rhs, r = u.vector.duplicate(), u.vector.duplicate(), u.vector.duplicate()
+    increments = []                        # the converged increments of the last two load steps: the predictor
     for lam in lambdas:
         step_history = []
+        start = u.x.array.copy()
+        if increments and not linear:      # equal load steps: the increment extrapolated (linearly from two)
+            u.x.array[:] += increments[-1]
+            u.x.scatter_forward()
         for it in range(max_iterations + 1):
             # the prescribed increment still to apply (only non-zero on the first iteration of a step)
             lift.set(0.0)
@@ -289,6 +295,7 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
             if not linear:
                 A.destroy()
                 ksp.destroy()
+        increments = [*increments[-1:], u.x.array - start]
         tips.append(gather_dof_values(sector, u.x.array, sector.tip_dofs))
         its.append(it)
         history.append(np.array(step_history))
