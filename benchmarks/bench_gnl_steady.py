@@ -50,6 +50,9 @@ def parse(argv):
                    "alone: the reduced models are SVK's)")
     p.add_argument("--cubature", type=float, default=None, help="run the --r-c models on a point cubature of this "
                    "tolerance, in (0, 0.1], trained on their own exact runs at --train-speeds (no full order)")
+    p.add_argument("--map", type=float, nargs=3, default=None, metavar=("START", "STOP", "N"),
+                   help="also each --r-c model's steady map over N speeds in [START, STOP] rad/s, GNL off and on, "
+                        "under the first speed's case (studies.steady_reference.run_steady_maps); N in [2, 1000]")
     p.add_argument("--train-speeds", type=float, nargs="+", default=[1200.0, 1600.0], help="the cubature's training "
                    "runs (rad/s, in [1, 5000]), 3 revolutions each")
     args = p.parse_args(argv)
@@ -61,6 +64,14 @@ def parse(argv):
         for v in values:
             real_number(name, v, lo, hi)
     real_number("--batch-cost", args.batch_cost, 0, 1000)
+    if args.map is not None:
+        real_number("--map START", args.map[0], 1.0, 5000.0)
+        real_number("--map STOP", args.map[1], args.map[0], 5000.0, open_low=True)
+        real_number("--map N", args.map[2], 2, 1000)
+        if args.map[2] != int(args.map[2]) or not args.r_c:
+            raise ValueError(f"--map N must be a whole number of speeds and --map needs --r-c models, got "
+                             f"{args.map[2]:g} with --r-c {args.r_c}")
+        args.map = (args.map[0], args.map[1], int(args.map[2]))
     if args.energy is not None:
         real_number("--energy", args.energy, 0.0, 20.0, open_low=True)
     if args.cubature is not None:
@@ -97,11 +108,13 @@ def main(argv=None) -> int:
     args, cases = parse(argv)
     config = config_of(args, cases)
     before_work({"results": RESULTS.parent})
-    from rotor37_rom.studies.steady_reference import run_steady_study
+    from rotor37_rom.studies.steady_reference import run_steady_maps, run_steady_study
 
     for result in run_steady_study(config):
         if result.reference is not None:
             table(result.rows, result.case, result.reference)
+    if args.map is not None:
+        run_steady_maps(config, args.map)
     return 0
 
 

@@ -30,7 +30,7 @@ from rotor37_rom.post.steady import Steadiness, revolution_maxima, steadiness
 HYPERELASTIC_LAWS = ("svk", "neo-hookean")
 
 __all__ = ["SteadyCase", "SteadyRun", "full_order_run", "full_order_energy", "reduced_run", "reduced_damping",
-           "cubature_model", "batch_cost", "pod_model", "revolution_peaks", "compare_runs"]
+           "cubature_model", "batch_cost", "steady_map", "pod_model", "revolution_peaks", "compare_runs"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -281,6 +281,43 @@ def batch_cost(model, C: np.ndarray, case: SteadyCase, h: float, cap: float, spe
              on_blowup="flag")
     wall = time.perf_counter() - t0
     return {"us_per_speed_step": 1e6 * wall / (speeds * steps), "speeds": speeds, "steps": steps, "h": scheme.h}
+
+
+def steady_map(model, C: np.ndarray, case: SteadyCase, speeds, h: float, cap: float, nonlinear: bool = True,
+               record: float = 2e-6) -> dict:
+    """An interaction map at steady state: ``case`` (its casing, damping, revolutions) at every speed of ``speeds``
+    (rad/s), the reduced model (damping ``C``) marched in one batch of the maps' explicit scheme, GNL on or off, each
+    run's max |u_LE| over its last revolution judged steady or not (``post.steady.steadiness``). Returns {'speeds',
+    'value' (m), 'steady', 'maxima' (per revolution), 'diverged', 'reason', 'nonlinear', 'h', 'wall_s'}."""
+    from rotor37_rom.dynamics.explicit import CentralDifference, simulate
+
+    speeds = np.atleast_1d(np.asarray(speeds, float))
+    if speeds.size == 0 or speeds.size > 1000:
+        raise ValueError(f"speeds: give 1 to 1000 speeds, got {speeds.size}")
+    cases = [dataclasses.replace(case, speed=float(w)) for w in speeds]        # each speed checked by its case
+    C = np.asarray(C, float)
+    if C.shape != model.K.shape or not np.all(np.isfinite(C)):
+        raise ValueError(f"C must be a finite ({model.r}, {model.r}) matrix, got {C.shape}")
+    scheme = CentralDifference(dataclasses.replace(model, C=C), nonlinear=nonlinear, damping=True,
+                               frequency_cap=cap, h=h, force=True)
+    every = max(1, int(round(record / scheme.h)))
+    n_steps = [every * int(np.ceil(c.duration / (scheme.h * every))) for c in cases]   # last revolutions whole
+    t0 = time.perf_counter()
+    res = simulate(scheme, speeds, case.casing(), n_steps=n_steps, duration=[c.duration for c in cases],
+                   record_every=every, on_blowup="flag")
+    out = {"speeds": speeds.tolist(), "value": [], "steady": [], "maxima": [], "reason": [],
+           "diverged": (res.diverged_step >= 0).tolist(), "nonlinear": bool(nonlinear), "h": scheme.h}
+    for p, c in enumerate(cases):
+        t, u = np.asarray(res.t[p], float), np.asarray(res.u_r[p][res.row("0:LE")], float)
+        if res.diverged_step[p] >= 0:
+            u = np.where(t <= res.diverged_step[p] * scheme.h, u, np.nan)
+        v = steadiness(t, u, c.speed, c.tolerance)
+        out["value"].append(v.value)
+        out["steady"].append(bool(v.steady))
+        out["maxima"].append(v.maxima.tolist())
+        out["reason"].append(v.reason)
+    out["wall_s"] = time.perf_counter() - t0
+    return out
 
 
 def pod_model(sector, ops, snapshots: np.ndarray, r: int, cache_dir=None):

@@ -23,7 +23,7 @@ from rotor37_rom.reporting import say
 from rotor37_rom.studies.gnl_reference import SteadyCase, revolution_peaks
 
 __all__ = ["FullOrderSettings", "ReducedSettings", "SteadyStudyConfig", "CaseResult", "run_steady_study",
-           "full_order_stem"]
+           "run_steady_maps", "map_label", "full_order_stem"]
 
 
 def _each(name: str, values, low: float, high: float) -> tuple:
@@ -184,6 +184,9 @@ class _Store:
     def runs(self, case: SteadyCase) -> dict:
         return self.data.setdefault(case.label(), {})
 
+    def runs_of_label(self, label: str) -> dict:
+        return self.data.setdefault(label, {})
+
     def save(self) -> None:
         on_disk = json.loads(self.path.read_text()) if self.path.exists() else {}
         for label, runs in self.data.items():
@@ -329,3 +332,47 @@ def run_steady_study(config: SteadyStudyConfig, sector=None, ops=None) -> list[C
         results.append(CaseResult(case, runs, full[0] if full else None,
                                   compare_runs(case, runs, full[0]) if full else []))
     return results
+
+
+def map_label(case: SteadyCase, speeds: tuple) -> str:
+    """The results file's label of the steady maps of ``case``'s casing and law over ``speeds`` (start, stop, n)."""
+    start, stop, n = speeds
+    law = "" if case.hyperelastic == "svk" else f" {case.hyperelastic}"
+    return (f"map {start:g}-{stop:g} rad/s x {int(n)} mu {case.mu:g} {case.direction} {case.law} "
+            f"{case.revolutions} rev{law}")
+
+
+def run_steady_maps(config: SteadyStudyConfig, speeds: tuple, sector=None, ops=None) -> dict:
+    """Each reduced model of ``config`` (r_c x global_md, on its cubature where asked) over ``speeds`` (start, stop,
+    n: rad/s) at steady state under the first case's casing, damping and revolutions, GNL off and on
+    (``gnl_reference.steady_map``): {run key + ' GNL' / ' linear': map}, kept in the results file under
+    ``map_label`` and not run again."""
+    from rotor37_rom import fem
+    from rotor37_rom.machine import machine_description
+    from rotor37_rom.studies import gnl_reference as gr
+
+    start, stop, n = speeds
+    real_number("map speeds' start", start, 1.0, 5000.0)
+    real_number("map speeds' stop", stop, start, 5000.0, open_low=True)
+    if not (isinstance(n, (int, np.integer)) and 2 <= n <= 1000):
+        raise ValueError(f"map speeds' count must be an integer in [2, 1000], got {n!r}")
+    case, red = config.cases[0], config.reduced
+    store = _Store(config.results, machine_description())
+    maps = store.data.setdefault(map_label(case, speeds), {})
+    sector = fem.create_blade_sector(preset="ci") if sector is None else sector
+    ops = fem.create_svk_operators(sector, law=case.hyperelastic) if ops is None else ops
+    grid = np.linspace(start, stop, int(n))
+    for r_c, g in ((r_c, g) for r_c in red.r_c for g in red.global_md):
+        model, C, _ = _model(config, case, r_c, g, sector, ops)
+        for nonlinear in (False, True):
+            key = red.key(r_c, g) + (" GNL" if nonlinear else " linear")
+            if key not in maps:
+                maps[key] = gr.steady_map(model, C, case, grid, red.step, red.cap, nonlinear)
+                store.save()
+            m = maps[key]
+            best = int(np.nanargmax(m["value"]))
+            say(f"{map_label(case, speeds)} | {key}: largest max |u_LE| {1e3 * m['value'][best]:.3f} mm at "
+                f"{m['speeds'][best]:g} rad/s; {sum(m['steady'])} of {len(m['steady'])} speeds steady; "
+                f"{m['wall_s']:.0f} s", flush=True)
+    store.save()
+    return dict(store.runs_of_label(map_label(case, speeds)))
