@@ -1,6 +1,6 @@
 """Tuned bladed disk in contact with GNL: does the response settle on the travelling wave, and at which step?
 
-The case of ``tests/test_disk_contact.py`` (ci disk sector, node LE of each of the 36 blades kept physical, r_c = 8,
+The case of ``tests/disk/test_disk_contact.py`` (ci disk sector, node LE of each of the 36 blades kept physical, r_c = 8,
 4 modal derivatives by MI 2b, 96 interface modes: r = 636, exact sector tensors; 2 % modal damping; the two-lobe
 casing with bumps of 0.55 mm, mu = 0.15 along the casing cone's normal; 1,400 rad/s from rest, 100 kHz cap), run
 with GNL for --duration seconds at h = (2 pi / 36) / Omega / m for each m of --per-shift (a sector's turn is a whole

@@ -80,7 +80,7 @@ def main() -> None:
                        total_s=ref["timings"]["forces"] * scale + rows[-2]["total_s"],
                        peak_rss_mb=8 * (r * (r + 1) / 2) ** 2 / 2**20 + ref["peak_rss_mb"])
             rows.append(est)
-    # STEP cost model: one FE assembly per enforced displacement (STEP itself is verified in tests/test_reduction.py)
+    # STEP cost model: one FE assembly per enforced displacement (STEP itself is verified in tests/reduction/test_reduction.py)
     child = subprocess.run([sys.executable, "-c", CHILD, args.preset, "0", "step-cost"], capture_output=True,
                            text=True, check=True)
     assembly_s = json.loads(child.stdout.strip().splitlines()[-1])["assembly_s"]

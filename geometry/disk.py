@@ -358,7 +358,7 @@ def create_annular_sector_model(inner: float, outer: float, thickness: float, n_
     """A sector of a flat annular plate (inner radius clamped, outer edge free; mid-plane z = 0) with radial cyclic
     faces at theta = 0 and 2 pi / N, meshed as a structured grid of about ``size`` (m) in r and along the mid-radius
     arc and exactly ``layers`` elements through the thickness (``_structured_annulus``). Groups: volume 'disk', faces
-    'clamp' (inner edge), 'left', 'right'. For verification against the Kirchhoff plate (``tests/test_disk.py``)."""
+    'clamp' (inner edge), 'left', 'right'. For verification against the Kirchhoff plate (``tests/disk/test_disk.py``)."""
     if not (0.0 < inner < outer) or not (0.0 < thickness < outer - inner):
         raise ValueError("annular sector: need 0 < inner < outer and 0 < thickness < outer - inner")
     if not (2 <= int(n_sectors) <= 360):
@@ -384,7 +384,7 @@ def create_ring_sector_model(radius: float, radial: float, axial: float, n_secto
     """A sector of a free thin ring: mean radius ``radius``, rectangular cross-section ``radial`` x ``axial`` (m),
     a structured grid (``_structured_annulus``) of about ``size`` (m) in every direction (at least 2 cells across
     the section's sides). Nothing is clamped (a free structure: its rigid-body motions live in the harmonic indices
-    k = 0 and 1). Groups: volume 'disk', faces 'left', 'right'. For Bryan's factor (``tests/test_rotation.py``)."""
+    k = 0 and 1). Groups: volume 'disk', faces 'left', 'right'. For Bryan's factor (``tests/dynamics/test_rotation.py``)."""
     if not (0.0 < radial < radius) or not (0.0 < axial < radius):
         raise ValueError("ring sector: need 0 < radial < radius and 0 < axial < radius")
     if not (4 <= int(n_sectors) <= 360):

@@ -410,7 +410,7 @@ def _filling(kind: str, pattern: tuple) -> tuple:
             if abs(vol - cell) < 1e-12:
                 return tuple(tets)
     # the smallest-node rule never gives the twisted patterns that have no filling (checked over every node order
-    # in tests/test_mesh_import.py); anything else reaching here is a bug
+    # in tests/fem/test_mesh_import.py); anything else reaching here is a bug
     raise AssertionError(f"no tetrahedral filling of a {kind} with face diagonals {pattern}")
 
 

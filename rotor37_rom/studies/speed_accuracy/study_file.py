@@ -97,7 +97,7 @@ class StudyRecord(TypedDict, total=False):
     runs: list[RunRecord]
 
 
-# the configuration whose field names a scene's options are (module, class): checked by tests/test_model_choice.py
+# the configuration whose field names a scene's options are (module, class): checked by tests/studies/test_model_choice.py
 _MAP_CONFIG = ("rotor37_rom.studies.contact_config", "ContactMapConfig")
 _DISK_CONFIG = ("rotor37_rom.reduction.disk_builder", "DiskReductionConfig")
 SCENE_CONFIG = {

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 ENTRY_POINTS = ["demos/contact_map.py", "demos/report.py", "demos/reduced_blade.py", "demos/blade_modes.py",
                 "demos/bladed_disk.py", "demos/own_blade.py", "benchmarks/bench_disk_forced.py",
                 "demos/turning_map.py", "demos/campbell.py", "demos/disk_campbell.py",

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 # demo -> {case: (arguments, the option the error must name)}; '{text}' is a text file that is no model at all
 CASES = {

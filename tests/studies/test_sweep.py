@@ -20,7 +20,7 @@ from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model
 from rotor37_rom.studies.sweep import (SweepSpec, interaction_map, is_steady, load_sweep, rerun_diverged,
     response_period, run_sweep, sweep_folder)
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SPEEDS = np.array([1300.0, 1600.0])
 # spectral mass scaling at 60 kHz (12x the unscaled step): for the continuation's bookkeeping, which does not depend on
 # the modes above the cap (bench_contact_convergence: the capped response within 3 % of the unscaled)

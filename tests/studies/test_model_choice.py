@@ -10,7 +10,7 @@ import pytest
 from rotor37_rom.pareto import pareto_front
 from rotor37_rom.studies.model_choice import STUDY_FILE, choose_model, load_study, scenes
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_pareto_front_is_the_set_of_undominated_points():

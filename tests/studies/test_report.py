@@ -8,7 +8,7 @@ import pytest
 
 from rotor37_rom.studies import blade_report as report
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_unbounded_run_shows_no_stress():

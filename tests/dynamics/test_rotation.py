@@ -617,7 +617,7 @@ def test_turning_map_under_mpi_equals_the_serial_sweep(turning_rom, tmp_path):
     path = save_reduced_model(turning_rom, tmp_path / "turning.npz")
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg", OPENBLAS_NUM_THREADS="1")
-    demo = Path(__file__).resolve().parents[1] / "demos" / "contact_map.py"
+    demo = Path(__file__).resolve().parents[2] / "demos" / "contact_map.py"
     cmd = ["mpirun", "-n", "2", sys.executable, str(demo), "--model", str(path), "--rotation", "running",
            "--speeds", "1500", "1800", "4", "--revolutions", "0.5", "--gnl", "off", "--safety", "0.9",
            "--frequency-cap", "60", "--out", str(tmp_path / "mpi"), "--quiet"]
@@ -648,7 +648,7 @@ def test_a_turning_map_refuses_a_model_that_cannot_turn_there(turning_rom, tmp_p
 
     turning = save_reduced_model(turning_rom, tmp_path / "turning.npz")
     still = save_reduced_model(dataclasses.replace(turning_rom, rotation=None), tmp_path / "still.npz")
-    demo = Path(__file__).resolve().parents[1] / "demos" / "contact_map.py"
+    demo = Path(__file__).resolve().parents[2] / "demos" / "contact_map.py"
     for model, speeds, words in ((still, ["1500", "1800", "2"], "built at rest"),
                                  (turning, ["1500", "2500", "2"], "outside this reduced model's range 0 ... 2000")):
         run = subprocess.run([sys.executable, str(demo), "--model", str(model), "--rotation", "running", "--speeds",
@@ -668,7 +668,7 @@ def test_a_turning_map_refuses_a_model_that_cannot_turn_there(turning_rom, tmp_p
     ({"rotation": "running", "tolerance": 0.05}, "not with --tolerance")])
 def test_a_turning_map_configuration_refuses_what_it_cannot_turn(options, words):
     """What a turning map does not take is refused by its configuration, one ValueError naming --rotation, before
-    any work (the command line prints it as one line: tests/test_demo_errors.py)."""
+    any work (the command line prints it as one line: tests/cli/test_demo_errors.py)."""
     from rotor37_rom.studies.contact_config import ContactMapConfig
 
     with pytest.raises(ValueError, match="^--rotation") as error:

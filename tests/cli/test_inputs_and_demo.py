@@ -11,7 +11,7 @@ from rotor37_rom.forms import Material
 from rotor37_rom.geometry import blade as geo
 from rotor37_rom.geometry.tables import read_blade_table
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 
 def _one_line(exc_info, *words):
@@ -113,7 +113,7 @@ def _timoshenko_first_bending(E, nu, rho, L, h, kappa, guess):
 
 def test_demo_runs_and_draws(tmp_path, ci_blade):
     """demos/blade_modes.py's study (rotor37_rom.studies.blade_modes.run_blade_modes) at the ci preset, in-process:
-    1B and 1T found, XDMF written, three PNG mode pictures (its bad inputs: tests/test_demo_errors.py).
+    1B and 1T found, XDMF written, three PNG mode pictures (its bad inputs: tests/cli/test_demo_errors.py).
 
     Pixels depend on VTK/OpenGL, so only 'not blank' is asserted on them (loose: any picture of the blade passes,
     a white or black frame or a single flat colour fails). What was drawn is checked through the renderer's

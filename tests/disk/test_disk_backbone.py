@@ -239,7 +239,7 @@ def test_backbone_script_bad_input(tmp_path, args, option):
 
     text = tmp_path / "notes.txt"
     text.write_text("not a reduced model\n")
-    script = Path(__file__).resolve().parents[1] / "benchmarks" / "disk_backbone.py"
+    script = Path(__file__).resolve().parents[2] / "benchmarks" / "disk_backbone.py"
     proc = subprocess.run([sys.executable, str(script)] + [a.replace("{text}", str(text)) for a in args],
                           cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 2

@@ -3,7 +3,7 @@ speed file) is named, with what is done about it, before any work; two runs on o
 is refused at once, naming the folder and the first's pid.
 
 The sweeps here run a stand-in integrator (``fake_simulate``) on a stand-in scheme: what is tested is the folder's
-bookkeeping before and around the work, not the dynamics (tests/test_sweep.py runs the real ones)."""
+bookkeeping before and around the work, not the dynamics (tests/studies/test_sweep.py runs the real ones)."""
 import json
 import logging
 import os
@@ -23,7 +23,7 @@ from rotor37_rom.studies import contact_map
 from rotor37_rom.studies import sweep as sweep_mod
 from rotor37_rom.studies.sweep import SweepSpec, load_sweep, run_sweep, sweep_folder
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SPEEDS = [1300.0, 1400.0]
 SPEC = SweepSpec(revolutions=1.0, casing=Casing(), record_dt=1e-4)
 

@@ -14,7 +14,7 @@ import pytest
 from rotor37_rom.studies import blade_report, contact_map, sweep
 from rotor37_rom.model.reduced import save_reduced_model
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 

@@ -399,7 +399,7 @@ def test_gnl_vs_linear_step_check_bad_input(tmp_path, args, says):
     import sys
     from pathlib import Path
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     proc = subprocess.run([sys.executable, str(root / "benchmarks" / "bench_gnl_vs_linear.py")] + args, cwd=tmp_path,
                           capture_output=True, text=True, timeout=300)
     lines = proc.stderr.strip().splitlines()

@@ -342,7 +342,7 @@ def test_own_blade_demo(tmp_path):
     from rotor37_rom.studies.own_blade import OwnBladeConfig, run_own_blade
     from rotor37_rom.studies.sector_file import SectorFile
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     env = dict(os.environ, MPLBACKEND="Agg")
     run = subprocess.run([sys.executable, "demos/own_blade.py", "--units", "furlong", "--out", str(tmp_path / "bad")],
                          cwd=root, env=env, capture_output=True, text=True, timeout=120)
@@ -544,7 +544,7 @@ def test_a_users_bladed_disk_from_a_deck(ci_disk, tmp_path):
                           "TIP", "--left", "left", "--right", "RIGHT", "--n-sectors", "36", "--blade", "Blade",
                           "--units", "mm", "--modes", "4", "--nodal-diameters", "0", "1", "18", "--pictures", "1",
                           "--out", str(tmp_path / "out")],
-                         cwd=Path(__file__).resolve().parents[1], env=dict(os.environ, MPLBACKEND="Agg"),
+                         cwd=Path(__file__).resolve().parents[2], env=dict(os.environ, MPLBACKEND="Agg"),
                          capture_output=True, text=True, timeout=900)
     assert run.returncode == 0, run.stderr[-3000:]
     assert re.search(r"left 'left': \d+ facets, \d+ nodes", run.stdout) and "blade 'Blade': " in run.stdout
@@ -560,7 +560,7 @@ def test_a_users_bladed_disk_from_a_deck(ci_disk, tmp_path):
     # --show-groups: the groups drawn on the mesh, and nothing else run
     shown = subprocess.run([sys.executable, "demos/bladed_disk.py", "--mesh", str(deck), "--left", "LEFT", "--right",
                             "RIGHT", "--n-sectors", "36", "--show-groups", "--out", str(tmp_path / "shown")],
-                           cwd=Path(__file__).resolve().parents[1], env=dict(os.environ, MPLBACKEND="Agg"),
+                           cwd=Path(__file__).resolve().parents[2], env=dict(os.environ, MPLBACKEND="Agg"),
                            capture_output=True, text=True, timeout=300)
     assert shown.returncode == 0, shown.stderr[-3000:]
     drawn = json.loads((tmp_path / "shown" / "own" / "groups.png.json").read_text())
