@@ -11,7 +11,7 @@ export OMPI_MCA_rmaps_base_oversubscribe := 1
 export MPLBACKEND := Agg
 export PYVISTA_OFF_SCREEN := true
 
-.PHONY: setup demo test test-fast test-fe test-mpi test-slow test-kernels bench contact-map speed-accuracy \
+.PHONY: setup docs demo test test-fast test-fe test-mpi test-slow test-kernels bench contact-map speed-accuracy \
 	speed-accuracy-disk disk-map clean
 
 setup: $(STAMP)
@@ -25,7 +25,7 @@ $(STAMP): pyproject.toml /usr/lib/x86_64-linux-gnu/openblas-pthread/libblas.so.3
 	  (apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q $(APT_PKGS))
 	test -x $(PY) || /usr/bin/python3 -m venv --system-site-packages $(VENV)
 	/usr/bin/python3 -c "import numpy; print('numpy==' + numpy.__version__)" > $(VENV)/constraints.txt
-	$(PY) -m pip install -q -c $(VENV)/constraints.txt pyvista matplotlib tqdm "meshio>=5.3,<6" pytest pytest-xdist
+	$(PY) -m pip install -q -c $(VENV)/constraints.txt pyvista matplotlib tqdm "meshio>=5.3,<6" pytest pytest-xdist pdoc
 	$(PY) -m pip install -q -c $(VENV)/constraints.txt --no-build-isolation --no-deps -e .
 	$(PY) -c "import numpy, dolfinx; assert numpy.__version__ == '$$(/usr/bin/python3 -c 'import numpy; print(numpy.__version__)')'"
 	# OpenBLAS 0.3.21 falls back to SSE3 kernels on CPUs it does not know (6x slower dgemm here): see blas_check.py
@@ -48,6 +48,12 @@ demo: $(STAMP)
 # a finer map without friction on the r = 55 model, GNL off and on (~30 min)
 contact-map: $(STAMP)
 	$(PY) demos/contact_map.py --r-c 25 --mu 0 --speeds 1200 1600 21 --revolutions 20
+
+# the API reference from the docstrings (pdoc): results/api/index.html; pdoc's warnings (an annotation it cannot
+# read) are errors, as in tests/test_api_reference.py
+docs: $(STAMP)
+	OPENBLAS_NUM_THREADS=1 $(PY) -W error::UserWarning -m pdoc -o results/api rotor37_rom forms geometry
+	@echo "API reference: results/api/index.html"
 
 # the suite on two workers side by side (pytest-xdist), one BLAS thread each (one per core): most tests are
 # single-threaded Python, so this halves the wall time; whole files go to whichever worker is free (--dist loadfile:

@@ -43,15 +43,16 @@ from .operators import (JIT_PARAMS, MASS_DIAGONAL, SvkOperators, assemble_coriol
                         facet_centroid, strain_energy_form,
                         free_dofs, gather_dof_values, patch_load, petsc_to_scipy, quadrature_gradients,
                         scipy_to_petsc, tip_patch_interface)
-from .periodic import (CasingContact, NewmarkScheme, RepeatingNewmark, RepeatingSectors, SectorLoad,
-                       sector_harmonic_load, solve_repeating_newmark)
+from .periodic import (CasingContact, ContactOperators, NewmarkScheme, RepeatingNewmark, RepeatingSectorResult,
+                       RepeatingSectors, SectorLoad, sector_harmonic_load, solve_repeating_newmark)
+from .safe import BLADE_SHARE_DOMINATED, SafeDiagram, compute_safe_diagram, group_stiffness
 from .sector import (MissingMaterial, Sector, build_on_rank0, clamp_cell_group, create_blade_sector,
                      create_sector_from_file,
                      create_sector_from_gmsh, create_sector_from_mesh, locate_cyclic_pairs, tip_node_names,
                      write_sector_mesh)
 from .solvers import (ModalResult, StaticResult, compute_clamped_modes, mumps_solver, reduced_coriolis,
                      reduced_rotation_terms, rotating_modes, slepc_eigenpairs, solve_clamped_static,
-                     solve_eigenproblem, solve_static, static_compliance)
+                     shift_invert_solver, solve_eigenproblem, solve_static, static_compliance)
 
 __all__ = [
     "Sector", "SvkOperators", "ModalResult", "StaticResult",
@@ -72,5 +73,7 @@ __all__ = [
     "RepeatingSectors", "RepeatingNewmark", "NewmarkScheme", "SectorLoad", "CasingContact", "solve_repeating_newmark",
     "sector_harmonic_load", "write_sector_mesh", "facet_centroid",
     "patch_load", "static_compliance", "tip_patch_interface", "create_ring_sector", "cyclic_projector",
-    "centrifugal_state", "rotating_cyclic_operators", "reduced_rotation_terms",
+    "centrifugal_state", "rotating_cyclic_operators", "reduced_rotation_terms", "RepeatingSectorResult",
+    "ContactOperators", "SafeDiagram", "compute_safe_diagram", "group_stiffness", "BLADE_SHARE_DOMINATED",
+    "shift_invert_solver",
 ]

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import ctypes
 import functools
+from collections.abc import Callable
 import hashlib
 import logging
 import os
@@ -233,7 +234,7 @@ def _kernel_for(dtype: np.dtype):
     return kernel
 
 
-def pk_nonlinear_kernel(dtype) -> "callable | None":
+def pk_nonlinear_kernel(dtype) -> "Callable[..., np.ndarray] | None":
     """The compiled kernel for float32 or float64 as ``kernel(G, out, lmbda, mu)`` on C-contiguous arrays of 9 m
     values each (G read, out written), or None where it cannot be built (then use the NumPy path)."""
     return _kernel_for(np.dtype(dtype))
@@ -276,7 +277,7 @@ def pack_panels(C: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(padded.reshape(rp // 8, 8, n).transpose(0, 2, 1))
 
 
-def polynomial_kernel() -> "callable | None":
+def polynomial_kernel() -> "Callable[..., np.ndarray] | None":
     """``kernel(panels, Q) -> (r, P)``: sum over degrees d of C_d m_d(Q) for ``panels`` = [(d, pack_panels(C_d)), ...]
     (d = 2: r(r+1)/2 pairs, d = 3: r(r+1)(r+2)/6 triples, lexicographic) and states Q (r, P); or None where the
     kernel cannot be built (then use the NumPy path)."""

@@ -13,7 +13,6 @@ basis [Psi Theta] (eq. 22). ``boundary_coordinates`` gives the change of coordin
 so: the span, hence the Galerkin model, is unchanged; only what the coordinates mean changes
 (``reduction.builder.build_from_basis`` applies it and projects the operators and the exact forces).
 """
-from __future__ import annotations
 
 from typing import NamedTuple
 
