@@ -156,8 +156,8 @@ def completed_revolutions(run, omega):
 
 
 def last_peak(run, omega):
-    """The last revolution's max |u| of a run (m): the NFRC's quantity (``studies.sweep.last_revolution_max``)."""
-    from rotor37_rom.studies.sweep import last_revolution_max
+    """The last revolution's max |u| of a run (m): the NFRC's quantity (``post.signals.last_revolution_max``)."""
+    from rotor37_rom.post.signals import last_revolution_max
 
     return last_revolution_max(np.asarray(run["t"]), np.asarray(run["u_le"]), omega)
 
@@ -214,7 +214,7 @@ def main(argv=None) -> int:
     from rotor37_rom import fem
     from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
     from rotor37_rom.dynamics.casing import Casing
-    from rotor37_rom.studies.sweep import band_rms
+    from rotor37_rom.post.signals import band_rms
 
     sector = fem.create_blade_sector(preset="ci")
     ops = fem.create_svk_operators(sector)

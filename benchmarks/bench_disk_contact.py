@@ -105,7 +105,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     from rotor37_rom.dynamics.explicit import CentralDifference, gnl_time_step, largest_states, simulate
     from rotor37_rom.machine import write_results
     from rotor37_rom.studies.disk_contact import MAP_REVOLUTIONS, MAP_SPEEDS, contact_disk_model, cost_per_sim_step
-    from rotor37_rom.studies.sweep import SweepSpec, last_revolution_max, load_sweep, run_sweep
+    from rotor37_rom.post.signals import last_revolution_max
+    from rotor37_rom.studies.sweep import SweepSpec, load_sweep, run_sweep
 
     start, stop, n = args.speeds if args.speeds is not None else (None, None, None)
     cap = 2 * np.pi * 1e3 * args.cap

@@ -97,7 +97,7 @@ def responses(scheme, casing, speeds, revolutions, monitor) -> tuple[dict, np.nd
     """Node LE of sector 0 and the largest over the blades (max over the last revolution, m) per speed, and the
     run's states (records every 1e-5 s)."""
     from rotor37_rom.dynamics.explicit import simulate
-    from rotor37_rom.studies.sweep import last_revolution_max
+    from rotor37_rom.post.signals import last_revolution_max
 
     res = simulate(scheme, speeds, casing, revolutions=revolutions, monitor=monitor, on_blowup="flag",
                    record_q=True, record_every=max(1, int(round(1e-5 / scheme.h))))

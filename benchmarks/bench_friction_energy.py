@@ -83,7 +83,7 @@ def main(argv=None) -> int:
     from rotor37_rom.reduction.builder import ReductionConfig, build_reduced_model
     from rotor37_rom.dynamics.casing import Casing
     from rotor37_rom.dynamics.explicit import CentralDifference, gnl_time_step, probe_states, simulate
-    from rotor37_rom.studies.sweep import last_revolution_max
+    from rotor37_rom.post.signals import last_revolution_max
 
     sector = fem.create_blade_sector(preset="ci")
     ops = fem.create_svk_operators(sector)

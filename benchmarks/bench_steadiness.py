@@ -29,7 +29,8 @@ def main(argv=None) -> int:
                         help="also list the verdicts of the speeds in this band (rad/s)")
     parser.add_argument("--name", default="bench_steadiness")
     args = parser.parse_args(argv)
-    from rotor37_rom.studies.sweep import LE, is_steady, load_sweep, record_row
+    from rotor37_rom.post.signals import is_steady
+    from rotor37_rom.studies.sweep import LE, load_sweep, record_row
 
     bad = [f for f in args.folders if not Path(f).is_dir()]
     if bad or min(args.windows) < 1 or not 0 < args.tol < 1:

@@ -4,7 +4,7 @@ casing forces (engine-order lines), next to the disk's critical speeds (paper §
 Reads a finished (or partly finished) sweep folder of ``demos/contact_map.py --disk`` (``<out>/sweeps/<key>``); per
 speed: node LE of sector 0 and the largest over the blades (max over the last revolution), the dominant frequency of
 node LE of sector 0 over the last ``--revolutions`` revolutions and the share of its power within 0.4 % of k Omega
-(k = 1..29; ``studies.sweep.engine_order_content``), and where that frequency is an engine order n Omega, the nodal
+(k = 1..29; ``post.signals.engine_order_content``), and where that frequency is an engine order n Omega, the nodal
 diameters of the wave that carries it over the 36 blades (k, and its share of that order's power). With ``--model``
 (the map's rom.npz) also the share of that window in contact (a positive normal multiplier on any tip node of
 sector 0, and the mean over the sectors), the critical speeds omega_{f,k} / k of the model's lowest families inside
@@ -25,8 +25,9 @@ from pathlib import Path
 import numpy as np
 
 from rotor37_rom.machine import write_results
-from rotor37_rom.studies.sweep import (engine_order_content, engine_order_resonance, interaction_map, load_sweep,
-    record_row, sector_maxima, sector_rows)
+from rotor37_rom.post.signals import engine_order_content
+from rotor37_rom.studies.sweep import (engine_order_resonance, interaction_map, load_sweep, record_row, sector_maxima,
+    sector_rows)
 
 
 def critical_speeds(model, lo: float, hi: float, families: int = 3) -> tuple[float, list[dict]]:

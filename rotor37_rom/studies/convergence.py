@@ -13,7 +13,7 @@ def nfrc_run(model, gnl, speeds, casing, revolutions, safety, cap, h=None, state
     """NFRC at each speed; with ``states`` > 0 also the that many largest-amplitude reduced states of the run (the
     GNL tangent stability limit is evaluated on them)."""
     from rotor37_rom.dynamics.explicit import CentralDifference, largest_states, simulate
-    from rotor37_rom.studies.sweep import last_revolution_max
+    from rotor37_rom.post.signals import last_revolution_max
 
     scheme = CentralDifference(model, nonlinear=gnl, safety=safety, frequency_cap=cap, h=h)
     rec = max(1, int(round(1e-5 / scheme.h)))

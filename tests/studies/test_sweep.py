@@ -17,8 +17,9 @@ from rotor37_rom.studies import sweep as sweep_mod
 from rotor37_rom.dynamics.casing import Casing
 from rotor37_rom.dynamics.explicit import CentralDifference
 from rotor37_rom.model.reduced import load_reduced_model, save_reduced_model
-from rotor37_rom.studies.sweep import (SweepSpec, interaction_map, is_steady, load_sweep, rerun_diverged,
-    response_period, run_sweep, sweep_folder)
+from rotor37_rom.post import signals
+from rotor37_rom.post.signals import is_steady, response_period
+from rotor37_rom.studies.sweep import SweepSpec, interaction_map, load_sweep, rerun_diverged, run_sweep, sweep_folder
 
 ROOT = Path(__file__).resolve().parents[2]
 SPEEDS = np.array([1300.0, 1600.0])
@@ -303,18 +304,18 @@ def test_engine_order_content_splits_forced_from_sustained_power():
     for a, b in ((3e-4, 1e-4), (1e-4, 3e-4)):
         u = a * np.sin(4 * omega * t + 0.3) + b * np.cos(5.3 * omega * t) + 2e-5
         u[: 10 * per_rev] += 1e-3 * np.exp(-t[: 10 * per_rev] / T)          # the transient, outside the window
-        dominant, share = sweep_mod.engine_order_content(t, u, omega, revolutions)
+        dominant, share = signals.engine_order_content(t, u, omega, revolutions)
         assert share == pytest.approx(a ** 2 / (a ** 2 + b ** 2), abs=1e-10)
         assert dominant == pytest.approx(4 * omega if a > b else 5.3 * omega, rel=1e-12)
     t2 = np.arange(0.0, 60 * T, T / 61.3)
     u2 = 3e-4 * np.sin(4 * omega * t2) + 1e-4 * np.cos(5.3 * omega * t2)
-    _, share2 = sweep_mod.engine_order_content(t2, u2, omega, revolutions)
+    _, share2 = signals.engine_order_content(t2, u2, omega, revolutions)
     assert share2 == pytest.approx(0.9, abs=0.02)
-    assert np.isnan(sweep_mod.engine_order_content(t, np.zeros_like(t), omega)[1])
+    assert np.isnan(signals.engine_order_content(t, np.zeros_like(t), omega)[1])
     with pytest.raises(ValueError, match="revolutions asked"):
-        sweep_mod.engine_order_content(t, u, omega, 80)
+        signals.engine_order_content(t, u, omega, 80)
     with pytest.raises(ValueError, match="omega > 0"):
-        sweep_mod.engine_order_content(t, u, -1.0)
+        signals.engine_order_content(t, u, -1.0)
 
 
 def test_band_rms_splits_the_variance_by_frequency():
@@ -330,21 +331,21 @@ def test_band_rms_splits_the_variance_by_frequency():
     u = a * np.sin(4 * omega * t + 0.3) + b * np.cos(30 * omega * t) + c * np.cos(np.pi * np.arange(t.size)) + 1e-3
     u[:per_rev] += 5e-4 * np.exp(-t[:per_rev] / T)
     edges = [0.0, 10 * f0, 20 * f0, 100 * f0, 1e9]
-    rms = sweep_mod.band_rms(t, u, omega, edges)
+    rms = signals.band_rms(t, u, omega, edges)
     np.testing.assert_allclose(rms, [a / np.sqrt(2), 0.0, b / np.sqrt(2), c], atol=1e-12 * a)
     seg = u[-per_rev:]
     assert np.sum(rms ** 2) == pytest.approx(seg.var(), rel=1e-10)
     odd = np.random.default_rng(3).standard_normal(3 * 511)               # odd n: no Nyquist bin
     t_odd = np.arange(odd.size) * T / 511
-    rms_odd = sweep_mod.band_rms(t_odd, odd, omega, [0.0, 50 * f0, np.inf])
+    rms_odd = signals.band_rms(t_odd, odd, omega, [0.0, 50 * f0, np.inf])
     assert np.sum(rms_odd ** 2) == pytest.approx(odd[-511:].var(), rel=1e-10)
     for bad in ([0.0, 5e3, 2e3], [0.0, np.nan, 2e3]):
         with pytest.raises(ValueError, match="increasing edges_hz"):
-            sweep_mod.band_rms(t, u, omega, bad)
+            signals.band_rms(t, u, omega, bad)
     with pytest.raises(ValueError, match="as many samples"):
-        sweep_mod.band_rms(t, u[:-1], omega, edges)
+        signals.band_rms(t, u[:-1], omega, edges)
     with pytest.raises(ValueError, match="revolutions asked"):
-        sweep_mod.band_rms(t, u, omega, edges, revolutions=4)
+        signals.band_rms(t, u, omega, edges, revolutions=4)
 
 
 def test_diverged_runs_are_reported_as_results(ci_rom):
@@ -753,7 +754,8 @@ def test_zero_initial_condition_sweep_misses_the_high_branch(ci_rom):
     by a factor ~6; the test asks for 2 and for the continuation's points to be steady (the 2 % criterion), so it
     fails if a zero-IC run finds the high branch or the continuation loses it."""
     from rotor37_rom.dynamics.explicit import simulate
-    from rotor37_rom.studies.sweep import continuation, last_revolution_max
+    from rotor37_rom.post.signals import last_revolution_max
+    from rotor37_rom.studies.sweep import continuation
 
     scheme = CentralDifference(ci_rom, nonlinear=False, safety=0.5, frequency_cap=2 * np.pi * 60e3)
     casing, speeds = Casing(mu=0.0), np.array([1460.0, 1480.0])
