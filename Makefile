@@ -40,7 +40,7 @@ $(CHROMIUM):
 	-(apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium) \
 	  || echo "chromium could not be installed: the browser test will be skipped"
 
-# the paper's single-blade story in ~14 min on 2 cores (the GNL map 12): modes, clearance consumption, maps and NFRC
+# the paper's single-blade story in ~6 min on 2 cores (the GNL map 4): modes, clearance consumption, maps and NFRC
 # with GNL off and on, stress at t_max; results/report/report.html
 demo: $(STAMP)
 	$(PY) demos/report.py

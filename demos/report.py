@@ -1,6 +1,6 @@
 # # The paper's single-blade story in one report: modes, clearance consumption, maps, NFRC and stress (`make demo`)
 #
-# Delhez et al. (2023) §2 at a size that runs in about fourteen minutes on two cores (the GNL map twelve of them),
+# Delhez et al. (2023) §2 at a size that runs in about six minutes on two cores (the GNL map four of them),
 # written to one `report.html` that opens with our numbers next to the paper's:
 #
 # 1. the clamped modes of the blade against the paper's 5272 / 15760 / 19071 rad/s (`demos/blade_modes.py`);
@@ -18,7 +18,7 @@
 # is off (mu = 0): with the paper's mu = 0.15 this blade's responses grow without bound at many speeds (the LE half
 # of the tip wedges into the casing: sprag-slip), which the report would flag run by run (`--mu 0.15` shows it).
 #
-#     python demos/report.py                                            # make demo: about 14 min on 2 cores
+#     python demos/report.py                                            # make demo: about 6 min on 2 cores
 #     python demos/report.py --speeds 1200 1600 21 --revolutions 20     # a finer map (the GNL map is most of it)
 #
 # The study is one library function, `run_report(ReportConfig(...))` of `rotor37_rom.studies.blade_report`, returning

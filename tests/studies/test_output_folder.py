@@ -296,7 +296,7 @@ def test_mpi_ranks_take_the_lock_on_rank_0(tmp_path, held):
     script.write_text(MPI_SWEEP)
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1",
-               PYTHONPATH=os.pathsep.join([str(ROOT), str(ROOT / "tests")]),
+               PYTHONPATH=os.pathsep.join([str(ROOT), str(ROOT / "tests"), str(Path(__file__).resolve().parent)]),
                MPLBACKEND="Agg")
 
     def mpirun(out):
