@@ -177,12 +177,73 @@ class StaticResult:
     residuals: list = dataclasses.field(default_factory=list)
 
 
+class _StaticProblem:
+    """The pieces of ``solve_static``'s Newton iteration: the external load (a vector, the centrifugal force at the
+    deformed position), the prescribed DOFs, the residual with its reference norm, and the tangent."""
+
+    def __init__(self, sector: Sector, ops: SvkOperators, force, prescribed, spin: float):
+        V = sector.V
+        self.sector, self.ops, self.spin, self.bcs = sector, ops, spin, [sector.clamp_bc]
+        self.f_ext = None
+        if isinstance(force, PETSc.Vec):
+            self.f_ext = force
+        elif force is not None:
+            self.f_ext = assemble_vector(fem.form(force(ufl.TestFunction(V)), jit_params=JIT_PARAMS))
+        dofs = np.concatenate([np.asarray(d, dtype=np.int64).ravel() for d, _ in prescribed]) if prescribed else \
+            np.zeros(0, np.int64)
+        values = np.concatenate([np.asarray(v, float).ravel() for _, v in prescribed]) if prescribed else np.zeros(0)
+        if dofs.shape != values.shape:
+            raise ValueError(f"prescribed: {dofs.size} DOFs but {values.size} values")
+        owned = dofs >= 0  # per-rank local indices, -1 where the DOF lives on another rank
+        self.dofs, self.values = dofs[owned], values[owned]
+        bs = V.dofmap.index_map_bs
+        if np.any(self.dofs >= V.dofmap.index_map.size_local * bs):
+            raise ValueError("prescribed: DOF indices must be owned local (unblocked) indices, as in Sector.tip_dofs")
+        self.global_rows = (V.dofmap.index_map.local_range[0] * bs + self.dofs).astype(PETSc.IntType)
+        if spin:
+            spin_c = fem.Constant(sector.mesh, PETSc.ScalarType(spin))
+            self.centrifugal = fem.form(forms.centrifugal_force(ops.u, ufl.TestFunction(V), ops.constants["rho"],
+                                                                spin_c), jit_params=JIT_PARAMS)
+            self.M_P = assemble_spin_softening(sector, ops)
+
+    def residual(self, lam: float, r: PETSc.Vec) -> tuple[PETSc.Vec, float, float]:
+        """(r - lam f on the free rows, |r|, the reference max(|lam f|, |reaction|)); ``r`` holds f_int(u) or K u."""
+        reaction, load_norm = r.norm(), 0.0
+        if self.f_ext is not None:
+            r.axpy(-lam, self.f_ext)
+            load_norm = abs(lam) * self.f_ext.norm()
+        if self.spin:
+            f_spin = assemble_vector(self.centrifugal)
+            r.axpy(-lam, f_spin)
+            load_norm = max(load_norm, abs(lam) * f_spin.norm())
+            f_spin.destroy()
+        fem_petsc.set_bc(r, self.bcs, scale=0.0)
+        r.array[self.dofs] = 0.0
+        return r, r.norm(), max(load_norm, reaction, 1e-300)
+
+    def tangent(self, lam: float) -> PETSc.Mat:
+        A = fem_petsc.assemble_matrix(self.ops.tangent, bcs=self.bcs, diagonal=1.0)
+        A.assemble()
+        if self.spin:
+            A.axpy(-lam * self.spin**2, self.M_P, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        return A
+
+    def correction(self, A: PETSc.Mat, r: PETSc.Vec, lift: PETSc.Vec, rhs: PETSc.Vec) -> PETSc.Vec:
+        """rhs = -r - A lift on the free rows, = lift on the prescribed rows (a lifted predictor: no spike)."""
+        A.mult(lift, rhs)
+        rhs.axpy(1.0, r)
+        rhs.scale(-1.0)
+        fem_petsc.set_bc(rhs, self.bcs, scale=0.0)
+        rhs.array[self.dofs] = lift.array[self.dofs]
+        return rhs
+
+
 def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec | None = None,
                  prescribed: Sequence[tuple[np.ndarray, np.ndarray]] = (), n_steps: int = 10,
                  rtol: float = 1e-10, max_iterations: int = 25, ops: SvkOperators | None = None,
                  linear: bool = False, spin: float = 0.0) -> StaticResult:
     """Nonlinear static equilibrium f_int(u) = lambda f_ext by Newton with the exact tangent and load stepping, each
-    step started from a predictor: u_k plus the last increment extrapolated (u_k+1 ~ 3 u_k - 3 u_k-1 + u_k-2).
+    step started from the secant predictor (u_k plus the previous step's increment).
 
     Args:
         sector: the structure (clamp applied).
@@ -203,47 +264,25 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
     if linear and spin:
         raise ValueError("spin needs the nonlinear solve (linear=False): the spin softening follows the load factor")
     ops = ops or create_svk_operators(sector)
-    V = sector.V
     u = ops.u
     u.x.array[:] = 0.0
-    f_ext = None
-    if isinstance(force, PETSc.Vec):
-        f_ext = force
-    elif force is not None:
-        f_ext = assemble_vector(fem.form(force(ufl.TestFunction(V)), jit_params=JIT_PARAMS))
-    dofs = np.concatenate([np.asarray(d, dtype=np.int64).ravel() for d, _ in prescribed]) if prescribed else \
-        np.zeros(0, np.int64)
-    values = np.concatenate([np.asarray(v, float).ravel() for _, v in prescribed]) if prescribed else np.zeros(0)
-    if dofs.shape != values.shape:
-        raise ValueError(f"prescribed: {dofs.size} DOFs but {values.size} values")
-    owned = dofs >= 0  # per-rank local indices, -1 where the DOF lives on another rank
-    dofs, values = dofs[owned], values[owned]
-    bs = V.dofmap.index_map_bs
-    n_owned = V.dofmap.index_map.size_local * bs
-    if np.any(dofs >= n_owned):
-        raise ValueError("prescribed: DOF indices must be owned local (unblocked) indices, as in Sector.tip_dofs")
-    global_rows = (V.dofmap.index_map.local_range[0] * bs + dofs).astype(PETSc.IntType)
-    bcs = [sector.clamp_bc]
-    if spin:
-        rho, v = ops.constants["rho"], ufl.TestFunction(V)
-        spin_c = fem.Constant(sector.mesh, PETSc.ScalarType(spin))
-        centrifugal = fem.form(forms.centrifugal_force(u, v, rho, spin_c), jit_params=JIT_PARAMS)
-        M_P = assemble_spin_softening(sector, ops)
+    problem = _StaticProblem(sector, ops, force, prescribed, spin)
+    dofs, values = problem.dofs, problem.values
     lambdas = np.linspace(0.0, 1.0, n_steps + 1)[1:]
     tips, its, history = [], [], []
     du = u.vector.duplicate()
     K_full = assemble_stiffness(sector, ops) if linear else None
     if linear:  # one factorisation of K with the prescribed rows and columns eliminated
         K_lin = K_full.copy()
-        K_lin.zeroRowsColumns(global_rows, diag=1.0)
+        K_lin.zeroRowsColumns(problem.global_rows, diag=1.0)
         ksp = _lu_solver(sector.comm, K_lin, "static_")
     lift, rhs, r = u.vector.duplicate(), u.vector.duplicate(), u.vector.duplicate()
-    increments = []                        # the converged increments of the last two load steps: the predictor
+    increment = None                       # the previous load step's converged increment: the secant predictor
     for lam in lambdas:
         step_history = []
         start = u.x.array.copy()
-        if increments and not linear:      # equal load steps: the increment extrapolated (linearly from two)
-            u.x.array[:] += increments[-1]
+        if increment is not None and not linear:          # equal load steps: u_k+1 ~ u_k + (u_k - u_k-1)
+            u.x.array[:] += increment
             u.x.scatter_forward()
         for it in range(max_iterations + 1):
             # the prescribed increment still to apply (only non-zero on the first iteration of a step)
@@ -254,19 +293,7 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
                 K_full.mult(u.vector, r)
             else:
                 r = assemble_vector(ops.f_int)
-            reaction = r.norm()
-            load_norm = 0.0
-            if f_ext is not None:
-                r.axpy(-lam, f_ext)
-                load_norm = abs(lam) * f_ext.norm()
-            if spin:
-                f_spin = assemble_vector(centrifugal)
-                r.axpy(-lam, f_spin)
-                load_norm = max(load_norm, abs(lam) * f_spin.norm())
-                f_spin.destroy()
-            fem_petsc.set_bc(r, bcs, scale=0.0)
-            r.array[dofs] = 0.0
-            res, ref = r.norm(), max(load_norm, reaction, 1e-300)
+            r, res, ref = problem.residual(lam, r)
             LOG.debug("lambda=%.4f it=%d |r|=%.3e ref=%.3e", lam, it, res, ref)
             step_history.append((res, ref))
             if (res <= rtol * ref or (linear and it == 1) or _at_round_off(step_history)) and lift.norm() == 0.0:
@@ -274,20 +301,10 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
             if it == max_iterations:
                 raise RuntimeError(f"Newton did not converge at load factor {lam:.4g} "
                                    f"(|r|/ref = {res / ref:.2e} after {it} iterations); use more n_steps")
-            A = K_full
+            A = K_full if linear else problem.tangent(lam)
+            problem.correction(A, r, lift, rhs)
             if not linear:
-                A = fem_petsc.assemble_matrix(ops.tangent, bcs=bcs, diagonal=1.0)
-                A.assemble()
-                if spin:
-                    A.axpy(-lam * spin**2, M_P, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
-            # rhs = -r - A lift on the free rows, = lift on the prescribed rows (a lifted predictor: no spike)
-            A.mult(lift, rhs)
-            rhs.axpy(1.0, r)
-            rhs.scale(-1.0)
-            fem_petsc.set_bc(rhs, bcs, scale=0.0)
-            rhs.array[dofs] = lift.array[dofs]
-            if not linear:
-                A.zeroRowsColumns(global_rows, diag=1.0)
+                A.zeroRowsColumns(problem.global_rows, diag=1.0)
                 ksp = _lu_solver(sector.comm, A, "newton_")
             ksp.solve(rhs, du)
             u.vector.axpy(1.0, du)
@@ -295,13 +312,13 @@ def solve_static(sector: Sector, force: Callable[[object], object] | PETSc.Vec |
             if not linear:
                 A.destroy()
                 ksp.destroy()
-        increments = [*increments[-1:], u.x.array - start]
+        increment = u.x.array - start
         tips.append(gather_dof_values(sector, u.x.array, sector.tip_dofs))
         its.append(it)
         history.append(np.array(step_history))
     if spin:
-        M_P.destroy()
-    out = fem.Function(V, name="u")
+        problem.M_P.destroy()
+    out = fem.Function(sector.V, name="u")
     out.x.array[:] = u.x.array
     return StaticResult(load_factors=lambdas, tip_displacements=np.array(tips), iterations=np.array(its), u=out,
                         residuals=history)
